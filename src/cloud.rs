@@ -1,0 +1,134 @@
+//! A compact, validated copy of a caller's points: `dim` coordinates per point, packed, with
+//! the caller's index of each. Trees and baselines keep one (the tree in its own order).
+
+use crate::error::{NbhdError, Result};
+use crate::points::PointsView;
+use crate::scalar::Scalar;
+
+/// What to do with points that have a NaN or infinite coordinate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum NonFinitePolicy {
+    /// Refuse the input with [`NbhdError::NonFinite`] naming the first such point.
+    #[default]
+    Reject,
+    /// Leave such points out (as PCL does); the others keep their original indices.
+    Skip,
+}
+
+/// Packed coordinates plus the caller's index of every point.
+#[derive(Clone, Debug)]
+pub struct Cloud<T> {
+    /// `dim` coordinates per point, point after point.
+    pub coords: Vec<T>,
+    /// Caller's index of each point.
+    pub ids: Vec<u32>,
+    /// Dimension.
+    pub dim: usize,
+    /// Number of points the caller passed in (skipped ones included).
+    pub source_len: usize,
+}
+
+impl<T: Scalar> Cloud<T> {
+    /// Copies the points of `view`, converting to `T` and applying `policy` to non-finite
+    /// points. A value that is finite in the source but overflows `T` (an `f64` beyond the
+    /// `f32` range) counts as non-finite.
+    pub fn from_view(view: &PointsView<'_>, policy: NonFinitePolicy) -> Result<Self> {
+        let (n, dim) = (view.len(), view.dim());
+        let mut coords = Vec::with_capacity(n * dim);
+        let mut ids = Vec::with_capacity(n);
+        let mut p = vec![T::ZERO; dim];
+        for i in 0..n {
+            view.read_point(i, &mut p);
+            if let Some(j) = p.iter().position(|c| !c.is_finite()) {
+                match policy {
+                    NonFinitePolicy::Reject => {
+                        return Err(NbhdError::NonFinite {
+                            index: i,
+                            coordinate: j,
+                        })
+                    }
+                    NonFinitePolicy::Skip => continue,
+                }
+            }
+            coords.extend_from_slice(&p);
+            ids.push(i as u32);
+        }
+        if ids.is_empty() {
+            return Err(NbhdError::EmptyInput);
+        }
+        Ok(Self {
+            coords,
+            ids,
+            dim,
+            source_len: n,
+        })
+    }
+
+    /// Number of points held.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// `true` if no point is held (never, after a successful build).
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// Coordinates of the point in slot `slot`.
+    #[inline]
+    pub fn point(&self, slot: usize) -> &[T] {
+        &self.coords[slot * self.dim..(slot + 1) * self.dim]
+    }
+
+    /// For every caller index, the slot holding it (`u32::MAX` for skipped points).
+    pub fn slots_by_caller_index(&self) -> Vec<u32> {
+        let mut slot_of = vec![u32::MAX; self.source_len];
+        for (slot, &id) in self.ids.iter().enumerate() {
+            slot_of[id as usize] = slot as u32;
+        }
+        slot_of
+    }
+}
+
+/// Resolves a query to its coordinates and the caller index to leave out: the shared first
+/// step of every searcher. `slot_of` maps caller indices to slots of `cloud`.
+pub(crate) fn resolve_query<'q, T: Scalar>(
+    query: crate::query::Query<'q, T>,
+    dim: usize,
+    source_len: usize,
+    slot_of: &[u32],
+    point_of_slot: impl Fn(usize) -> &'q [T],
+) -> Result<(&'q [T], Option<u32>)> {
+    use crate::query::Query;
+    match query {
+        Query::Point { coords, exclude } => {
+            if coords.len() != dim {
+                return Err(NbhdError::DimensionMismatch {
+                    expected: dim,
+                    got: coords.len(),
+                });
+            }
+            if let Some(j) = coords.iter().position(|c| !c.is_finite()) {
+                return Err(NbhdError::NonFiniteQuery { coordinate: j });
+            }
+            Ok((coords, exclude))
+        }
+        Query::Stored {
+            index,
+            exclude_self,
+        } => {
+            let i = index as usize;
+            if i >= source_len {
+                return Err(NbhdError::IndexOutOfRange {
+                    index: i,
+                    count: source_len,
+                });
+            }
+            let slot = slot_of[i];
+            if slot == u32::MAX {
+                return Err(NbhdError::SkippedPoint { index: i });
+            }
+            Ok((point_of_slot(slot as usize), exclude_self.then_some(index)))
+        }
+    }
+}

@@ -1,0 +1,27 @@
+//! # nbhd — exact neighbourhoods in point clouds, and the smoothing that needs them
+//!
+//! nbhd builds k-d trees over d-dimensional points with every build variant of M. Skrodzki,
+//! *Neighborhood Computation of Point Set Surfaces* (pivot policies of Sections 3.2 and 5.4,
+//! median algorithms of Chapter 6), answers exact k-nearest, radius and ε-k neighbourhood
+//! queries (Chapter 5), and uses them for point-set smoothing (Chapter 2).
+//!
+//! Conventions: indices are the caller's; a radius is a plain Euclidean radius and inclusive
+//! (`‖x − q‖ ≤ ε`); distances come back squared (`sq_dist`); results are ordered by
+//! `(sq_dist, index)`, identical for any number of threads.
+#![warn(missing_docs)]
+
+pub mod cloud;
+pub mod error;
+pub mod linalg;
+pub mod points;
+pub mod query;
+pub mod scalar;
+pub mod table;
+
+pub use cloud::NonFinitePolicy;
+pub use error::{NbhdError, Result};
+pub use points::{PointsView, MAX_POINTS};
+pub use query::brute::BruteForce;
+pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
+pub use scalar::{Scalar, ScalarType};
+pub use table::NeighborTable;

@@ -1,0 +1,68 @@
+//! The brute-force baseline (thesis Algorithm 7): every point is a candidate. O(n) per query;
+//! the oracle of the tests.
+
+use super::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
+use crate::cloud::{resolve_query, Cloud, NonFinitePolicy};
+use crate::error::Result;
+use crate::points::PointsView;
+use crate::scalar::Scalar;
+
+/// Answers every query by scanning all points.
+#[derive(Clone, Debug)]
+pub struct BruteForce<T> {
+    cloud: Cloud<T>,
+    slot_of: Vec<u32>,
+}
+
+impl<T: Scalar> BruteForce<T> {
+    /// Copies the points of `view` (non-finite points handled by `policy`).
+    pub fn new(view: &PointsView<'_>, policy: NonFinitePolicy) -> Result<Self> {
+        let cloud = Cloud::from_view(view, policy)?;
+        let slot_of = cloud.slots_by_caller_index();
+        Ok(Self { cloud, slot_of })
+    }
+}
+
+/// Squared Euclidean distance.
+#[inline]
+pub(crate) fn sq_dist<T: Scalar>(a: &[T], b: &[T]) -> T {
+    a.iter().zip(b).fold(T::ZERO, |acc, (&x, &y)| {
+        let d = x - y;
+        acc + d * d
+    })
+}
+
+impl<T: Scalar> NeighborSearch<T> for BruteForce<T> {
+    fn dim(&self) -> usize {
+        self.cloud.dim
+    }
+
+    fn source_len(&self) -> usize {
+        self.cloud.source_len
+    }
+
+    fn search(
+        &self,
+        query: Query<'_, T>,
+        nbhd: Neighborhood<T>,
+        out: &mut Vec<Neighbor<T>>,
+    ) -> Result<()> {
+        nbhd.validate()?;
+        let cloud = &self.cloud;
+        let (q, exclude) = resolve_query(query, cloud.dim, cloud.source_len, &self.slot_of, |s| {
+            cloud.point(s)
+        })?;
+        let (k, sq_radius) = nbhd.limits();
+        let mut heap = NeighborHeap::new(out, k, sq_radius);
+        for slot in 0..cloud.len() {
+            let id = cloud.ids[slot];
+            if Some(id) != exclude {
+                heap.push(id, sq_dist(q, cloud.point(slot)));
+            }
+        }
+        if nbhd.is_sorted() {
+            heap.finish();
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,171 @@
+//! Neighbourhood queries (thesis Chapter 5): the k nearest, all within a radius ε, and the
+//! ε-k-neighbourhood (the k nearest among those within ε, Section 2.1.1), answered by the k-d
+//! tree and by the two baselines, brute force (Algorithm 7) and the PCA sweep (Algorithm 8).
+//!
+//! Conventions, shared by every searcher:
+//! - indices are the caller's original indices;
+//! - a radius is a plain Euclidean radius and inclusive: `‖x − q‖ ≤ ε`, evaluated as
+//!   `sq_dist ≤ ε²` in the tree's scalar type;
+//! - distances come back squared (`sq_dist`);
+//! - results are ordered by `(sq_dist, index)`, so ties are deterministic (the unsorted radius
+//!   variant returns the same set in an unspecified order).
+
+pub mod brute;
+mod heap;
+
+use crate::error::{NbhdError, Result};
+use crate::scalar::Scalar;
+
+pub use heap::NeighborHeap;
+
+/// One neighbour: the caller's index of the point and its squared distance to the query.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Neighbor<T> {
+    /// The caller's index of the point.
+    pub index: u32,
+    /// Squared Euclidean distance to the query point.
+    pub sq_dist: T,
+}
+
+impl<T: Scalar> Neighbor<T> {
+    /// The `(sq_dist, index)` order every sorted result uses.
+    #[inline]
+    pub fn precedes(&self, other: &Self) -> bool {
+        self.sq_dist < other.sq_dist || (self.sq_dist == other.sq_dist && self.index < other.index)
+    }
+
+    /// Total order by `(sq_dist, index)` (distances are never NaN).
+    #[inline]
+    pub fn cmp_by_distance(&self, other: &Self) -> std::cmp::Ordering {
+        self.sq_dist
+            .partial_cmp(&other.sq_dist)
+            .unwrap_or(std::cmp::Ordering::Equal)
+            .then(self.index.cmp(&other.index))
+    }
+}
+
+/// Which neighbourhood to compute.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Neighborhood<T> {
+    /// The `k` nearest points.
+    Knn {
+        /// How many (≥ 1).
+        k: usize,
+    },
+    /// All points with `‖x − q‖ ≤ radius`.
+    Radius {
+        /// Plain Euclidean radius (≥ 0).
+        radius: T,
+        /// Sort by `(sq_dist, index)`; `false` returns the same set faster, unordered.
+        sorted: bool,
+    },
+    /// The ε-k-neighbourhood: the `k` nearest among the points with `‖x − q‖ ≤ radius`.
+    KnnRadius {
+        /// How many at most (≥ 1).
+        k: usize,
+        /// Plain Euclidean radius (≥ 0).
+        radius: T,
+    },
+}
+
+impl<T: Scalar> Neighborhood<T> {
+    /// Checks `k ≥ 1` and a finite radius ≥ 0.
+    pub fn validate(&self) -> Result<()> {
+        let check_radius = |r: T| {
+            if r.is_finite() && r >= T::ZERO {
+                Ok(())
+            } else {
+                Err(NbhdError::InvalidRadius(r.to_f64()))
+            }
+        };
+        match *self {
+            Neighborhood::Knn { k } if k == 0 => Err(NbhdError::ZeroK),
+            Neighborhood::Knn { .. } => Ok(()),
+            Neighborhood::Radius { radius, .. } => check_radius(radius),
+            Neighborhood::KnnRadius { k, .. } if k == 0 => Err(NbhdError::ZeroK),
+            Neighborhood::KnnRadius { radius, .. } => check_radius(radius),
+        }
+    }
+
+    /// `(k, squared radius)` of this neighbourhood: `k` is `usize::MAX` for a radius query and
+    /// the squared radius is infinite for a k-nearest query.
+    pub fn limits(&self) -> (usize, T) {
+        match *self {
+            Neighborhood::Knn { k } => (k, T::INFINITY),
+            Neighborhood::Radius { radius, .. } => (usize::MAX, radius * radius),
+            Neighborhood::KnnRadius { k, radius } => (k, radius * radius),
+        }
+    }
+
+    /// Whether the result must be ordered by `(sq_dist, index)`.
+    pub fn is_sorted(&self) -> bool {
+        !matches!(self, Neighborhood::Radius { sorted: false, .. })
+    }
+}
+
+/// What to search around.
+#[derive(Clone, Copy, Debug)]
+pub enum Query<'a, T> {
+    /// An arbitrary point (its length must be the tree's dimension), optionally leaving out
+    /// one stored point by its caller index.
+    Point {
+        /// The query coordinates.
+        coords: &'a [T],
+        /// A caller index to leave out of the result, if any.
+        exclude: Option<u32>,
+    },
+    /// The stored point with this caller index.
+    Stored {
+        /// The caller's index of the point.
+        index: u32,
+        /// Leave the point itself out (its duplicates at distance 0 stay).
+        exclude_self: bool,
+    },
+}
+
+impl<'a, T> Query<'a, T> {
+    /// An arbitrary query point.
+    pub fn point(coords: &'a [T]) -> Self {
+        Query::Point {
+            coords,
+            exclude: None,
+        }
+    }
+
+    /// The stored point `index`, itself left out of its neighbourhood.
+    pub fn stored_excluding_self(index: u32) -> Self {
+        Query::Stored {
+            index,
+            exclude_self: true,
+        }
+    }
+
+    /// The stored point `index`, itself included (at distance 0).
+    pub fn stored(index: u32) -> Self {
+        Query::Stored {
+            index,
+            exclude_self: false,
+        }
+    }
+}
+
+/// Anything that answers neighbourhood queries on a fixed point set: the k-d tree and the
+/// baselines. One interface so that the baselines serve as oracles in tests and as
+/// comparisons in benchmarks.
+pub trait NeighborSearch<T: Scalar>: Sync {
+    /// Dimension of the stored points.
+    fn dim(&self) -> usize;
+
+    /// Number of points the caller passed in (the range of caller indices).
+    fn source_len(&self) -> usize;
+
+    /// Writes the neighbourhood of `query` into `out` (cleared first), ordered by
+    /// `(sq_dist, index)` unless an unsorted radius query was asked for.
+    fn search(
+        &self,
+        query: Query<'_, T>,
+        nbhd: Neighborhood<T>,
+        out: &mut Vec<Neighbor<T>>,
+    ) -> Result<()>;
+}

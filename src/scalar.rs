@@ -1,0 +1,129 @@
+//! The coordinate types nbhd computes in: `f32` and `f64`, both first-class.
+
+use std::fmt::{Debug, Display};
+use std::ops::{Add, Mul, Sub};
+
+/// The run-time tag of a coordinate type, used where the type is only known from a buffer
+/// description (the C ABI, files).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ScalarType {
+    /// 32-bit IEEE 754 floats.
+    F32,
+    /// 64-bit IEEE 754 floats.
+    F64,
+}
+
+impl ScalarType {
+    /// Size of one coordinate in bytes.
+    pub const fn size(self) -> usize {
+        match self {
+            ScalarType::F32 => 4,
+            ScalarType::F64 => 8,
+        }
+    }
+}
+
+/// A floating-point coordinate type (implemented for `f32` and `f64`).
+///
+/// Sealed: the trees, queries and smoothing rely on IEEE semantics of exactly these two types.
+pub trait Scalar:
+    Copy
+    + Send
+    + Sync
+    + PartialOrd
+    + Debug
+    + Display
+    + Default
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + sealed::Sealed
+    + 'static
+{
+    /// The run-time tag of this type.
+    const TYPE: ScalarType;
+    /// Zero.
+    const ZERO: Self;
+    /// Positive infinity.
+    const INFINITY: Self;
+    /// Converts from `f64` (rounding to nearest for `f32`).
+    fn from_f64(v: f64) -> Self;
+    /// Converts to `f64` (exact).
+    fn to_f64(self) -> f64;
+    /// Reads one native-endian value from exactly `Self::TYPE.size()` bytes.
+    fn read_ne(bytes: &[u8]) -> Self;
+    /// `true` unless NaN or infinite.
+    fn is_finite(self) -> bool;
+    /// Larger of two non-NaN values.
+    #[inline]
+    fn max_of(self, other: Self) -> Self {
+        if other > self {
+            other
+        } else {
+            self
+        }
+    }
+    /// Smaller of two non-NaN values.
+    #[inline]
+    fn min_of(self, other: Self) -> Self {
+        if other < self {
+            other
+        } else {
+            self
+        }
+    }
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for f32 {}
+    impl Sealed for f64 {}
+}
+
+impl Scalar for f32 {
+    const TYPE: ScalarType = ScalarType::F32;
+    const ZERO: Self = 0.0;
+    const INFINITY: Self = f32::INFINITY;
+    #[inline]
+    fn from_f64(v: f64) -> Self {
+        v as f32
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+    #[inline]
+    fn read_ne(bytes: &[u8]) -> Self {
+        let mut b = [0u8; 4];
+        b.copy_from_slice(bytes);
+        f32::from_ne_bytes(b)
+    }
+    #[inline]
+    fn is_finite(self) -> bool {
+        f32::is_finite(self)
+    }
+}
+
+impl Scalar for f64 {
+    const TYPE: ScalarType = ScalarType::F64;
+    const ZERO: Self = 0.0;
+    const INFINITY: Self = f64::INFINITY;
+    #[inline]
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self
+    }
+    #[inline]
+    fn read_ne(bytes: &[u8]) -> Self {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(bytes);
+        f64::from_ne_bytes(b)
+    }
+    #[inline]
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+}
