@@ -121,6 +121,9 @@ use rayon::prelude::*;
 /// balance two to dozens of threads.
 const CHUNK: usize = 1024;
 
+/// Row lengths, neighbour indices and squared distances of one chunk of queries.
+type RowsChunk<T> = (Vec<usize>, Vec<u32>, Vec<T>);
+
 /// The neighbourhood of every stored point of `searcher` (row `i` for caller index `i`;
 /// points skipped at build time get empty rows), with or without the point itself, computed
 /// in parallel in the current rayon pool. The bytes are identical for any number of threads:
@@ -132,7 +135,7 @@ pub fn neighborhoods_of_all<T: Scalar, S: NeighborSearch<T> + ?Sized>(
 ) -> Result<NeighborTable<T>> {
     nbhd.validate()?;
     let n = searcher.source_len();
-    let chunks: Vec<Result<(Vec<usize>, Vec<u32>, Vec<T>)>> = (0..n.div_ceil(CHUNK))
+    let chunks: Vec<Result<RowsChunk<T>>> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let mut row: Vec<Neighbor<T>> = Vec::new();

@@ -80,10 +80,10 @@ impl<T: Scalar> Neighborhood<T> {
             }
         };
         match *self {
-            Neighborhood::Knn { k } if k == 0 => Err(NbhdError::ZeroK),
+            Neighborhood::Knn { k: 0 } => Err(NbhdError::ZeroK),
             Neighborhood::Knn { .. } => Ok(()),
             Neighborhood::Radius { radius, .. } => check_radius(radius),
-            Neighborhood::KnnRadius { k, .. } if k == 0 => Err(NbhdError::ZeroK),
+            Neighborhood::KnnRadius { k: 0, .. } => Err(NbhdError::ZeroK),
             Neighborhood::KnnRadius { radius, .. } => check_radius(radius),
         }
     }
