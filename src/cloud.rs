@@ -6,7 +6,7 @@ use crate::points::PointsView;
 use crate::scalar::Scalar;
 
 /// What to do with points that have a NaN or infinite coordinate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum NonFinitePolicy {
     /// Refuse the input with [`NbhdError::NonFinite`] naming the first such point.
     #[default]

@@ -1,0 +1,266 @@
+//! The k-d tree (thesis Chapter 3): built with a selectable pivot policy and median
+//! algorithm, holding its own compact copy of the points in tree order plus the map to the
+//! caller's indices, answering the exact queries of Chapter 5.
+
+mod build;
+mod node;
+pub mod options;
+mod presorted;
+mod search;
+mod split;
+
+use std::sync::OnceLock;
+
+use crate::cloud::{resolve_query, Cloud};
+use crate::error::{NbhdError, Result};
+use crate::points::PointsView;
+use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
+use crate::scalar::Scalar;
+use build::{build_parallel, build_serial, BuildInput};
+use node::Node;
+pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
+use search::{TreeView, WithinRadius};
+
+/// Shape and memory of a built tree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TreeStats {
+    /// Points held (skipped non-finite points not counted).
+    pub points: usize,
+    /// Dimension.
+    pub dim: usize,
+    /// Edges on the longest root-to-leaf path (a single leaf has depth 0).
+    pub depth: usize,
+    /// Internal nodes plus leaves.
+    pub nodes: usize,
+    /// Leaves.
+    pub leaves: usize,
+    /// Most points in one leaf.
+    pub max_leaf_points: usize,
+    /// Bytes of coordinates, index map and nodes (and the reverse index map once a stored-point
+    /// query has created it).
+    pub bytes: usize,
+}
+
+/// A k-d tree over d-dimensional points with `T` coordinates. Immutable once built: it may
+/// be queried from many threads at once.
+#[derive(Debug)]
+pub struct KdTree<T> {
+    dim: usize,
+    /// Coordinates in tree order.
+    coords: Vec<T>,
+    /// Caller index of each point, in tree order.
+    ids: Vec<u32>,
+    nodes: Vec<Node<T>>,
+    depth: usize,
+    source_len: usize,
+    options: BuildOptions,
+    /// Tree position of every caller index (`u32::MAX` for skipped points), made on first use.
+    position_of: OnceLock<Vec<u32>>,
+}
+
+impl<T: Scalar> KdTree<T> {
+    /// Builds a tree over the points of `view` (converted to `T`).
+    ///
+    /// Errors: [`NbhdError::NonFinite`] naming the first point with a NaN or infinite
+    /// coordinate (unless `options.non_finite` skips them), [`NbhdError::EmptyInput`] if no
+    /// point remains, [`NbhdError::InvalidOption`] for a leaf size of 0,
+    /// [`NbhdError::ThreadPool`] if a requested pool cannot be created.
+    pub fn build(view: &PointsView<'_>, options: &BuildOptions) -> Result<Self> {
+        options.validate()?;
+        let cloud = Cloud::<T>::from_view(view, options.non_finite)?;
+        let n = cloud.len();
+        let input = BuildInput {
+            coords: &cloud.coords,
+            dim: cloud.dim,
+            options: *options,
+        };
+        let (subtree, order) = if options.median == MedianAlgorithm::Presorted {
+            presorted::build_presorted(&input, n)
+        } else {
+            let mut slots: Vec<u32> = (0..n as u32).collect();
+            let subtree = match options.threads {
+                1 => build_serial(&input, &mut slots, 0, 0),
+                0 => build_parallel(&input, &mut slots, 0, 0),
+                t => rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .map_err(|e| NbhdError::ThreadPool(e.to_string()))?
+                    .install(|| build_parallel(&input, &mut slots, 0, 0)),
+            };
+            (subtree, slots)
+        };
+        let dim = cloud.dim;
+        let mut coords = Vec::with_capacity(n * dim);
+        for &s in &order {
+            coords.extend_from_slice(cloud.point(s as usize));
+        }
+        let ids = order.iter().map(|&s| cloud.ids[s as usize]).collect();
+        Ok(Self {
+            dim,
+            coords,
+            ids,
+            nodes: subtree.nodes,
+            depth: subtree.depth,
+            source_len: cloud.source_len,
+            options: *options,
+            position_of: OnceLock::new(),
+        })
+    }
+
+    /// Builds from packed coordinates `[x0, y0, z0, x1, ...]` of dimension `dim`.
+    pub fn from_flat(coords: &[T], dim: usize, options: &BuildOptions) -> Result<Self> {
+        Self::build(&PointsView::from_flat(coords, dim)?, options)
+    }
+
+    /// The options the tree was built with.
+    pub fn options(&self) -> &BuildOptions {
+        &self.options
+    }
+
+    /// Number of points held.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// Always `false`: a tree holds at least one point.
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// Caller indices in tree order (points of one leaf are adjacent).
+    pub fn tree_order(&self) -> &[u32] {
+        &self.ids
+    }
+
+    /// Coordinates of the point at tree position `pos`.
+    pub fn point_at(&self, pos: usize) -> &[T] {
+        &self.coords[pos * self.dim..(pos + 1) * self.dim]
+    }
+
+    /// Coordinates of the point with caller index `index`, if the tree holds it.
+    pub fn point(&self, index: u32) -> Option<&[T]> {
+        let pos = *self.positions().get(index as usize)?;
+        (pos != u32::MAX).then(|| self.point_at(pos as usize))
+    }
+
+    fn positions(&self) -> &[u32] {
+        self.position_of.get_or_init(|| {
+            let mut pos = vec![u32::MAX; self.source_len];
+            for (p, &id) in self.ids.iter().enumerate() {
+                pos[id as usize] = p as u32;
+            }
+            pos
+        })
+    }
+
+    /// `true` if both trees have the same nodes, splits, leaves and point order: the
+    /// identity the thesis states for the median algorithms of one pivot policy (8.1).
+    pub fn same_structure(&self, other: &Self) -> bool {
+        self.dim == other.dim
+            && self.nodes == other.nodes
+            && self.ids == other.ids
+            && self.coords == other.coords
+            && self.depth == other.depth
+    }
+
+    /// Depth, node counts and memory.
+    pub fn stats(&self) -> TreeStats {
+        let leaves = self.nodes.iter().filter(|n| n.is_leaf());
+        let max_leaf_points = leaves
+            .clone()
+            .map(|n| (n.b - n.a) as usize)
+            .max()
+            .unwrap_or(0);
+        let reverse = self.position_of.get().map_or(0, |v| v.len() * 4);
+        TreeStats {
+            points: self.len(),
+            dim: self.dim,
+            depth: self.depth,
+            nodes: self.nodes.len(),
+            leaves: leaves.count(),
+            max_leaf_points,
+            bytes: self.coords.len() * std::mem::size_of::<T>()
+                + self.ids.len() * 4
+                + self.nodes.len() * std::mem::size_of::<Node<T>>()
+                + reverse,
+        }
+    }
+
+    fn view(&self) -> TreeView<'_, T> {
+        TreeView {
+            nodes: &self.nodes,
+            coords: &self.coords,
+            ids: &self.ids,
+            dim: self.dim,
+        }
+    }
+
+    /// The `k` nearest neighbours of `query`, by `(sq_dist, index)`.
+    pub fn knn(&self, query: Query<'_, T>, k: usize, out: &mut Vec<Neighbor<T>>) -> Result<()> {
+        self.search(query, Neighborhood::Knn { k }, out)
+    }
+
+    /// All points within `radius` (inclusive) of `query`, by `(sq_dist, index)`.
+    pub fn radius(&self, query: Query<'_, T>, radius: T, out: &mut Vec<Neighbor<T>>) -> Result<()> {
+        self.search(
+            query,
+            Neighborhood::Radius {
+                radius,
+                sorted: true,
+            },
+            out,
+        )
+    }
+
+    /// The ε-k-neighbourhood: the `k` nearest among the points within `radius` of `query`.
+    pub fn knn_radius(
+        &self,
+        query: Query<'_, T>,
+        k: usize,
+        radius: T,
+        out: &mut Vec<Neighbor<T>>,
+    ) -> Result<()> {
+        self.search(query, Neighborhood::KnnRadius { k, radius }, out)
+    }
+}
+
+impl<T: Scalar> NeighborSearch<T> for KdTree<T> {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+
+    fn source_len(&self) -> usize {
+        self.source_len
+    }
+
+    fn search(
+        &self,
+        query: Query<'_, T>,
+        nbhd: Neighborhood<T>,
+        out: &mut Vec<Neighbor<T>>,
+    ) -> Result<()> {
+        nbhd.validate()?;
+        // The reverse index map is only made for stored-point queries.
+        let positions: &[u32] = match query {
+            Query::Stored { .. } => self.positions(),
+            Query::Point { .. } => &[],
+        };
+        let (q, exclude) = resolve_query(query, self.dim, self.source_len, positions, |p| {
+            self.point_at(p)
+        })?;
+        let (k, sq_radius) = nbhd.limits();
+        let tree = self.view();
+        if k == usize::MAX {
+            out.clear();
+            search::search(&tree, q, exclude, &mut WithinRadius { out, sq_radius });
+            if nbhd.is_sorted() {
+                out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
+            }
+        } else {
+            let mut heap = NeighborHeap::new(out, k, sq_radius);
+            search::search(&tree, q, exclude, &mut heap);
+            heap.finish();
+        }
+        Ok(())
+    }
+}

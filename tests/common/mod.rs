@@ -1,0 +1,103 @@
+//! Point sets for the tests: seeded, in any dimension, of the kinds that break trees.
+#![allow(dead_code)]
+
+/// SplitMix64: a tiny seeded generator so test data is reproducible without dependencies.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+}
+
+/// The kinds of point sets the property tests run on.
+#[derive(Clone, Copy, Debug)]
+pub enum Kind {
+    Random,
+    Clustered,
+    /// Half the points are copies of 10 points.
+    DuplicateHeavy,
+    AllIdentical,
+    Collinear,
+    Coplanar,
+    /// Coordinates on a coarse integer grid: many shared coordinates and exact distance ties.
+    Grid,
+}
+
+pub const KINDS: [Kind; 7] = [
+    Kind::Random,
+    Kind::Clustered,
+    Kind::DuplicateHeavy,
+    Kind::AllIdentical,
+    Kind::Collinear,
+    Kind::Coplanar,
+    Kind::Grid,
+];
+
+/// `n` points of dimension `d`, packed, as f64.
+pub fn points(kind: Kind, n: usize, d: usize, seed: u64) -> Vec<f64> {
+    let mut rng = Rng(seed);
+    let mut v = Vec::with_capacity(n * d);
+    match kind {
+        Kind::Random => (0..n * d).for_each(|_| v.push(rng.unit() * 10.0 - 5.0)),
+        Kind::Clustered => {
+            let centres: Vec<f64> = (0..4 * d).map(|_| rng.unit() * 100.0).collect();
+            for _ in 0..n {
+                let c = rng.below(4);
+                for j in 0..d {
+                    v.push(centres[c * d + j] + (rng.unit() - 0.5) * 0.5);
+                }
+            }
+        }
+        Kind::DuplicateHeavy => {
+            let base: Vec<f64> = (0..10 * d).map(|_| rng.unit()).collect();
+            for i in 0..n {
+                if i % 2 == 0 {
+                    let c = rng.below(10);
+                    v.extend_from_slice(&base[c * d..(c + 1) * d]);
+                } else {
+                    (0..d).for_each(|_| v.push(rng.unit()));
+                }
+            }
+        }
+        Kind::AllIdentical => (0..n).for_each(|_| (0..d).for_each(|j| v.push(j as f64 + 0.5))),
+        Kind::Collinear => {
+            let dir: Vec<f64> = (0..d).map(|_| rng.unit() - 0.5).collect();
+            for _ in 0..n {
+                let t = rng.unit() * 4.0;
+                dir.iter().for_each(|c| v.push(1.0 + c * t));
+            }
+        }
+        Kind::Coplanar => {
+            // Points in a plane spanned by two directions (axis-aligned when d > 2, so many
+            // points share the last coordinates exactly).
+            for _ in 0..n {
+                let (s, t) = (rng.unit(), rng.unit());
+                for j in 0..d {
+                    v.push(match j {
+                        0 => s,
+                        1 => t + 0.25 * s,
+                        _ => 0.75,
+                    });
+                }
+            }
+        }
+        Kind::Grid => (0..n * d).for_each(|_| v.push(rng.below(4) as f64)),
+    }
+    v
+}
+
+pub fn to_f32(v: &[f64]) -> Vec<f32> {
+    v.iter().map(|&x| x as f32).collect()
+}
