@@ -13,6 +13,7 @@
 pub mod cloud;
 pub mod error;
 pub mod linalg;
+pub mod parallel;
 pub mod points;
 pub mod query;
 pub mod scalar;
@@ -24,7 +25,7 @@ pub use points::{PointsView, MAX_POINTS};
 pub use query::brute::BruteForce;
 pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
 pub use scalar::{Scalar, ScalarType};
-pub use table::NeighborTable;
+pub use table::{NeighborTable, TableOptions};
 pub mod tree;
 
 pub use tree::{BuildOptions, KdTree, MedianAlgorithm, PivotPolicy, TreeStats};

@@ -2,6 +2,11 @@
 //! tree) as compressed rows, `offsets` + caller `indices` + `sq_dists`, row `i` belonging to
 //! query `i` (for a tree's own points: the caller's point `i`; skipped points get empty rows).
 
+use crate::error::Result;
+use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
+use crate::scalar::Scalar;
+use rayon::prelude::*;
+
 /// Compressed rows of neighbours.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct NeighborTable<T> {
@@ -94,35 +99,30 @@ impl<T: Copy> NeighborTable<T> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rows_and_validation() {
-        let t = NeighborTable::from_parts(vec![0, 2, 2, 3], vec![1, 2, 0], vec![1.0, 2.0, 3.0])
-            .unwrap();
-        assert_eq!(t.len(), 3);
-        assert_eq!(t.indices_of(0), &[1, 2]);
-        assert!(t.indices_of(1).is_empty());
-        assert_eq!(t.sq_dists_of(2), &[3.0]);
-        assert_eq!((t.min_row_len(), t.max_row_len()), (0, 2));
-        assert!(NeighborTable::<f32>::from_parts(vec![0, 2], vec![1], vec![1.0]).is_none());
-        assert!(NeighborTable::<f32>::from_parts(vec![1, 1], vec![], vec![]).is_none());
-    }
-}
-
-use crate::error::Result;
-use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
-use crate::scalar::Scalar;
-use rayon::prelude::*;
-
 /// Queries per parallel work item: large enough to amortise scheduling, small enough to
 /// balance two to dozens of threads.
 const CHUNK: usize = 1024;
 
 /// Row lengths, neighbour indices and squared distances of one chunk of queries.
 type RowsChunk<T> = (Vec<usize>, Vec<u32>, Vec<T>);
+
+/// Options of the all-point neighbourhood table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TableOptions {
+    /// Leave each point out of its own row (the default, as smoothing and normals need).
+    pub exclude_self: bool,
+    /// Worker threads: 0 uses the current rayon pool. The table is identical for any value.
+    pub threads: usize,
+}
+
+impl Default for TableOptions {
+    fn default() -> Self {
+        Self {
+            exclude_self: true,
+            threads: 0,
+        }
+    }
+}
 
 /// The neighbourhood of every stored point of `searcher` (row `i` for caller index `i`;
 /// points skipped at build time get empty rows), with or without the point itself, computed
@@ -133,23 +133,65 @@ pub fn neighborhoods_of_all<T: Scalar, S: NeighborSearch<T> + ?Sized>(
     nbhd: Neighborhood<T>,
     exclude_self: bool,
 ) -> Result<NeighborTable<T>> {
+    rows_in_parallel(
+        searcher.source_len(),
+        |i, row, _| {
+            let query = Query::Stored {
+                index: i as u32,
+                exclude_self,
+            };
+            match searcher.search(query, nbhd, row) {
+                Err(crate::NbhdError::SkippedPoint { .. }) => {
+                    row.clear();
+                    Ok(())
+                }
+                other => other,
+            }
+        },
+        nbhd,
+    )
+}
+
+/// The neighbourhoods of the points of `queries` (row `i` for query `i`), in parallel.
+pub fn neighborhoods_of_points<T: Scalar, S: NeighborSearch<T> + ?Sized>(
+    searcher: &S,
+    queries: &crate::PointsView<'_>,
+    nbhd: Neighborhood<T>,
+) -> Result<NeighborTable<T>> {
+    if queries.dim() != searcher.dim() {
+        return Err(crate::NbhdError::DimensionMismatch {
+            expected: searcher.dim(),
+            got: queries.dim(),
+        });
+    }
+    let d = queries.dim();
+    rows_in_parallel(
+        queries.len(),
+        |i, row, q| {
+            q.resize(d, T::ZERO);
+            queries.read_point(i, q);
+            searcher.search(Query::point(q), nbhd, row)
+        },
+        nbhd,
+    )
+}
+
+/// Runs `query(i, row, scratch)` for rows `0..n` in fixed chunks on the current rayon pool and joins
+/// the rows in order, so the table does not depend on the number of threads.
+fn rows_in_parallel<T: Scalar>(
+    n: usize,
+    query: impl Fn(usize, &mut Vec<Neighbor<T>>, &mut Vec<T>) -> Result<()> + Sync,
+    nbhd: Neighborhood<T>,
+) -> Result<NeighborTable<T>> {
     nbhd.validate()?;
-    let n = searcher.source_len();
     let chunks: Vec<Result<RowsChunk<T>>> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let mut row: Vec<Neighbor<T>> = Vec::new();
+            let mut scratch: Vec<T> = Vec::new();
             let (mut lens, mut ids, mut dists) = (Vec::new(), Vec::new(), Vec::new());
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                let query = Query::Stored {
-                    index: i as u32,
-                    exclude_self,
-                };
-                match searcher.search(query, nbhd, &mut row) {
-                    Ok(()) => {}
-                    Err(crate::NbhdError::SkippedPoint { .. }) => row.clear(),
-                    Err(e) => return Err(e),
-                }
+                query(i, &mut row, &mut scratch)?;
                 lens.push(row.len());
                 ids.extend(row.iter().map(|nb| nb.index));
                 dists.extend(row.iter().map(|nb| nb.sq_dist));
@@ -173,6 +215,24 @@ pub fn neighborhoods_of_all<T: Scalar, S: NeighborSearch<T> + ?Sized>(
         indices,
         sq_dists,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_and_validation() {
+        let t = NeighborTable::from_parts(vec![0, 2, 2, 3], vec![1, 2, 0], vec![1.0, 2.0, 3.0])
+            .unwrap();
+        assert_eq!(t.len(), 3);
+        assert_eq!(t.indices_of(0), &[1, 2]);
+        assert!(t.indices_of(1).is_empty());
+        assert_eq!(t.sq_dists_of(2), &[3.0]);
+        assert_eq!((t.min_row_len(), t.max_row_len()), (0, 2));
+        assert!(NeighborTable::<f32>::from_parts(vec![0, 2], vec![1], vec![1.0]).is_none());
+        assert!(NeighborTable::<f32>::from_parts(vec![1, 1], vec![], vec![]).is_none());
+    }
 }
 
 #[cfg(test)]

@@ -12,10 +12,12 @@ mod split;
 use std::sync::OnceLock;
 
 use crate::cloud::{resolve_query, Cloud};
-use crate::error::{NbhdError, Result};
+use crate::error::Result;
+use crate::parallel::with_threads;
 use crate::points::PointsView;
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
+use crate::table::{NeighborTable, TableOptions};
 use build::{build_parallel, build_serial, BuildInput};
 use node::Node;
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
@@ -80,12 +82,7 @@ impl<T: Scalar> KdTree<T> {
             let mut slots: Vec<u32> = (0..n as u32).collect();
             let subtree = match options.threads {
                 1 => build_serial(&input, &mut slots, 0, 0),
-                0 => build_parallel(&input, &mut slots, 0, 0),
-                t => rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build()
-                    .map_err(|e| NbhdError::ThreadPool(e.to_string()))?
-                    .install(|| build_parallel(&input, &mut slots, 0, 0)),
+                t => with_threads(t, || build_parallel(&input, &mut slots, 0, 0))?,
             };
             (subtree, slots)
         };
@@ -221,6 +218,34 @@ impl<T: Scalar> KdTree<T> {
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()> {
         self.search(query, Neighborhood::KnnRadius { k, radius }, out)
+    }
+}
+
+impl<T: Scalar> KdTree<T> {
+    /// The neighbourhood of every point of the tree, as compressed rows in the caller's
+    /// index order (row `i` for point `i`; points skipped at build time get empty rows),
+    /// computed in parallel; identical bytes for any thread count.
+    pub fn neighborhoods(
+        &self,
+        nbhd: Neighborhood<T>,
+        options: &TableOptions,
+    ) -> Result<NeighborTable<T>> {
+        with_threads(options.threads, || {
+            crate::table::neighborhoods_of_all(self, nbhd, options.exclude_self)
+        })?
+    }
+
+    /// The neighbourhoods of a batch of query points (row `i` for query `i`), computed in
+    /// parallel. `options.exclude_self` does not apply (the queries are not stored points).
+    pub fn neighborhoods_of(
+        &self,
+        queries: &PointsView<'_>,
+        nbhd: Neighborhood<T>,
+        options: &TableOptions,
+    ) -> Result<NeighborTable<T>> {
+        with_threads(options.threads, || {
+            crate::table::neighborhoods_of_points(self, queries, nbhd)
+        })?
     }
 }
 
