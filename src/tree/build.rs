@@ -1,26 +1,23 @@
 //! Building the node array by selection (thesis Algorithm 4 with the median algorithms of
-//! Section 3.3.4 / Chapter 6): at every node the policy picks a dimension and a rank, and a
-//! selection algorithm partitions the node's points around the point of that rank in the
-//! composite order. Iterative (an explicit work stack), so trees thousands of levels deep
+//! Section 3.3.4 / Chapter 6): at every node the policy picks a dimension and a rank (or a
+//! threshold), and a selection algorithm (or one partition pass) splits the node's points in
+//! the composite order. Iterative (an explicit work stack), so trees thousands of levels deep
 //! (closest-to-middle on surfaces, thesis Fig. 8.7) cannot overflow the call stack. Above a
 //! size threshold the two children of a well-balanced split are built in parallel and
 //! concatenated, which gives exactly the serial tree.
 
+use super::layout::Layout;
 use super::node::Node;
 use super::options::{BuildOptions, MedianAlgorithm};
-use super::split::{choose_split, lex_less, NodeFacts, Split};
+use super::split::{choose_split, resolve_below, NodeFacts, Plan, Split};
 use crate::scalar::Scalar;
 
 /// Children smaller than this are built serially.
 const PARALLEL_MIN: usize = 16 * 1024;
 
-/// The points and options a build reads.
-pub(crate) struct BuildInput<'a, T> {
-    /// Packed coordinates of the points, by slot.
-    pub coords: &'a [T],
-    /// Dimension.
-    pub dim: usize,
-    /// Options.
+/// The layout and options a build reads.
+pub(crate) struct BuildInput<L> {
+    pub layout: L,
     pub options: BuildOptions,
 }
 
@@ -30,45 +27,66 @@ pub(crate) struct Subtree<T> {
     pub depth: usize,
 }
 
-/// Facts about the slots of one node, found by scanning them.
-struct ScanFacts<'a, T> {
-    coords: &'a [T],
-    dim: usize,
-    slots: &'a [u32],
+/// Facts about the items of one node, found by scanning them.
+struct ScanFacts<'a, L: Layout<T>, T: Scalar> {
+    layout: &'a L,
+    items: &'a [L::Item],
 }
 
-impl<T: Scalar> ScanFacts<'_, T> {
-    #[inline]
-    fn coord(&self, slot: u32, j: usize) -> T {
-        self.coords[slot as usize * self.dim + j]
-    }
-}
-
-impl<T: Scalar> NodeFacts<T> for ScanFacts<'_, T> {
+impl<L: Layout<T>, T: Scalar> NodeFacts<T> for ScanFacts<'_, L, T> {
     fn len(&self) -> usize {
-        self.slots.len()
+        self.items.len()
     }
 
     fn range(&self, j: usize) -> (T, T) {
-        let first = self.coord(self.slots[0], j);
-        self.slots.iter().fold((first, first), |(lo, hi), &s| {
-            let c = self.coord(s, j);
+        let first = self.layout.coord(&self.items[0], j);
+        self.items.iter().fold((first, first), |(lo, hi), it| {
+            let c = self.layout.coord(it, j);
             (lo.min_of(c), hi.max_of(c))
         })
     }
 
-    fn count_below(&self, j: usize, value: T) -> usize {
-        self.slots
-            .iter()
-            .filter(|&&s| self.coord(s, j) < value)
-            .count()
+    fn widest(&self, d: usize) -> (usize, T, T) {
+        const MAX_D: usize = 8;
+        if d > MAX_D {
+            return (0..d)
+                .map(|j| (j, self.range(j)))
+                .fold((0, T::ZERO, T::ZERO), |best, (j, (l, h))| {
+                    if j == 0 || h - l > best.2 - best.1 {
+                        (j, l, h)
+                    } else {
+                        best
+                    }
+                });
+        }
+        // One pass over the items for all dimensions.
+        let mut lo = [T::ZERO; MAX_D];
+        let mut hi = [T::ZERO; MAX_D];
+        for j in 0..d {
+            lo[j] = self.layout.coord(&self.items[0], j);
+            hi[j] = lo[j];
+        }
+        for it in self.items {
+            for j in 0..d {
+                let c = self.layout.coord(it, j);
+                lo[j] = lo[j].min_of(c);
+                hi[j] = hi[j].max_of(c);
+            }
+        }
+        let mut best = 0;
+        for j in 1..d {
+            if hi[j] - lo[j] > hi[best] - lo[best] {
+                best = j;
+            }
+        }
+        (best, lo[best], hi[best])
     }
 
     fn closest(&self, j: usize, target: T) -> T {
         let dist = |c: T| if c > target { c - target } else { target - c };
-        let first = self.coord(self.slots[0], j);
-        self.slots.iter().fold(first, |best, &s| {
-            let c = self.coord(s, j);
+        let first = self.layout.coord(&self.items[0], j);
+        self.items.iter().fold(first, |best, it| {
+            let c = self.layout.coord(it, j);
             let (dc, db) = (dist(c), dist(best));
             if dc < db || (dc == db && c < best) {
                 c
@@ -79,51 +97,78 @@ impl<T: Scalar> NodeFacts<T> for ScanFacts<'_, T> {
     }
 }
 
-/// Splits the node holding `slots`: decides the split and partitions `slots` so that the first
+/// Splits the node holding `items`: decides the split and moves the items so that the first
 /// `rank` are the left child. Returns the split and its coordinate value.
-fn split_node<T: Scalar>(input: &BuildInput<'_, T>, slots: &mut [u32], depth: usize) -> (Split, T) {
-    let facts = ScanFacts {
-        coords: input.coords,
-        dim: input.dim,
-        slots,
+fn split_node<T: Scalar, L: Layout<T>>(
+    input: &BuildInput<L>,
+    items: &mut [L::Item],
+    depth: usize,
+) -> (Split, T) {
+    let layout = &input.layout;
+    let facts = ScanFacts { layout, items };
+    let plan = choose_split(input.options.pivot, depth, layout.dim(), &facts);
+    let (dim, rank) = match plan {
+        Plan::Rank(split) => (split.dim, split.rank),
+        Plan::Below { dim, value } => {
+            let below = partition_below(layout, items, dim, value);
+            match resolve_below(below, items.len()) {
+                Ok(rank) => return (Split { dim, rank }, value),
+                Err(rank) => (dim, rank),
+            }
+        }
     };
-    let split = choose_split(input.options.pivot, depth, input.dim, &facts);
-    let (coords, d, j) = (input.coords, input.dim, split.dim);
-    let mut less = |a: &u32, b: &u32| lex_less(coords, d, *a, *b, j);
-    select(slots, split.rank, &mut less, input.options.median);
-    let value = coords[slots[split.rank] as usize * d + j];
-    (split, value)
+    select(layout, items, rank, dim, input.options.median);
+    (Split { dim, rank }, layout.coord(&items[rank], dim))
 }
 
-/// Puts the element of rank `k` at `k`, smaller before, larger after.
-fn select<F: FnMut(&u32, &u32) -> bool>(
-    v: &mut [u32],
+/// Moves the items with coordinate `< value` in `dim` to the front; returns their count.
+fn partition_below<T: Scalar, L: Layout<T>>(
+    layout: &L,
+    items: &mut [L::Item],
+    dim: usize,
+    value: T,
+) -> usize {
+    let mut k = 0;
+    for i in 0..items.len() {
+        if layout.coord(&items[i], dim) < value {
+            items.swap(i, k);
+            k += 1;
+        }
+    }
+    k
+}
+
+/// Puts the item of rank `k` in the composite order of `dim` at `k`, smaller before, larger
+/// after, with the chosen median algorithm.
+fn select<T: Scalar, L: Layout<T>>(
+    layout: &L,
+    items: &mut [L::Item],
     k: usize,
-    less: &mut F,
+    dim: usize,
     algo: MedianAlgorithm,
 ) {
-    let mut cmp = |a: &u32, b: &u32| {
-        if less(a, b) {
+    let cmp = |a: &L::Item, b: &L::Item| {
+        if layout.lex_less(a, b, dim) {
             std::cmp::Ordering::Less
-        } else if less(b, a) {
+        } else if layout.lex_less(b, a, dim) {
             std::cmp::Ordering::Greater
         } else {
             std::cmp::Ordering::Equal
         }
     };
     match algo {
-        MedianAlgorithm::Sort | MedianAlgorithm::Presorted => v.sort_unstable_by(&mut cmp),
+        MedianAlgorithm::Sort | MedianAlgorithm::Presorted => items.sort_unstable_by(cmp),
         _ => {
-            v.select_nth_unstable_by(k, &mut cmp);
+            items.select_nth_unstable_by(k, cmp);
         }
     }
 }
 
-/// Builds the subtree over `slots` (tree positions `offset..offset + slots.len()`) at `depth`,
-/// serially, with an explicit stack.
-pub(crate) fn build_serial<T: Scalar>(
-    input: &BuildInput<'_, T>,
-    slots: &mut [u32],
+/// Builds the subtree over `items` (tree positions `offset..offset + items.len()`) at
+/// `depth`, serially, with an explicit stack.
+pub(crate) fn build_serial<T: Scalar, L: Layout<T>>(
+    input: &BuildInput<L>,
+    items: &mut [L::Item],
     offset: usize,
     depth: usize,
 ) -> Subtree<T> {
@@ -134,11 +179,11 @@ pub(crate) fn build_serial<T: Scalar>(
         parent: Option<usize>,
     }
     let leaf_size = input.options.leaf_size;
-    let mut nodes: Vec<Node<T>> = Vec::with_capacity(2 * slots.len() / leaf_size.max(1) + 1);
+    let mut nodes: Vec<Node<T>> = Vec::with_capacity(2 * items.len() / leaf_size + 1);
     let mut max_depth = depth;
     let mut stack = vec![Task {
         start: 0,
-        end: slots.len(),
+        end: items.len(),
         depth,
         parent: None,
     }];
@@ -148,13 +193,13 @@ pub(crate) fn build_serial<T: Scalar>(
             nodes[p].a = idx as u32;
         }
         max_depth = max_depth.max(t.depth);
-        let node_slots = &mut slots[t.start..t.end];
-        if node_slots.len() <= leaf_size {
-            node_slots.sort_unstable();
+        let node_items = &mut items[t.start..t.end];
+        if node_items.len() <= leaf_size {
+            node_items.sort_unstable_by_key(|it| input.layout.slot(it));
             nodes.push(Node::leaf(offset + t.start, offset + t.end));
             continue;
         }
-        let (split, value) = split_node(input, node_slots, t.depth);
+        let (split, value) = split_node(input, node_items, t.depth);
         let mid = t.start + split.rank;
         nodes.push(Node::internal(split.dim, value, 0, offset + t.end));
         stack.push(Task {
@@ -176,21 +221,21 @@ pub(crate) fn build_serial<T: Scalar>(
     }
 }
 
-/// Builds the subtree over `slots` like [`build_serial`], building the children of balanced
+/// Builds the subtree over `items` like [`build_serial`], building the children of balanced
 /// splits of large nodes in parallel (rayon) and concatenating them in preorder.
-pub(crate) fn build_parallel<T: Scalar>(
-    input: &BuildInput<'_, T>,
-    slots: &mut [u32],
+pub(crate) fn build_parallel<T: Scalar, L: Layout<T>>(
+    input: &BuildInput<L>,
+    items: &mut [L::Item],
     offset: usize,
     depth: usize,
 ) -> Subtree<T> {
-    let n = slots.len();
+    let n = items.len();
     if n < 2 * PARALLEL_MIN || n <= input.options.leaf_size {
-        return build_serial(input, slots, offset, depth);
+        return build_serial(input, items, offset, depth);
     }
-    let (split, value) = split_node(input, slots, depth);
+    let (split, value) = split_node(input, items, depth);
     let rank = split.rank;
-    let (left, right) = slots.split_at_mut(rank);
+    let (left, right) = items.split_at_mut(rank);
     let (l, r) = if rank >= PARALLEL_MIN && n - rank >= PARALLEL_MIN {
         rayon::join(
             || build_parallel(input, left, offset, depth + 1),
@@ -206,11 +251,7 @@ pub(crate) fn build_parallel<T: Scalar>(
 }
 
 /// `root` followed by the nodes of `left` and `right`, child links rebased.
-pub(crate) fn join_subtrees<T: Scalar>(
-    mut root: Node<T>,
-    left: Subtree<T>,
-    right: Subtree<T>,
-) -> Subtree<T> {
+fn join_subtrees<T: Scalar>(mut root: Node<T>, left: Subtree<T>, right: Subtree<T>) -> Subtree<T> {
     let right_start = 1 + left.nodes.len();
     root.a = right_start as u32;
     let mut nodes = Vec::with_capacity(right_start + right.nodes.len());

@@ -3,6 +3,7 @@
 //! caller's indices, answering the exact queries of Chapter 5.
 
 mod build;
+mod layout;
 mod node;
 pub mod options;
 mod presorted;
@@ -18,7 +19,8 @@ use crate::points::PointsView;
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
 use crate::table::{NeighborTable, TableOptions};
-use build::{build_parallel, build_serial, BuildInput};
+use build::{build_parallel, build_serial, BuildInput, Subtree};
+use layout::{BySlot, Inline, Layout, Record};
 use node::Node;
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
 use search::{TreeView, WithinRadius};
@@ -71,20 +73,19 @@ impl<T: Scalar> KdTree<T> {
         options.validate()?;
         let cloud = Cloud::<T>::from_view(view, options.non_finite)?;
         let n = cloud.len();
-        let input = BuildInput {
-            coords: &cloud.coords,
-            dim: cloud.dim,
-            options: *options,
-        };
-        let (subtree, order) = if options.median == MedianAlgorithm::Presorted {
-            presorted::build_presorted(&input, n)
-        } else {
-            let mut slots: Vec<u32> = (0..n as u32).collect();
-            let subtree = match options.threads {
-                1 => build_serial(&input, &mut slots, 0, 0),
-                t => with_threads(t, || build_parallel(&input, &mut slots, 0, 0))?,
-            };
-            (subtree, slots)
+        let (subtree, order) = match cloud.dim {
+            1 => build_inline::<T, 1>(&cloud, options)?,
+            2 => build_inline::<T, 2>(&cloud, options)?,
+            3 => build_inline::<T, 3>(&cloud, options)?,
+            _ => {
+                let layout = BySlot {
+                    coords: &cloud.coords,
+                    dim: cloud.dim,
+                };
+                let mut slots: Vec<u32> = (0..n as u32).collect();
+                let subtree = run_build(layout, options, &mut slots)?;
+                (subtree, slots)
+            }
         };
         let dim = cloud.dim;
         let mut coords = Vec::with_capacity(n * dim);
@@ -218,6 +219,41 @@ impl<T: Scalar> KdTree<T> {
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()> {
         self.search(query, Neighborhood::KnnRadius { k, radius }, out)
+    }
+}
+
+/// Builds with compact records of dimension `D`; returns the nodes and the slots in tree
+/// order.
+fn build_inline<T: Scalar, const D: usize>(
+    cloud: &Cloud<T>,
+    options: &BuildOptions,
+) -> Result<(Subtree<T>, Vec<u32>)> {
+    let mut records: Vec<Record<T, D>> = (0..cloud.len())
+        .map(|s| Record {
+            p: std::array::from_fn(|j| cloud.coords[s * D + j]),
+            slot: s as u32,
+        })
+        .collect();
+    let subtree = run_build(Inline::<D>, options, &mut records)?;
+    Ok((subtree, records.iter().map(|r| r.slot).collect()))
+}
+
+/// Runs the build the options ask for over `items` (given in slot order, left in tree order).
+fn run_build<T: Scalar, L: Layout<T>>(
+    layout: L,
+    options: &BuildOptions,
+    items: &mut [L::Item],
+) -> Result<Subtree<T>> {
+    let input = BuildInput {
+        layout,
+        options: *options,
+    };
+    if options.median == MedianAlgorithm::Presorted {
+        return Ok(presorted::build_presorted(&input, items));
+    }
+    match options.threads {
+        1 => Ok(build_serial(&input, items, 0, 0)),
+        t => with_threads(t, || build_parallel(&input, items, 0, 0)),
     }
 }
 

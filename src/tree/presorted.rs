@@ -6,38 +6,42 @@
 //! searches instead of scans. Serial; gives the same tree as every selection build.
 
 use super::build::{BuildInput, Subtree};
+use super::layout::Layout;
 use super::node::Node;
-use super::split::{choose_split, lex_less, NodeFacts};
+use super::split::{choose_split, resolve_below, NodeFacts, Plan};
 use crate::scalar::Scalar;
 
 /// Facts about a node read from the presorted lists.
-struct SortedFacts<'a, T> {
-    coords: &'a [T],
-    dim: usize,
+struct SortedFacts<'a, L: Layout<T>, T: Scalar> {
+    layout: &'a L,
+    /// The items in slot order.
+    by_slot: &'a [L::Item],
     lists: &'a [Vec<u32>],
     start: usize,
     end: usize,
 }
 
-impl<T: Scalar> SortedFacts<'_, T> {
+impl<L: Layout<T>, T: Scalar> SortedFacts<'_, L, T> {
     #[inline]
     fn coord(&self, list: usize, pos: usize) -> T {
-        self.coords[self.lists[list][pos] as usize * self.dim + list]
+        self.layout
+            .coord(&self.by_slot[self.lists[list][pos] as usize], list)
+    }
+
+    /// Number of the node's points with coordinate `< value` in `j` (a binary search).
+    fn count_below(&self, j: usize, value: T) -> usize {
+        let list = &self.lists[j][self.start..self.end];
+        list.partition_point(|&s| self.layout.coord(&self.by_slot[s as usize], j) < value)
     }
 }
 
-impl<T: Scalar> NodeFacts<T> for SortedFacts<'_, T> {
+impl<L: Layout<T>, T: Scalar> NodeFacts<T> for SortedFacts<'_, L, T> {
     fn len(&self) -> usize {
         self.end - self.start
     }
 
     fn range(&self, j: usize) -> (T, T) {
         (self.coord(j, self.start), self.coord(j, self.end - 1))
-    }
-
-    fn count_below(&self, j: usize, value: T) -> usize {
-        let list = &self.lists[j][self.start..self.end];
-        list.partition_point(|&s| self.coords[s as usize * self.dim + j] < value)
     }
 
     fn closest(&self, j: usize, target: T) -> T {
@@ -57,17 +61,19 @@ impl<T: Scalar> NodeFacts<T> for SortedFacts<'_, T> {
     }
 }
 
-/// Builds the whole tree over all slots; returns the subtree and the slots in tree order.
-pub(crate) fn build_presorted<T: Scalar>(
-    input: &BuildInput<'_, T>,
-    n: usize,
-) -> (Subtree<T>, Vec<u32>) {
-    let (coords, d) = (input.coords, input.dim);
+/// Builds the whole tree over `items` (given in slot order, rearranged into tree order).
+pub(crate) fn build_presorted<T: Scalar, L: Layout<T>>(
+    input: &BuildInput<L>,
+    items: &mut [L::Item],
+) -> Subtree<T> {
+    let layout = &input.layout;
+    let (n, d) = (items.len(), layout.dim());
+    let by_slot: &[L::Item] = items;
     let mut lists: Vec<Vec<u32>> = (0..d)
         .map(|j| {
             let mut l: Vec<u32> = (0..n as u32).collect();
             l.sort_unstable_by(|&a, &b| {
-                if lex_less(coords, d, a, b, j) {
+                if layout.lex_less(&by_slot[a as usize], &by_slot[b as usize], j) {
                     std::cmp::Ordering::Less
                 } else {
                     std::cmp::Ordering::Greater
@@ -95,15 +101,21 @@ pub(crate) fn build_presorted<T: Scalar>(
             continue;
         }
         let facts = SortedFacts {
-            coords,
-            dim: d,
+            layout,
+            by_slot,
             lists: &lists,
             start,
             end,
         };
-        let split = choose_split(input.options.pivot, depth, d, &facts);
-        let (j, mid) = (split.dim, start + split.rank);
-        let value = coords[lists[j][mid] as usize * d + j];
+        let (j, rank, value) = match choose_split(input.options.pivot, depth, d, &facts) {
+            Plan::Rank(split) => (split.dim, split.rank, None),
+            Plan::Below { dim, value } => match resolve_below(facts.count_below(dim, value), end - start) {
+                Ok(rank) => (dim, rank, Some(value)),
+                Err(rank) => (dim, rank, None),
+            },
+        };
+        let mid = start + rank;
+        let value = value.unwrap_or_else(|| facts.coord(j, mid));
         for &s in &lists[j][start..mid] {
             in_left[s as usize] = true;
         }
@@ -119,14 +131,12 @@ pub(crate) fn build_presorted<T: Scalar>(
         stack.push((mid, end, depth + 1, Some(idx)));
         stack.push((start, mid, depth + 1, None));
     }
-    let order = lists.swap_remove(0);
-    (
-        Subtree {
-            nodes,
-            depth: max_depth,
-        },
-        order,
-    )
+    let in_tree_order: Vec<L::Item> = lists[0].iter().map(|&s| by_slot[s as usize]).collect();
+    items.copy_from_slice(&in_tree_order);
+    Subtree {
+        nodes,
+        depth: max_depth,
+    }
 }
 
 /// Moves the slots marked in `in_left` to the front, keeping the order within both parts
