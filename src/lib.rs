@@ -16,6 +16,7 @@ pub mod linalg;
 pub mod points;
 pub mod query;
 pub mod scalar;
+pub mod select;
 pub mod table;
 
 pub use cloud::NonFinitePolicy;
