@@ -30,6 +30,19 @@ const PRUNE_LIMIT: f64 = 1e300;
 
 /// Answers queries by a sweep along the principal axis of largest variance (thesis
 /// Algorithm 8), with the same results as brute force.
+///
+/// ```
+/// use nbhd::{Neighborhood, NeighborSearch, NonFinitePolicy, PcaSweep, PointsView, Query};
+///
+/// let pts = [[0.0f32, 0.0], [1.0, 0.0], [0.0, 2.0], [3.0, 3.0]];
+/// let view = PointsView::from_rows(&pts)?;
+/// let pca = PcaSweep::<f32>::new(&view, NonFinitePolicy::Reject)?;
+/// let mut out = Vec::new();
+/// pca.search(Query::stored_excluding_self(0), Neighborhood::Knn { k: 2 }, &mut out)?;
+/// let found: Vec<(u32, f32)> = out.iter().map(|n| (n.index, n.sq_dist)).collect();
+/// assert_eq!(found, [(1, 1.0), (2, 4.0)]);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct PcaSweep<T> {
     /// The points, reordered by ascending projection on the first axis (ties by input order).

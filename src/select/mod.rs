@@ -18,9 +18,9 @@
 //! finished by the median of medians, so every algorithm is `O(n)` in the worst case except
 //! `Sort`.
 //!
-//! Nothing allocates except `Sort` (whatever the standard library's unstable sort needs, which
-//! is nothing) and nothing recurses except on samples that shrink geometrically; the side of a
-//! partition that holds rank `k` is handled by a loop.
+//! Nothing allocates (the median of medians gathers its medians in place, and `Sort` uses the
+//! standard library's in-place unstable sort), and nothing recurses except on samples that
+//! shrink geometrically; the side of a partition that holds rank `k` is handled by a loop.
 //!
 //! The order is given as a strict "less than" predicate. The algorithms are written for a
 //! strict total order, but stay correct (and fast) for a strict weak order, i.e. a comparator
@@ -67,6 +67,22 @@ impl SelectAlgorithm {
 /// less. The order of the elements within each side is unspecified.
 ///
 /// The result depends only on the input and `algo` (no run-time randomness).
+///
+/// ```
+/// use nbhd::select::{select_nth, SelectAlgorithm};
+///
+/// // Indices of points, ordered by their x coordinate (ties by index: a strict total order).
+/// let xs = [0.5, -1.0, 2.0, 0.5, 3.0];
+/// let mut idx: Vec<u32> = (0..5).collect();
+/// let mut less = |a: &u32, b: &u32| {
+///     let (p, q) = (xs[*a as usize], xs[*b as usize]);
+///     p < q || (p == q && a < b)
+/// };
+/// select_nth(&mut idx, 2, &mut less, SelectAlgorithm::FloydRivest);
+/// assert_eq!(idx[2], 3); // the median: x = 0.5, second of the two by index
+/// assert!(idx[..2].iter().all(|&i| less(&i, &3)));
+/// assert!(idx[3..].iter().all(|&i| less(&3, &i)));
+/// ```
 ///
 /// # Panics
 ///
