@@ -7,7 +7,7 @@
 //! Results are identical to [`BruteForce`](super::brute::BruteForce): the last word is always
 //! the same `sq_dist(q, x) ≤ bound` test in the scalar type `T`. Projections are computed in
 //! `f64` and are rounded, so every pruning test is widened by a margin that covers the rounding
-//! of the projections and of `sq_dist` itself (see [`Margins`]): a point is pruned only if its
+//! of the projections and of `sq_dist` itself (see `Margins`): a point is pruned only if its
 //! computed squared distance is certainly above the bound.
 //!
 //! - Radius queries scan the window `[q·a₁ − ε, q·a₁ + ε]` (found by binary search) in order.

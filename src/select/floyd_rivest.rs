@@ -1,5 +1,5 @@
 //! Floyd–Rivest select (R. W. Floyd and R. L. Rivest, "Expected time bounds for selection",
-//! CACM 18(3), 1975 [FR75]; thesis Section 6.1).
+//! CACM 18(3), 1975 \[FR75\]; thesis Section 6.1).
 //!
 //! Like randomized select (thesis Algorithm 10) it partitions around one pivot and continues on
 //! the side holding rank `k`; the difference is the pivot. From a range of `n` elements it draws
@@ -11,7 +11,7 @@
 //! now near an end, leaves only a small window: about `n + min(k, n − k) + o(n)` comparisons
 //! in expectation, optimal up to lower-order terms.
 //!
-//! Following [FR75], the sample size `s = e^(2 ln n / 3) / 2`, the shift
+//! Following \[FR75\], the sample size `s = e^(2 ln n / 3) / 2`, the shift
 //! `sd = sqrt(ln n · s · (n − s) / n) / 2` and the cut-off of 600 below which sampling does not
 //! pay are the published constants. Unlike the published version, which takes a contiguous block
 //! of the range as its sample and so assumes randomly ordered input, the sample is drawn by a
@@ -20,7 +20,7 @@
 
 use super::{median_of_medians, partition, quickselect, SplitMix64, WORK_BUDGET_FACTOR};
 
-/// Ranges up to this length are not sampled ([FR75] uses 600).
+/// Ranges up to this length are not sampled (\[FR75\] uses 600).
 const SAMPLE_ABOVE: usize = 600;
 
 /// Puts the element of rank `k` at `v[k]` (`k < v.len()`).
@@ -85,7 +85,7 @@ fn select_rec<E: Copy, F: FnMut(&E, &E) -> bool>(
 
 /// The positions `from..to` (containing `i`) of a range of length `n` that receive the sample,
 /// so that rank `i − from` in the sample estimates rank `i` in the range, shifted towards the
-/// middle by `sd` ([FR75]).
+/// middle by `sd` (\[FR75\]).
 fn sample_window(n: usize, i: usize) -> (usize, usize) {
     let nf = n as f64;
     let fi = i as f64;

@@ -1,4 +1,4 @@
-//! Deterministic select (thesis Algorithm 11, Blum, Floyd, Pratt, Rivest and Tarjan [Blu+73]).
+//! Deterministic select (thesis Algorithm 11, Blum, Floyd, Pratt, Rivest and Tarjan \[Blu+73\]).
 //!
 //! The range is cut into groups of five; the median of each group is moved to the front of the
 //! range (in place, no buffer), the median of these `⌈n/5⌉` medians is selected recursively and

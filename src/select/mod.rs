@@ -7,9 +7,9 @@
 //! - [`SelectAlgorithm::Quickselect`]: randomized select (thesis Algorithm 10) with a
 //!   median-of-three pivot, expected `O(n)`.
 //! - [`SelectAlgorithm::FloydRivest`]: the pivot is chosen from a sample so that it lands close
-//!   to rank `k` (Floyd and Rivest [FR75], thesis Section 6.1), about `n + min(k, n − k)`
+//!   to rank `k` (Floyd and Rivest \[FR75\], thesis Section 6.1), about `n + min(k, n − k)`
 //!   comparisons in expectation.
-//! - [`SelectAlgorithm::MedianOfMedians`]: deterministic select (thesis Algorithm 11, [Blu+73]),
+//! - [`SelectAlgorithm::MedianOfMedians`]: deterministic select (thesis Algorithm 11, \[Blu+73\]),
 //!   `O(n)` in the worst case.
 //!
 //! All randomness is a fixed pseudo-random sequence seeded from the slice length, so a build is
@@ -39,12 +39,12 @@ pub enum SelectAlgorithm {
     /// Randomized select (thesis Algorithm 10), median-of-three pivot from deterministic
     /// pseudo-random positions, Hoare partition; expected `O(n)`.
     Quickselect,
-    /// Floyd–Rivest select [FR75] (thesis Section 6.1): the pivot is the element of the right
+    /// Floyd–Rivest select \[FR75\] (thesis Section 6.1): the pivot is the element of the right
     /// rank in a random sample of about `n^(2/3)` elements, selected recursively; expected
     /// `n + min(k, n − k) + o(n)` comparisons.
     FloydRivest,
     /// Deterministic select by the median of medians of groups of five (thesis Algorithm 11,
-    /// [Blu+73]); `O(n)` in the worst case.
+    /// \[Blu+73\]); `O(n)` in the worst case.
     MedianOfMedians,
 }
 
