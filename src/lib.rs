@@ -17,12 +17,14 @@ pub mod parallel;
 pub mod points;
 pub mod query;
 pub mod scalar;
+pub mod select;
 pub mod table;
 
 pub use cloud::NonFinitePolicy;
 pub use error::{NbhdError, Result};
 pub use points::{PointsView, MAX_POINTS};
 pub use query::brute::BruteForce;
+pub use query::pca_sweep::PcaSweep;
 pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::{NeighborTable, TableOptions};

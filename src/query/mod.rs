@@ -12,6 +12,7 @@
 
 pub mod brute;
 mod heap;
+pub mod pca_sweep;
 
 use crate::error::{NbhdError, Result};
 use crate::scalar::Scalar;
