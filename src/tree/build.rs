@@ -11,6 +11,7 @@ use super::node::Node;
 use super::options::{BuildOptions, MedianAlgorithm};
 use super::split::{choose_split, resolve_below, NodeFacts, Plan, Split};
 use crate::scalar::Scalar;
+use crate::select::{select_nth, SelectAlgorithm};
 
 /// Children smaller than this are built serially.
 const PARALLEL_MIN: usize = 16 * 1024;
@@ -147,21 +148,14 @@ fn select<T: Scalar, L: Layout<T>>(
     dim: usize,
     algo: MedianAlgorithm,
 ) {
-    let cmp = |a: &L::Item, b: &L::Item| {
-        if layout.lex_less(a, b, dim) {
-            std::cmp::Ordering::Less
-        } else if layout.lex_less(b, a, dim) {
-            std::cmp::Ordering::Greater
-        } else {
-            std::cmp::Ordering::Equal
-        }
+    let mut less = |a: &L::Item, b: &L::Item| layout.lex_less(a, b, dim);
+    let algo = match algo {
+        MedianAlgorithm::Sort | MedianAlgorithm::Presorted => SelectAlgorithm::Sort,
+        MedianAlgorithm::Quickselect => SelectAlgorithm::Quickselect,
+        MedianAlgorithm::FloydRivest => SelectAlgorithm::FloydRivest,
+        MedianAlgorithm::MedianOfMedians => SelectAlgorithm::MedianOfMedians,
     };
-    match algo {
-        MedianAlgorithm::Sort | MedianAlgorithm::Presorted => items.sort_unstable_by(cmp),
-        _ => {
-            items.select_nth_unstable_by(k, cmp);
-        }
-    }
+    select_nth(items, k, &mut less, algo);
 }
 
 /// Builds the subtree over `items` (tree positions `offset..offset + items.len()`) at
