@@ -341,9 +341,20 @@ fn unsupported_extension(path: &Path) -> Option<String> {
 /// Reads a point cloud. The format is recognised by content (PLY and PCD headers) and
 /// otherwise by extension (`.obj`, `.xyz`/`.txt`/`.pts`/`.asc`/`.csv`).
 pub fn read(path: impl AsRef<Path>) -> Result<PointCloud, IoError> {
+    read_as(path, None).map(|(cloud, _)| cloud)
+}
+
+/// Reads a point cloud as [`read`] does, or in the given format, and tells the format read.
+pub fn read_as(
+    path: impl AsRef<Path>,
+    format: Option<Format>,
+) -> Result<(PointCloud, Format), IoError> {
     let path = path.as_ref();
     let data = std::fs::read(path).map_err(|e| IoError::new(path, IoErrorKind::Io(e)))?;
-    let format = match Format::sniff(&data).or_else(|| Format::from_path(path)) {
+    let format = match format
+        .or_else(|| Format::sniff(&data))
+        .or_else(|| Format::from_path(path))
+    {
         Some(f) => f,
         None => {
             let msg = unsupported_extension(path).unwrap_or_else(|| {
@@ -354,7 +365,9 @@ pub fn read(path: impl AsRef<Path>) -> Result<PointCloud, IoError> {
             return Err(IoError::new(path, IoErrorKind::Unsupported(msg)));
         }
     };
-    parse(&data, format).map_err(|f| f.with_path(path))
+    parse(&data, format)
+        .map(|c| (c, format))
+        .map_err(|f| f.with_path(path))
 }
 
 /// Reads a point cloud of the given format from memory; errors name the path `<memory>`.
