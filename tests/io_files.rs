@@ -407,3 +407,72 @@ fn unsupported_and_missing_files_say_so() {
     let e = io::write(tmp("bad.ply"), &bad, &WriteOptions::default()).unwrap_err();
     assert!(matches!(e.kind, IoErrorKind::InvalidCloud(_)), "{e}");
 }
+
+mod prop {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn coord() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            8 => any::<f64>().prop_filter("finite", |v| v.is_finite()),
+            1 => Just(f64::NAN),
+            1 => Just(f64::INFINITY),
+            1 => Just(-0.0),
+        ]
+    }
+
+    fn cloud() -> impl Strategy<Value = PointCloud> {
+        (1usize..40, any::<bool>(), 0usize..3).prop_flat_map(|(n, normals, ns)| {
+            (
+                proptest::collection::vec([coord(), coord(), coord()], n),
+                proptest::collection::vec([coord(), coord(), coord()], if normals { n } else { 0 }),
+                proptest::collection::vec(proptest::collection::vec(coord(), n), ns),
+            )
+                .prop_map(move |(p, nr, sc)| {
+                    let mut c = PointCloud::from_positions(p);
+                    if normals {
+                        c.set_normals(nr).unwrap();
+                    }
+                    for (k, v) in sc.into_iter().enumerate() {
+                        c.set_scalar(&format!("s{k}"), v).unwrap();
+                    }
+                    c
+                })
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Double precision is exact in every writable format and encoding, NaN and
+        /// infinities included.
+        #[test]
+        fn double_precision_round_trips_exactly(c in cloud()) {
+            for (format, enc) in [
+                (Format::Ply, Encoding::Ascii),
+                (Format::Ply, Encoding::Binary),
+                (Format::Ply, Encoding::BinaryBigEndian),
+                (Format::Pcd, Encoding::Ascii),
+                (Format::Pcd, Encoding::Binary),
+                (Format::Pcd, Encoding::BinaryCompressed),
+                (Format::Xyz, Encoding::Ascii),
+            ] {
+                let opts = WriteOptions { format: None, encoding: Some(enc), precision: Precision::Double };
+                let bytes = io::write_bytes(&c, format, &opts).unwrap();
+                let back = io::read_bytes(&bytes, format).unwrap();
+                let what = format!("{format:?} {enc:?}");
+                prop_assert_eq!(back.len(), c.len());
+                let bits = |v: &[[f64; 3]]| v.iter().flatten().map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() }).collect::<Vec<_>>();
+                prop_assert_eq!(bits(&back.positions), bits(&c.positions), "{}", what);
+                prop_assert_eq!(back.normals.as_deref().map(bits), c.normals.as_deref().map(bits), "{}", what);
+                prop_assert_eq!(back.scalars.len(), c.scalars.len());
+                for (s, t) in back.scalars.iter().zip(&c.scalars) {
+                    prop_assert_eq!(&s.name, &t.name);
+                    let b: Vec<u64> = s.values.iter().map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() }).collect();
+                    let a: Vec<u64> = t.values.iter().map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() }).collect();
+                    prop_assert_eq!(a, b, "{}", what);
+                }
+            }
+        }
+    }
+}
