@@ -476,3 +476,74 @@ mod prop {
         }
     }
 }
+
+#[test]
+fn packed_colours_keep_their_bits() {
+    // rgb stored as the bits of a float; 0xFFAABBCC is a signalling-NaN pattern that a
+    // float conversion would alter.
+    let mut b = b"VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n\
+WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n"
+        .to_vec();
+    for c in [0xFFAABBCCu32, 0x00102030] {
+        b.extend(1f32.to_le_bytes());
+        b.extend(2f32.to_le_bytes());
+        b.extend(3f32.to_le_bytes());
+        b.extend(c.to_le_bytes());
+    }
+    let c = io::read_bytes(&b, Format::Pcd).unwrap();
+    assert_eq!(
+        c.scalar("rgb").unwrap(),
+        [0xFFAABBCCu32 as f64, 0x00102030 as f64]
+    );
+    assert_eq!(
+        c.colors().unwrap(),
+        vec![[0xAA, 0xBB, 0xCC], [0x10, 0x20, 0x30]]
+    );
+    let single = WriteOptions {
+        precision: Precision::Single,
+        encoding: Some(Encoding::Binary),
+        ..WriteOptions::default()
+    };
+    let out = io::write_bytes(&c, Format::Pcd, &single).unwrap();
+    let text = String::from_utf8_lossy(&out);
+    assert!(text.contains("TYPE F F F U\n"), "{text}");
+    assert_eq!(&out[out.len() - 16 + 12..], &0x00102030u32.to_le_bytes());
+    assert_eq!(
+        &out[out.len() - 32 + 12..out.len() - 16],
+        &0xFFAABBCCu32.to_le_bytes()
+    );
+    for (format, opts) in [
+        (Format::Ply, WriteOptions::ascii()),
+        (Format::Ply, single),
+        (Format::Pcd, WriteOptions::ascii()),
+        (
+            Format::Xyz,
+            WriteOptions {
+                precision: Precision::Single,
+                ..WriteOptions::default()
+            },
+        ),
+    ] {
+        let bytes = io::write_bytes(&c, format, &opts).unwrap();
+        let back = io::read_bytes(&bytes, format).unwrap();
+        assert_eq!(back.scalar("rgb"), c.scalar("rgb"), "{format:?}");
+    }
+    // PCL's ascii form: the float printed as a number.
+    let f = f32::from_bits(0x00102030);
+    let t = format!("FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nWIDTH 1\nPOINTS 1\nDATA ascii\n0 0 0 {f:e}\n");
+    let c = io::read_bytes(t.as_bytes(), Format::Pcd).unwrap();
+    assert_eq!(c.colors().unwrap(), vec![[0x10, 0x20, 0x30]]);
+}
+
+#[test]
+fn real_office_scan_has_colours() {
+    let Some(dir) = data_dir() else { return };
+    let c = io::read(dir.join("pcl/office1.pcd")).unwrap();
+    let colors = c.colors().expect("rgb field");
+    let distinct: std::collections::HashSet<_> = colors.iter().collect();
+    assert!(distinct.len() > 1000, "{} colours", distinct.len());
+    // Through binary PCD and back: the same packed values.
+    let bytes = io::write_bytes(&c, Format::Pcd, &WriteOptions::default()).unwrap();
+    let back = io::read_bytes(&bytes, Format::Pcd).unwrap();
+    assert_eq!(back.scalar("rgb"), c.scalar("rgb"));
+}

@@ -169,15 +169,29 @@ fn basis(view: [f64; 3], up: [f64; 3]) -> [[f64; 3]; 3] {
     [r, u, f]
 }
 
-/// Draws points. `normals` (one per point) switch on the light; `scalars` (one per point)
-/// colour the points through the colour map, NaN values in grey. Non-finite points are left
-/// out. Same input, same picture.
+/// What colours the points.
+#[derive(Clone, Copy, Debug)]
+pub enum Paint<'a> {
+    /// [`RenderOptions::flat_color`] for all.
+    Flat,
+    /// One value per point, through the colour map; NaN values in grey.
+    Scalar(&'a [f64]),
+    /// One colour per point (e.g. a scan's camera colours).
+    Rgb(&'a [[u8; 3]]),
+}
+
+/// Draws points. `normals` (one per point) switch on the light; `paint` colours them.
+/// Non-finite points are left out. Same input, same picture.
 pub fn render(
     positions: &[[f64; 3]],
     normals: Option<&[[f64; 3]]>,
-    scalars: Option<&[f64]>,
+    paint: Paint<'_>,
     opts: &RenderOptions,
 ) -> Image {
+    let scalars = match paint {
+        Paint::Scalar(s) => Some(s),
+        _ => None,
+    };
     let (w, h) = (opts.width.max(1), opts.height.max(1));
     let mut img = Image {
         width: w,
@@ -262,7 +276,10 @@ pub fn render(
                     opts.colormap.color(0.5)
                 }
             }
-            _ => opts.flat_color,
+            _ => match paint {
+                Paint::Rgb(c) => c[i],
+                _ => opts.flat_color,
+            },
         };
         let shade = match normals.and_then(|n| normalize(n[i])) {
             Some(n) => 0.22 + 0.78 * dot(n, light).abs(),
@@ -300,21 +317,29 @@ pub fn render(
     img
 }
 
-/// Draws a cloud, coloured by the scalar field `color_by` (or by `x`, `y`, `z`) if given.
+/// Draws a cloud, coloured by the scalar field `color_by`, by a coordinate (`x`, `y`, `z`), or
+/// by the cloud's own colours (`rgb`: a packed `rgb`/`rgba` field or `red green blue`).
 pub fn render_cloud(
     cloud: &PointCloud,
     color_by: Option<&str>,
     opts: &RenderOptions,
 ) -> Result<Image, String> {
     let coord: Vec<f64>;
-    let scalars = match color_by {
-        None => None,
+    let colors: Vec<[u8; 3]>;
+    let paint = match color_by {
+        None => Paint::Flat,
         Some(name @ ("x" | "y" | "z")) => {
             let j = ["x", "y", "z"].iter().position(|c| *c == name).unwrap();
             coord = cloud.positions.iter().map(|p| p[j]).collect();
-            Some(coord.as_slice())
+            Paint::Scalar(&coord)
         }
-        Some(name) => Some(cloud.scalar(name).ok_or_else(|| {
+        Some("rgb" | "rgba" | "color") => {
+            colors = cloud
+                .colors()
+                .ok_or("the cloud has no colours (no rgb, rgba or red/green/blue field)")?;
+            Paint::Rgb(&colors)
+        }
+        Some(name) => Paint::Scalar(cloud.scalar(name).ok_or_else(|| {
             let names: Vec<&str> = cloud.scalars.iter().map(|s| s.name.as_str()).collect();
             format!(
                 "no scalar field '{name}' (the file has: x y z{}{})",
@@ -326,7 +351,7 @@ pub fn render_cloud(
     Ok(render(
         &cloud.positions,
         cloud.normals.as_deref(),
-        scalars,
+        paint,
         opts,
     ))
 }
@@ -382,7 +407,7 @@ pub(crate) mod tests {
             height: 200,
             ..Default::default()
         };
-        let img = render(&p, Some(&n), None, &opts);
+        let img = render(&p, Some(&n), Paint::Flat, &opts);
         assert_eq!((img.width, img.height), (320, 200));
         assert_eq!(img.pixels.len(), 320 * 200);
         let bytes = img.encode_png().unwrap();
@@ -399,7 +424,7 @@ pub(crate) mod tests {
             height: 200,
             ..Default::default()
         };
-        let img = render(&p, Some(&n), None, &opts);
+        let img = render(&p, Some(&n), Paint::Flat, &opts);
         // The sphere fills a disc of diameter 88% of the side: pi/4 * 0.88^2 = 61% of the
         // pixels, with splat rims a little more. No holes in the middle.
         let cov = img.coverage(opts.background) as f64 / (200.0 * 200.0);
@@ -421,23 +446,36 @@ pub(crate) mod tests {
             colormap: ColorMap::Turbo,
             ..Default::default()
         };
-        let a = render(&p, None, Some(&s), &opts);
-        let b = render(&p, None, Some(&s), &opts);
+        let a = render(&p, None, Paint::Scalar(&s), &opts);
+        let b = render(&p, None, Paint::Scalar(&s), &opts);
         assert_eq!(a, b);
         assert!(a.coverage(opts.background) > 160 * 120 / 4);
         // Flat colour: every covered pixel is a shade of the flat colour.
-        let flat = render(&p, None, None, &opts);
+        let flat = render(&p, None, Paint::Flat, &opts);
         assert_ne!(flat, a);
+        // Own colours: a red cloud has only reddish pixels.
+        let red = vec![[200, 0, 0]; p.len()];
+        let r = render(&p, None, Paint::Rgb(&red), &opts);
+        assert!(r
+            .pixels
+            .iter()
+            .all(|&c| c == opts.background || (c[1] == 0 && c[2] == 0 && c[0] > 0)));
     }
 
     #[test]
     fn empty_and_all_nan_input_give_a_blank_picture() {
         let opts = RenderOptions::default();
-        assert_eq!(render(&[], None, None, &opts).coverage(opts.background), 0);
+        assert_eq!(
+            render(&[], None, Paint::Flat, &opts).coverage(opts.background),
+            0
+        );
         let p = vec![[f64::NAN; 3]; 4];
-        assert_eq!(render(&p, None, None, &opts).coverage(opts.background), 0);
+        assert_eq!(
+            render(&p, None, Paint::Flat, &opts).coverage(opts.background),
+            0
+        );
         // One point still shows.
-        assert!(render(&[[1.0, 2.0, 3.0]], None, None, &opts).coverage(opts.background) > 0);
+        assert!(render(&[[1.0, 2.0, 3.0]], None, Paint::Flat, &opts).coverage(opts.background) > 0);
     }
 
     #[test]
@@ -455,14 +493,14 @@ pub(crate) mod tests {
     fn look() {
         let (p, n) = sphere(20000);
         let s: Vec<f64> = p.iter().map(|q| q[1]).collect();
-        render(&p, Some(&n), Some(&s), &RenderOptions::default())
+        render(&p, Some(&n), Paint::Scalar(&s), &RenderOptions::default())
             .save_png(Path::new("/tmp/nbhd-sphere.png"))
             .unwrap();
         let (p, n) = cube(80);
-        render(&p, Some(&n), None, &RenderOptions::default())
+        render(&p, Some(&n), Paint::Flat, &RenderOptions::default())
             .save_png(Path::new("/tmp/nbhd-cube.png"))
             .unwrap();
-        render(&p, None, None, &RenderOptions::default())
+        render(&p, None, Paint::Flat, &RenderOptions::default())
             .save_png(Path::new("/tmp/nbhd-cube-flat.png"))
             .unwrap();
     }

@@ -145,6 +145,32 @@ impl PointCloud {
             .map(|s| s.values.as_slice())
     }
 
+    /// Per-point colours, if the cloud has them: a packed `rgb`/`rgba` field (as PCL writes
+    /// them) or `red`, `green`, `blue` fields (as PLY files have them, 0..255).
+    pub fn colors(&self) -> Option<Vec<[u8; 3]>> {
+        if let Some(v) = self.scalar("rgb").or_else(|| self.scalar("rgba")) {
+            return Some(
+                v.iter()
+                    .map(|&c| {
+                        let c = if c.is_finite() { c as u32 } else { 0 };
+                        [(c >> 16) as u8, (c >> 8) as u8, c as u8]
+                    })
+                    .collect(),
+            );
+        }
+        let (r, g, b) = (
+            self.scalar("red")?,
+            self.scalar("green")?,
+            self.scalar("blue")?,
+        );
+        let ch = |v: f64| v.clamp(0.0, 255.0) as u8;
+        Some(
+            (0..self.len())
+                .map(|i| [ch(r[i]), ch(g[i]), ch(b[i])])
+                .collect(),
+        )
+    }
+
     /// Number of points with a NaN or infinite coordinate.
     pub fn non_finite_count(&self) -> usize {
         self.positions
@@ -621,7 +647,12 @@ pub(crate) fn out_columns<'a>(
         }
     }
     for s in &cloud.scalars {
-        cols.push((header_name(&s.name), Col::Scalar(&s.values)));
+        let col = if is_packed_color(&s.name, &s.values) {
+            Col::Packed(&s.values)
+        } else {
+            Col::Scalar(&s.values)
+        };
+        cols.push((header_name(&s.name), col));
     }
     cols
 }
@@ -632,6 +663,8 @@ pub(crate) enum Col<'a> {
     Pos(usize),
     Normal(usize),
     Scalar(&'a [f64]),
+    /// A packed colour (`rgb`, `rgba`): written as a 32-bit unsigned integer.
+    Packed(&'a [f64]),
 }
 
 impl Col<'_> {
@@ -639,7 +672,35 @@ impl Col<'_> {
         match *self {
             Col::Pos(j) => cloud.positions[i][j],
             Col::Normal(j) => cloud.normals.as_ref().map_or(0.0, |n| n[i][j]),
-            Col::Scalar(v) => v[i],
+            Col::Scalar(v) | Col::Packed(v) => v[i],
         }
     }
+
+    /// The value of point `i` as text (packed colours as integers).
+    pub fn text(&self, cloud: &PointCloud, i: usize, single: bool) -> String {
+        let v = self.get(cloud, i);
+        if self.packed() {
+            (v as u32).to_string()
+        } else {
+            value::fmt_num(v, single)
+        }
+    }
+
+    pub fn packed(&self) -> bool {
+        matches!(self, Col::Packed(_))
+    }
+}
+
+/// `rgb` and `rgba` fields hold a colour packed as `0xAARRGGBB`: PCL stores it as the bits of
+/// a float (`F 4`) or as `U 4`. nbhd keeps the integer and writes it as a 32-bit unsigned
+/// integer, which is bit-identical to PCL's float.
+pub(crate) fn is_packed_name(name: &str) -> bool {
+    name == "rgb" || name == "rgba"
+}
+
+fn is_packed_color(name: &str, values: &[f64]) -> bool {
+    is_packed_name(name)
+        && values
+            .iter()
+            .all(|&v| v >= 0.0 && v <= u32::MAX as f64 && v.fract() == 0.0)
 }

@@ -2,8 +2,8 @@
 
 use super::error::{Fail, PResult};
 use super::lzf;
-use super::value::{fmt_num, parse_num, tokens, Lines, Ty};
-use super::{assign_columns, out_columns, Builder, Encoding, Grid, PointCloud};
+use super::value::{parse_num, tokens, Lines, Ty};
+use super::{assign_columns, out_columns, Builder, Col, Encoding, Grid, PointCloud};
 use std::io::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -172,16 +172,21 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         }
     };
     // Columns: fields expanded by COUNT; padding fields ('_') skipped.
+    // A packed colour stored as the bits of a float is read as those bits (a 32-bit
+    // unsigned integer): converting it as a float would change NaN-pattern colours.
     let mut col_names = Vec::new();
     let mut col_ty = Vec::new();
+    let mut packed_float = Vec::new();
     for f in &fields {
+        let packed = f.count == 1 && f.ty == Ty::F32 && super::is_packed_name(&f.name);
         for k in 0..f.count {
             col_names.push(if f.count == 1 || f.name == "_" {
                 f.name.clone()
             } else {
                 format!("{}_{k}", f.name)
             });
-            col_ty.push(f.ty);
+            col_ty.push(if packed { Ty::U32 } else { f.ty });
+            packed_float.push(packed);
         }
     }
     let (dest, scalar_names, has_normals) =
@@ -217,7 +222,18 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                         ),
                     ));
                 }
-                b.push(vals.iter().zip(&col_ty).map(|(v, t)| t.round_text(*v)));
+                b.push(
+                    vals.iter()
+                        .zip(&col_ty)
+                        .zip(&packed_float)
+                        .map(|((v, t), p)| {
+                            if *p {
+                                (*v as f32).to_bits() as f64
+                            } else {
+                                t.round_text(*v)
+                            }
+                        }),
+                );
                 got += 1;
             }
             if got < n {
@@ -332,18 +348,25 @@ pub(crate) fn write(
         Encoding::BinaryCompressed => "binary_compressed",
         Encoding::BinaryBigEndian => unreachable!("refused by check_writable"),
     };
-    let rep = |s: &str| vec![s; cols.len()].join(" ");
+    let per_col = |packed: &str, float: &str| {
+        cols.iter()
+            .map(|(_, c)| if c.packed() { packed } else { float })
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
     write!(
         w,
         "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\n\
          COUNT {}\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n",
         names.join(" "),
-        rep(&size.to_string()),
-        rep("F"),
-        rep("1"),
+        per_col("4", &size.to_string()),
+        per_col("U", "F"),
+        per_col("1", "1"),
     )?;
-    let put = |buf: &mut Vec<u8>, v: f64| {
-        if single {
+    let put = |buf: &mut Vec<u8>, col: &Col<'_>, v: f64| {
+        if col.packed() {
+            buf.extend_from_slice(&(v as u32).to_le_bytes())
+        } else if single {
             buf.extend_from_slice(&(v as f32).to_le_bytes())
         } else {
             buf.extend_from_slice(&v.to_le_bytes())
@@ -358,7 +381,7 @@ pub(crate) fn write(
                     if c > 0 {
                         line.push(' ');
                     }
-                    line.push_str(&fmt_num(col.get(cloud, i), single));
+                    line.push_str(&col.text(cloud, i, single));
                 }
                 line.push('\n');
                 w.write_all(line.as_bytes())?;
@@ -369,7 +392,7 @@ pub(crate) fn write(
             for i in 0..n {
                 buf.clear();
                 for (_, col) in &cols {
-                    put(&mut buf, col.get(cloud, i));
+                    put(&mut buf, col, col.get(cloud, i));
                 }
                 w.write_all(&buf)?;
             }
@@ -378,7 +401,7 @@ pub(crate) fn write(
             let mut raw = Vec::with_capacity(n * cols.len() * size);
             for (_, col) in &cols {
                 for i in 0..n {
-                    put(&mut raw, col.get(cloud, i));
+                    put(&mut raw, col, col.get(cloud, i));
                 }
             }
             if raw.len() > u32::MAX as usize {

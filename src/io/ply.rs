@@ -2,7 +2,7 @@
 //! ...) are skipped.
 
 use super::error::{Fail, PResult};
-use super::value::{fmt_num, parse_num, tokens, Lines, Ty};
+use super::value::{parse_num, tokens, Lines, Ty};
 use super::{assign_columns, out_columns, Builder, Encoding, PointCloud};
 use std::io::Write;
 
@@ -279,7 +279,8 @@ pub(crate) fn write(
         env!("CARGO_PKG_VERSION"),
         cloud.len()
     );
-    for (name, _) in &cols {
+    for (name, col) in &cols {
+        let ty = if col.packed() { "uint" } else { ty };
         h.push_str(&format!("property {ty} {name}\n"));
     }
     h.push_str("end_header\n");
@@ -294,7 +295,7 @@ pub(crate) fn write(
                     if c > 0 {
                         line.push(' ');
                     }
-                    line.push_str(&fmt_num(col.get(cloud, i), single));
+                    line.push_str(&col.text(cloud, i, single));
                 }
                 line.push('\n');
                 w.write_all(line.as_bytes())?;
@@ -304,6 +305,11 @@ pub(crate) fn write(
                 let be = enc == Encoding::BinaryBigEndian;
                 for (_, col) in &cols {
                     let v = col.get(cloud, i);
+                    if col.packed() {
+                        let c = v as u32;
+                        buf.extend_from_slice(&if be { c.to_be_bytes() } else { c.to_le_bytes() });
+                        continue;
+                    }
                     match (single, be) {
                         (true, false) => buf.extend_from_slice(&(v as f32).to_le_bytes()),
                         (true, true) => buf.extend_from_slice(&(v as f32).to_be_bytes()),

@@ -4,7 +4,7 @@
 //! and normal and other extra columns become scalars `field3`, `field4`, ...
 
 use super::error::{Fail, PResult};
-use super::value::{fmt_num, parse_num, Lines};
+use super::value::{parse_num, Lines};
 use super::{assign_columns, out_columns, Builder, PointCloud};
 use std::io::Write;
 
@@ -92,7 +92,7 @@ pub(crate) fn write(w: &mut impl Write, cloud: &PointCloud, single: bool) -> PRe
             if c > 0 {
                 line.push(' ');
             }
-            line.push_str(&fmt_num(col.get(cloud, i), single));
+            line.push_str(&col.text(cloud, i, single));
         }
         line.push('\n');
         w.write_all(line.as_bytes())?;

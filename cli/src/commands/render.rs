@@ -25,7 +25,8 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub from: Option<FormatArg>,
 
-    /// Colour by this scalar field (e.g. curvature, intensity) or coordinate (x, y, z)
+    /// Colour by this scalar field (e.g. curvature, intensity), a coordinate (x, y, z), or
+    /// rgb for the scan's own colours
     #[arg(long, short)]
     pub color: Option<String>,
 
