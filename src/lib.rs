@@ -12,6 +12,8 @@
 
 pub mod cloud;
 pub mod error;
+#[cfg(feature = "io")]
+pub mod io;
 pub mod linalg;
 pub mod parallel;
 pub mod points;

@@ -1,0 +1,94 @@
+//! `nbhd info FILE`: what a point-cloud file holds.
+
+use crate::commands::FormatArg;
+use crate::output::{num, Output};
+use nbhd::io;
+use serde_json::json;
+use std::path::PathBuf;
+
+/// Show what a point-cloud file holds: point count, NaN points, bounding box, fields
+///
+/// Points with a NaN or infinite coordinate (holes of organized depth scans) are counted
+/// but left out of the bounding box; they keep their indices, and the tree skips or rejects
+/// them.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv)
+    pub file: PathBuf,
+
+    /// Read as this format instead of recognising it by content and extension
+    #[arg(long, value_enum)]
+    pub format: Option<FormatArg>,
+}
+
+pub fn run(a: Args, out: &Output) -> Result<(), String> {
+    let (cloud, format) =
+        io::read_as(&a.file, a.format.map(Into::into)).map_err(|e| e.to_string())?;
+    let n = cloud.len();
+    let bad = cloud.non_finite_count();
+    let bbox = cloud.bounding_box();
+    let scalars: Vec<serde_json::Value> = cloud
+        .scalars
+        .iter()
+        .map(|s| {
+            let (lo, hi) = finite_range(&s.values);
+            json!({"name": s.name, "min": num(lo), "max": num(hi)})
+        })
+        .collect();
+    out.json(&json!({
+        "file": a.file.display().to_string(),
+        "format": format.name(),
+        "points": n,
+        "non_finite": bad,
+        "organized": cloud.grid.map(|g| json!({"width": g.width, "height": g.height})),
+        "bbox": bbox.map(|b| json!({
+            "min": b.min.map(num),
+            "max": b.max.map(num),
+            "diagonal": num(b.diagonal()),
+        })),
+        "normals": cloud.normals.is_some(),
+        "fields": cloud.field_names(),
+        "scalars": scalars,
+    }));
+    let mut t = String::new();
+    t.push_str(&format!("file       {}\n", a.file.display()));
+    t.push_str(&format!("format     {}\n", format.name()));
+    t.push_str(&format!("points     {n}\n"));
+    t.push_str(&format!(
+        "non-finite {bad}{}\n",
+        if n > 0 {
+            format!(" ({:.1}%)", 100.0 * bad as f64 / n as f64)
+        } else {
+            String::new()
+        }
+    ));
+    if let Some(g) = cloud.grid {
+        t.push_str(&format!("organized  {} x {}\n", g.width, g.height));
+    }
+    match bbox {
+        Some(b) => {
+            let f = |v: [f64; 3]| format!("{:.6} {:.6} {:.6}", v[0], v[1], v[2]);
+            t.push_str(&format!("bbox min   {}\n", f(b.min)));
+            t.push_str(&format!("bbox max   {}\n", f(b.max)));
+            t.push_str(&format!("diagonal   {:.6}\n", b.diagonal()));
+        }
+        None => t.push_str("bbox       (no finite point)\n"),
+    }
+    t.push_str(&format!("fields     {}\n", cloud.field_names().join(" ")));
+    t.push_str(&format!(
+        "normals    {}",
+        if cloud.normals.is_some() { "yes" } else { "no" }
+    ));
+    for s in &cloud.scalars {
+        let (lo, hi) = finite_range(&s.values);
+        t.push_str(&format!("\nscalar     {} in [{lo}, {hi}]", s.name));
+    }
+    out.text(t);
+    Ok(())
+}
+
+fn finite_range(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .filter(|x| x.is_finite())
+        .fold((f64::NAN, f64::NAN), |(a, b), &x| (a.min(x), b.max(x)))
+}

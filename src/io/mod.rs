@@ -1,0 +1,706 @@
+//! Point-cloud files: read PLY, PCD, OBJ (vertices) and XYZ text; write PLY, PCD and XYZ.
+//!
+//! ```no_run
+//! use nbhd::io::{self, WriteOptions};
+//! let cloud = io::read("scan.pcd")?;
+//! println!("{} points, {} NaN", cloud.len(), cloud.non_finite_count());
+//! io::write("scan.ply", &cloud, &WriteOptions::default())?;
+//! # Ok::<(), nbhd::io::IoError>(())
+//! ```
+//!
+//! Points with NaN coordinates (holes of organized scans) are kept as read, so indices stay
+//! the file's; the tree skips or rejects them by its `NonFinitePolicy`.
+//!
+//! The parsers are written here rather than taken from crates so that every error can name
+//! the line or byte where a file went wrong, and the `io` feature adds no dependency:
+//! `pcd-rs` (which reads `binary_compressed` since 0.13) reports no byte offsets in binary data
+//! and brings `regex` and a derive macro; the `lzf` crate is deprecated; `tobj` re-indexes
+//! vertices per object and drops unreferenced ones, whereas here an OBJ's `v` lines are the
+//! points, in file order.
+
+mod error;
+mod lzf;
+mod obj;
+mod pcd;
+mod ply;
+mod value;
+mod xyz;
+
+pub use error::{IoError, IoErrorKind, Location};
+
+use crate::error::{NbhdError, Result as NbhdResult};
+use crate::points::PointsView;
+use error::{Fail, PResult};
+use std::io::Write;
+use std::path::Path;
+
+/// A named per-point scalar, e.g. `curvature` or `intensity`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScalarField {
+    /// Name as in the file (`curvature`, `intensity`, `rgb`, ...).
+    pub name: String,
+    /// One value per point.
+    pub values: Vec<f64>,
+}
+
+/// Width and height of an organized cloud (a depth image: point `i` is pixel
+/// `(i % width, i / width)`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Grid {
+    /// Pixels per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+}
+
+/// Axis-aligned bounding box of the finite points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Smallest x, y, z.
+    pub min: [f64; 3],
+    /// Largest x, y, z.
+    pub max: [f64; 3],
+}
+
+impl Aabb {
+    /// Length of the diagonal.
+    pub fn diagonal(&self) -> f64 {
+        (0..3)
+            .map(|j| (self.max[j] - self.min[j]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
+}
+
+/// A point cloud as read from or written to a file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointCloud {
+    /// Positions, in file order; non-finite ones kept.
+    pub positions: Vec<[f64; 3]>,
+    /// Per-point normals, if the file has them (`nx ny nz` or `normal_x ...`).
+    pub normals: Option<Vec<[f64; 3]>>,
+    /// Other per-point values, in file order.
+    pub scalars: Vec<ScalarField>,
+    /// Width and height of an organized cloud (PCD with `HEIGHT` > 1).
+    pub grid: Option<Grid>,
+}
+
+impl PointCloud {
+    /// A cloud of positions only.
+    pub fn from_positions(positions: Vec<[f64; 3]>) -> Self {
+        Self {
+            positions,
+            ..Self::default()
+        }
+    }
+
+    /// Number of points (non-finite ones included).
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// `true` if there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Sets the normals. Errors: [`NbhdError::BufferTooSmall`] if there is not one per point.
+    pub fn set_normals(&mut self, normals: Vec<[f64; 3]>) -> NbhdResult<()> {
+        if normals.len() != self.len() {
+            return Err(NbhdError::BufferTooSmall {
+                what: "normals (points)",
+                len: normals.len(),
+                needed: self.len(),
+            });
+        }
+        self.normals = Some(normals);
+        Ok(())
+    }
+
+    /// Adds a scalar field, replacing one of the same name. Errors:
+    /// [`NbhdError::BufferTooSmall`] if there is not one value per point.
+    pub fn set_scalar(&mut self, name: &str, values: Vec<f64>) -> NbhdResult<()> {
+        if values.len() != self.len() {
+            return Err(NbhdError::BufferTooSmall {
+                what: "scalar values (points)",
+                len: values.len(),
+                needed: self.len(),
+            });
+        }
+        match self.scalars.iter_mut().find(|s| s.name == name) {
+            Some(s) => s.values = values,
+            None => self.scalars.push(ScalarField {
+                name: name.to_string(),
+                values,
+            }),
+        }
+        Ok(())
+    }
+
+    /// The values of the scalar field `name`.
+    pub fn scalar(&self, name: &str) -> Option<&[f64]> {
+        self.scalars
+            .iter()
+            .find(|s| s.name == name)
+            .map(|s| s.values.as_slice())
+    }
+
+    /// Per-point colours, if the cloud has them: a packed `rgb`/`rgba` field (as PCL writes
+    /// them) or `red`, `green`, `blue` fields (as PLY files have them, 0..255).
+    pub fn colors(&self) -> Option<Vec<[u8; 3]>> {
+        if let Some(v) = self.scalar("rgb").or_else(|| self.scalar("rgba")) {
+            return Some(
+                v.iter()
+                    .map(|&c| {
+                        let c = if c.is_finite() { c as u32 } else { 0 };
+                        [(c >> 16) as u8, (c >> 8) as u8, c as u8]
+                    })
+                    .collect(),
+            );
+        }
+        let (r, g, b) = (
+            self.scalar("red")?,
+            self.scalar("green")?,
+            self.scalar("blue")?,
+        );
+        let ch = |v: f64| v.clamp(0.0, 255.0) as u8;
+        Some(
+            (0..self.len())
+                .map(|i| [ch(r[i]), ch(g[i]), ch(b[i])])
+                .collect(),
+        )
+    }
+
+    /// Number of points with a NaN or infinite coordinate.
+    pub fn non_finite_count(&self) -> usize {
+        self.positions
+            .iter()
+            .filter(|p| !p.iter().all(|c| c.is_finite()))
+            .count()
+    }
+
+    /// Bounding box of the finite points, `None` if there is none.
+    pub fn bounding_box(&self) -> Option<Aabb> {
+        let mut it = self
+            .positions
+            .iter()
+            .filter(|p| p.iter().all(|c| c.is_finite()));
+        let first = *it.next()?;
+        let mut b = Aabb {
+            min: first,
+            max: first,
+        };
+        for p in it {
+            for (j, &c) in p.iter().enumerate() {
+                b.min[j] = b.min[j].min(c);
+                b.max[j] = b.max[j].max(c);
+            }
+        }
+        Some(b)
+    }
+
+    /// Names of the per-point fields: `x y z`, then `nx ny nz` if there are normals, then the
+    /// scalar fields.
+    pub fn field_names(&self) -> Vec<String> {
+        let mut v: Vec<String> = ["x", "y", "z"].iter().map(|s| s.to_string()).collect();
+        if self.normals.is_some() {
+            v.extend(["nx", "ny", "nz"].iter().map(|s| s.to_string()));
+        }
+        v.extend(self.scalars.iter().map(|s| s.name.clone()));
+        v
+    }
+
+    /// The positions as a [`PointsView`] for the trees (3 dimensions, `f64`).
+    /// Errors: [`NbhdError::EmptyInput`] for an empty cloud.
+    pub fn view(&self) -> NbhdResult<PointsView<'_>> {
+        PointsView::from_rows(&self.positions)
+    }
+
+    /// Checks that normals and scalar fields have one entry per point and that the grid,
+    /// if any, covers the points.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let n = self.len();
+        if let Some(nr) = &self.normals {
+            if nr.len() != n {
+                return Err(format!("{n} positions but {} normals", nr.len()));
+            }
+        }
+        for s in &self.scalars {
+            if s.values.len() != n {
+                return Err(format!(
+                    "{n} positions but {} values of scalar field '{}'",
+                    s.values.len(),
+                    s.name
+                ));
+            }
+        }
+        if let Some(g) = self.grid {
+            if g.width * g.height != n {
+                return Err(format!(
+                    "grid {} x {} does not hold {n} points",
+                    g.width, g.height
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A point-cloud file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// Stanford polygon format (`.ply`): ascii, binary little or big endian.
+    Ply,
+    /// Point Cloud Library format (`.pcd`): ascii, binary, binary_compressed.
+    Pcd,
+    /// Wavefront OBJ (`.obj`): the `v` lines are the points. Read only.
+    Obj,
+    /// Text, one point per line: `x y z [nx ny nz] [scalars...]` (`.xyz`, `.txt`, `.pts`,
+    /// `.asc`, `.csv`).
+    Xyz,
+}
+
+impl Format {
+    /// The format named by the extension of `path`, if any.
+    pub fn from_path(path: impl AsRef<Path>) -> Option<Format> {
+        let ext = path.as_ref().extension()?.to_str()?.to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "ply" => Format::Ply,
+            "pcd" => Format::Pcd,
+            "obj" => Format::Obj,
+            "xyz" | "txt" | "pts" | "asc" | "csv" | "xyzn" => Format::Xyz,
+            _ => return None,
+        })
+    }
+
+    /// Short name (`PLY`, `PCD`, `OBJ`, `XYZ`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Ply => "PLY",
+            Format::Pcd => "PCD",
+            Format::Obj => "OBJ",
+            Format::Xyz => "XYZ",
+        }
+    }
+
+    /// Recognises PLY and PCD by their first bytes.
+    pub fn sniff(data: &[u8]) -> Option<Format> {
+        if data.starts_with(b"ply\n") || data.starts_with(b"ply\r\n") {
+            return Some(Format::Ply);
+        }
+        let head = &data[..data.len().min(4096)];
+        let text = String::from_utf8_lossy(head);
+        for line in text.lines() {
+            let t = line.trim_start();
+            if t.is_empty() || t.starts_with('#') {
+                continue;
+            }
+            if t.starts_with("VERSION") || t.starts_with("FIELDS") {
+                return Some(Format::Pcd);
+            }
+            break;
+        }
+        None
+    }
+}
+
+/// How numbers are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    /// Text.
+    Ascii,
+    /// Binary, little endian (PLY `binary_little_endian`, PCD `binary`).
+    Binary,
+    /// Binary, big endian (PLY only).
+    BinaryBigEndian,
+    /// LZF-compressed, stored field by field (PCD `binary_compressed` only).
+    BinaryCompressed,
+}
+
+/// Width of the stored floating-point values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Precision {
+    /// 32-bit `float` (PLY `float`, PCD `F 4`): half the size, about 7 digits.
+    Single,
+    /// 64-bit `double` (PLY `double`, PCD `F 8`): exact for nbhd's `f64` values.
+    #[default]
+    Double,
+}
+
+/// Options of [`write()`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct WriteOptions {
+    /// Format; `None` takes it from the extension of the path.
+    pub format: Option<Format>,
+    /// Encoding; `None` is binary for PLY and PCD, text for XYZ.
+    pub encoding: Option<Encoding>,
+    /// Width of positions, normals and scalar fields.
+    pub precision: Precision,
+}
+
+impl WriteOptions {
+    /// Text output, double precision.
+    pub fn ascii() -> Self {
+        Self {
+            encoding: Some(Encoding::Ascii),
+            ..Self::default()
+        }
+    }
+}
+
+/// Known formats that nbhd does not read, with a hint.
+fn unsupported_extension(path: &Path) -> Option<String> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    let what = match ext.as_str() {
+        "las" | "laz" => "LAS/LAZ lidar files",
+        "e57" => "E57 scanner files",
+        "stl" => "STL meshes",
+        "off" => "OFF meshes",
+        "vtk" | "vtp" => "VTK files",
+        _ => return None,
+    };
+    Some(format!(
+        "{what} are not read by nbhd; convert to PLY, PCD, OBJ or XYZ first (e.g. with CloudCompare)"
+    ))
+}
+
+/// Reads a point cloud. The format is recognised by content (PLY and PCD headers) and
+/// otherwise by extension (`.obj`, `.xyz`/`.txt`/`.pts`/`.asc`/`.csv`).
+pub fn read(path: impl AsRef<Path>) -> Result<PointCloud, IoError> {
+    read_as(path, None).map(|(cloud, _)| cloud)
+}
+
+/// Reads a point cloud as [`read`] does, or in the given format, and tells the format read.
+pub fn read_as(
+    path: impl AsRef<Path>,
+    format: Option<Format>,
+) -> Result<(PointCloud, Format), IoError> {
+    let path = path.as_ref();
+    let data = std::fs::read(path).map_err(|e| IoError::new(path, IoErrorKind::Io(e)))?;
+    let format = match format
+        .or_else(|| Format::sniff(&data))
+        .or_else(|| Format::from_path(path))
+    {
+        Some(f) => f,
+        None => {
+            let msg = unsupported_extension(path).unwrap_or_else(|| {
+                "unknown point-cloud format: not a PLY or PCD file, and the extension is none of \
+                 .ply .pcd .obj .xyz .txt .pts .asc .csv"
+                    .to_string()
+            });
+            return Err(IoError::new(path, IoErrorKind::Unsupported(msg)));
+        }
+    };
+    parse(&data, format)
+        .map(|c| (c, format))
+        .map_err(|f| f.with_path(path))
+}
+
+/// Reads a point cloud of the given format from memory; errors name the path `<memory>`.
+pub fn read_bytes(data: &[u8], format: Format) -> Result<PointCloud, IoError> {
+    parse(data, format).map_err(|f| f.with_path(Path::new("<memory>")))
+}
+
+fn parse(data: &[u8], format: Format) -> PResult<PointCloud> {
+    match format {
+        Format::Ply => ply::read(data),
+        Format::Pcd => pcd::read(data),
+        Format::Obj => obj::read(data),
+        Format::Xyz => xyz::read(data),
+    }
+}
+
+/// Writes a point cloud: PLY (ascii, binary little or big endian), PCD (ascii, binary,
+/// binary_compressed) or XYZ text. Normals go out as `nx ny nz` (PLY) or
+/// `normal_x normal_y normal_z` (PCD); scalar fields as float properties/fields, which MeshLab
+/// and CloudCompare offer for colouring.
+pub fn write(
+    path: impl AsRef<Path>,
+    cloud: &PointCloud,
+    options: &WriteOptions,
+) -> Result<(), IoError> {
+    let path = path.as_ref();
+    let format =
+        match options.format.or_else(|| Format::from_path(path)) {
+            Some(f) => f,
+            None => return Err(IoError::new(
+                path,
+                IoErrorKind::Unsupported(
+                    "cannot tell the format to write from the extension; use .ply, .pcd or .xyz"
+                        .into(),
+                ),
+            )),
+        };
+    // Check before creating the file, so that a refused write leaves nothing behind.
+    check_writable(cloud, format, options).map_err(|f| f.with_path(path))?;
+    let file = std::fs::File::create(path).map_err(|e| IoError::new(path, IoErrorKind::Io(e)))?;
+    let mut w = std::io::BufWriter::new(file);
+    write_to(&mut w, cloud, format, options).map_err(|f| f.with_path(path))?;
+    w.flush()
+        .map_err(|e| IoError::new(path, IoErrorKind::Io(e)))
+}
+
+/// Writes a point cloud in `format` to memory (`options.format` is ignored).
+pub fn write_bytes(
+    cloud: &PointCloud,
+    format: Format,
+    options: &WriteOptions,
+) -> Result<Vec<u8>, IoError> {
+    let mut out = Vec::new();
+    check_writable(cloud, format, options)
+        .and_then(|_| write_to(&mut out, cloud, format, options))
+        .map_err(|f| f.with_path(Path::new("<memory>")))?;
+    Ok(out)
+}
+
+fn check_writable(cloud: &PointCloud, format: Format, options: &WriteOptions) -> PResult<()> {
+    cloud.validate().map_err(Fail::invalid)?;
+    let enc = options.encoding;
+    match (format, enc) {
+        (Format::Obj, _) => Err(Fail::unsupported(
+            "writing OBJ is not supported (it is read for its vertices); write PLY instead",
+        )),
+        (Format::Ply, Some(Encoding::BinaryCompressed)) => Err(Fail::unsupported(
+            "PLY has no compressed encoding; use ascii, binary or binary big endian",
+        )),
+        (Format::Pcd, Some(Encoding::BinaryBigEndian)) => {
+            Err(Fail::unsupported("PCD binary data is little endian only"))
+        }
+        (Format::Xyz, Some(e)) if e != Encoding::Ascii => Err(Fail::unsupported(
+            "XYZ is a text format; it has no binary encoding",
+        )),
+        _ => Ok(()),
+    }
+}
+
+fn write_to(
+    w: &mut impl Write,
+    cloud: &PointCloud,
+    format: Format,
+    options: &WriteOptions,
+) -> PResult<()> {
+    let single = options.precision == Precision::Single;
+    match format {
+        Format::Ply => ply::write(
+            w,
+            cloud,
+            options.encoding.unwrap_or(Encoding::Binary),
+            single,
+        ),
+        Format::Pcd => pcd::write(
+            w,
+            cloud,
+            options.encoding.unwrap_or(Encoding::Binary),
+            single,
+        ),
+        Format::Xyz => xyz::write(w, cloud, single),
+        Format::Obj => unreachable!("refused by check_writable"),
+    }
+}
+
+/// A property or field name usable in a PLY or PCD header: whitespace replaced by `_`.
+pub(crate) fn header_name(name: &str) -> String {
+    let s: String = name
+        .chars()
+        .map(|c| if c.is_whitespace() { '_' } else { c })
+        .collect();
+    if s.is_empty() {
+        "unnamed".into()
+    } else {
+        s
+    }
+}
+
+/// Collects per-point columns into a cloud: `dest` says where each column goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Dest {
+    Pos(usize),
+    Normal(usize),
+    Scalar(usize),
+    Skip,
+}
+
+/// Maps property/field names to destinations; returns them with the scalar names.
+/// Errors (as a message) if x, y or z is missing.
+pub(crate) fn assign_columns(
+    names: &[String],
+) -> std::result::Result<(Vec<Dest>, Vec<String>, bool), String> {
+    let mut dest = Vec::with_capacity(names.len());
+    let mut scalars = Vec::new();
+    let mut found = [false; 6];
+    for name in names {
+        let d = match name.as_str() {
+            "x" => Dest::Pos(0),
+            "y" => Dest::Pos(1),
+            "z" => Dest::Pos(2),
+            "nx" | "normal_x" => Dest::Normal(0),
+            "ny" | "normal_y" => Dest::Normal(1),
+            "nz" | "normal_z" => Dest::Normal(2),
+            "_" => Dest::Skip,
+            _ => {
+                scalars.push(name.clone());
+                Dest::Scalar(scalars.len() - 1)
+            }
+        };
+        match d {
+            Dest::Pos(j) | Dest::Normal(j) => {
+                let k = if matches!(d, Dest::Pos(_)) { j } else { 3 + j };
+                if found[k] {
+                    scalars.push(name.clone());
+                    dest.push(Dest::Scalar(scalars.len() - 1));
+                    continue;
+                }
+                found[k] = true;
+            }
+            _ => {}
+        }
+        dest.push(d);
+    }
+    if let Some(j) = (0..3).find(|&j| !found[j]) {
+        return Err(format!(
+            "no '{}' field: nbhd needs x, y and z per point",
+            ["x", "y", "z"][j]
+        ));
+    }
+    let normals = found[3] && found[4] && found[5];
+    if !normals {
+        // A partial normal is kept as scalars.
+        for (d, name) in dest.iter_mut().zip(names) {
+            if matches!(d, Dest::Normal(_)) {
+                scalars.push(name.clone());
+                *d = Dest::Scalar(scalars.len() - 1);
+            }
+        }
+    }
+    Ok((dest, scalars, normals))
+}
+
+/// Builds a cloud point by point from column values.
+pub(crate) struct Builder {
+    dest: Vec<Dest>,
+    cloud: PointCloud,
+    normals: Vec<[f64; 3]>,
+    has_normals: bool,
+}
+
+impl Builder {
+    pub fn new(dest: Vec<Dest>, scalar_names: Vec<String>, has_normals: bool, n: usize) -> Self {
+        let scalars = scalar_names
+            .into_iter()
+            .map(|name| ScalarField {
+                name,
+                values: Vec::with_capacity(n),
+            })
+            .collect();
+        Self {
+            dest,
+            cloud: PointCloud {
+                positions: Vec::with_capacity(n),
+                normals: None,
+                scalars,
+                grid: None,
+            },
+            normals: Vec::with_capacity(if has_normals { n } else { 0 }),
+            has_normals,
+        }
+    }
+
+    /// Adds a point from its column values (one per destination).
+    pub fn push(&mut self, values: impl Iterator<Item = f64>) {
+        let mut p = [0.0; 3];
+        let mut nr = [0.0; 3];
+        for (d, v) in self.dest.iter().zip(values) {
+            match *d {
+                Dest::Pos(j) => p[j] = v,
+                Dest::Normal(j) => nr[j] = v,
+                Dest::Scalar(s) => self.cloud.scalars[s].values.push(v),
+                Dest::Skip => {}
+            }
+        }
+        self.cloud.positions.push(p);
+        if self.has_normals {
+            self.normals.push(nr);
+        }
+    }
+
+    pub fn finish(mut self) -> PointCloud {
+        if self.has_normals {
+            self.cloud.normals = Some(self.normals);
+        }
+        self.cloud
+    }
+}
+
+/// The columns a writer emits: names and a getter per point.
+pub(crate) fn out_columns<'a>(
+    cloud: &'a PointCloud,
+    normal_names: [&str; 3],
+) -> Vec<(String, Col<'a>)> {
+    let mut cols: Vec<(String, Col<'a>)> = ["x", "y", "z"]
+        .iter()
+        .enumerate()
+        .map(|(j, n)| (n.to_string(), Col::Pos(j)))
+        .collect();
+    if cloud.normals.is_some() {
+        for (j, n) in normal_names.iter().enumerate() {
+            cols.push((n.to_string(), Col::Normal(j)));
+        }
+    }
+    for s in &cloud.scalars {
+        let col = if is_packed_color(&s.name, &s.values) {
+            Col::Packed(&s.values)
+        } else {
+            Col::Scalar(&s.values)
+        };
+        cols.push((header_name(&s.name), col));
+    }
+    cols
+}
+
+/// One output column.
+#[derive(Clone, Copy)]
+pub(crate) enum Col<'a> {
+    Pos(usize),
+    Normal(usize),
+    Scalar(&'a [f64]),
+    /// A packed colour (`rgb`, `rgba`): written as a 32-bit unsigned integer.
+    Packed(&'a [f64]),
+}
+
+impl Col<'_> {
+    pub fn get(&self, cloud: &PointCloud, i: usize) -> f64 {
+        match *self {
+            Col::Pos(j) => cloud.positions[i][j],
+            Col::Normal(j) => cloud.normals.as_ref().map_or(0.0, |n| n[i][j]),
+            Col::Scalar(v) | Col::Packed(v) => v[i],
+        }
+    }
+
+    /// The value of point `i` as text (packed colours as integers).
+    pub fn text(&self, cloud: &PointCloud, i: usize, single: bool) -> String {
+        let v = self.get(cloud, i);
+        if self.packed() {
+            (v as u32).to_string()
+        } else {
+            value::fmt_num(v, single)
+        }
+    }
+
+    pub fn packed(&self) -> bool {
+        matches!(self, Col::Packed(_))
+    }
+}
+
+/// `rgb` and `rgba` fields hold a colour packed as `0xAARRGGBB`: PCL stores it as the bits of
+/// a float (`F 4`) or as `U 4`. nbhd keeps the integer and writes it as a 32-bit unsigned
+/// integer, which is bit-identical to PCL's float.
+pub(crate) fn is_packed_name(name: &str) -> bool {
+    name == "rgb" || name == "rgba"
+}
+
+fn is_packed_color(name: &str, values: &[f64]) -> bool {
+    is_packed_name(name)
+        && values
+            .iter()
+            .all(|&v| v >= 0.0 && v <= u32::MAX as f64 && v.fract() == 0.0)
+}
