@@ -25,3 +25,6 @@ pub use query::brute::BruteForce;
 pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::NeighborTable;
+pub mod geometry;
+pub mod shapes;
+pub mod smooth;
