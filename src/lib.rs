@@ -25,6 +25,13 @@ pub use query::brute::BruteForce;
 pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::NeighborTable;
+
+// Normals (eq. 2.8–2.10), directional curvatures (eq. 2.20) and principal curvatures from
+// the Weingarten estimate (eq. 2.25–2.29) of point sets; the neighbourhood entry point.
 pub mod geometry;
+// Analytic test shapes (cube, sphere, torus, cylinder ∪ plane, catenoid for the Costa
+// surface) at the sizes of Fig. 8.2, seeded noise, and the smoothing quality metrics.
 pub mod shapes;
+// Isotropic (eq. 2.16, 2.18) and anisotropic (eq. 2.30–2.35) smoothing with the settings of
+// Section 7.3.
 pub mod smooth;

@@ -278,3 +278,42 @@ fn outputs_and_criteria_on_a_cube() {
         }
     }
 }
+
+#[test]
+fn every_feature_criterion_smooths() {
+    let cube = Cube::new(1.0);
+    let (s, h, p) = noisy(&cube, 3000, 0.3, 21);
+    let before = evaluate(&cube, &s, h, &p, None).unwrap();
+    for feature in [
+        FeatureCriterion::EdgeQuotient(0.3),
+        FeatureCriterion::PrincipalCurvature(Curvature::Relative(0.3)),
+        FeatureCriterion::DirectionalCurvature(Curvature::Relative(0.5)),
+    ] {
+        for weighting in [Weighting::Sharp, Weighting::Continuous] {
+            let o = SmoothOptions {
+                feature,
+                weighting,
+                formula: PrincipalFormula::ExactMoments,
+                ..SmoothOptions::default()
+            };
+            let r = smooth(&p, &o).unwrap();
+            assert!(all_finite(&r));
+            let q = quality(&cube, &s, h, &r);
+            let features = r.outputs.iter().filter(|o| o.feature).count();
+            eprintln!(
+                "{feature:?} {weighting:?}: {} {} {features}",
+                q.rms, q.edge_rms
+            );
+            // the edge quotient of noisy points is nearly random (about half the points pass),
+            // so the isotropically smoothed rest rounds the edges of this small cube
+            if !matches!(feature, FeatureCriterion::EdgeQuotient(_)) {
+                assert!(q.rms < before.rms, "{feature:?} {weighting:?}: {}", q.rms);
+            }
+            assert!(q.rms < 1.2 * before.rms);
+            assert!(
+                features > 0 && features < 3000,
+                "{feature:?} does not select"
+            );
+        }
+    }
+}
