@@ -138,6 +138,32 @@ pub fn add_noise(
         .collect())
 }
 
+/// A clean sample, its mean spacing `h` and a noisy copy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoisySample {
+    /// The clean sample (ground truth for the metrics).
+    pub clean: Sample,
+    /// Mean nearest-neighbour spacing of the clean sample.
+    pub h: f64,
+    /// The clean points moved by [`add_noise`] (same order).
+    pub points: Vec<DVec3>,
+}
+
+/// Samples `n` points of `shape` (seed `seed`), measures their spacing `h` and adds noise of
+/// `amplitude`·h (seed `seed + 1`).
+pub fn noisy_sample(
+    shape: &dyn Shape,
+    n: usize,
+    amplitude: f64,
+    kind: NoiseKind,
+    seed: u64,
+) -> Result<NoisySample> {
+    let clean = sample(shape, n, seed);
+    let h = crate::geometry::neighbors::mean_spacing(&clean.points)?;
+    let points = add_noise(&clean, amplitude, h, kind, seed.wrapping_add(1))?;
+    Ok(NoisySample { clean, h, points })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -197,6 +223,17 @@ mod tests {
             / 20_000.0;
         let want = (std::f64::consts::PI * big + 2.0 * small) / (2.0 * std::f64::consts::PI * big);
         assert!((outer - want).abs() < 0.015, "{outer} vs {want}");
+    }
+
+    #[test]
+    fn torus_density_and_noisy_sample() {
+        let t = Torus::new(1.0, 0.25);
+        // area π², so 500 points per unit area give ≈ 4,935 points
+        assert_eq!(t.count_for_density(500.0), 4935);
+        let ns = noisy_sample(&t, t.count_for_density(500.0), 0.5, NoiseKind::Uniform, 3).unwrap();
+        assert_eq!(ns.points.len(), 4935);
+        assert!(ns.h > 0.0 && ns.points != ns.clean.points);
+        assert!(noisy_sample(&t, 1, 0.5, NoiseKind::Uniform, 3).is_err());
     }
 
     #[test]

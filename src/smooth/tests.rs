@@ -317,3 +317,44 @@ fn every_feature_criterion_smooths() {
         }
     }
 }
+
+#[test]
+fn outputs_follow_the_orientation_and_the_sign_convention() {
+    let sphere = Sphere::new(2.0);
+    let s = sample(&sphere, 2500, 6);
+    for (o, sign) in [
+        (Orientation::AwayFrom(DVec3::ZERO), -1.0),
+        (Orientation::TowardViewpoint(DVec3::ZERO), 1.0),
+        (Orientation::Propagate, -1.0),
+    ] {
+        let r = analyze(
+            &s.points,
+            &SmoothOptions {
+                orientation: o,
+                formula: PrincipalFormula::ExactMoments,
+                ..SmoothOptions::default()
+            },
+        )
+        .unwrap();
+        let mean = r.outputs.iter().map(|o| o.mean_curvature).sum::<f64>() / 2500.0;
+        let ani = r
+            .outputs
+            .iter()
+            .map(|o| o.anisotropic_mean_curvature)
+            .sum::<f64>()
+            / 2500.0;
+        assert!((mean - sign * 0.5).abs() < 0.02, "{o:?}: {mean}");
+        // every κ_ij is ≈ ±1/R = ±0.5, far below λ = 0.2/h ≈ 3.6, so g = 1 everywhere
+        assert!((ani - sign * 0.5).abs() < 0.05, "{o:?}: {ani}");
+        let q = r
+            .outputs
+            .iter()
+            .map(|o| o.principal_curvature_quotient)
+            .sum::<f64>()
+            / 2500.0;
+        assert!(q > 0.5, "{q}");
+        assert!(r.outputs.iter().all(|o| o.covariance_quotient < 0.05));
+        let var = r.outputs.iter().map(|o| o.max_covariance).sum::<f64>() / 2500.0;
+        assert!(var > 0.5 * r.spacing * r.spacing && var < 10.0 * r.spacing * r.spacing);
+    }
+}
