@@ -12,6 +12,7 @@
 
 pub mod cloud;
 pub mod error;
+pub mod geometry;
 #[cfg(feature = "io")]
 pub mod io;
 pub mod linalg;
@@ -20,7 +21,10 @@ pub mod points;
 pub mod query;
 pub mod scalar;
 pub mod select;
+pub mod shapes;
+pub mod smooth;
 pub mod table;
+pub mod tree;
 
 pub use cloud::NonFinitePolicy;
 pub use error::{NbhdError, Result};
@@ -30,6 +34,4 @@ pub use query::pca_sweep::PcaSweep;
 pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::{NeighborTable, TableOptions};
-pub mod tree;
-
 pub use tree::{BuildOptions, KdTree, MedianAlgorithm, PivotPolicy, TreeStats};

@@ -1,0 +1,38 @@
+//! Time of the smoothing steps alone (total minus a zero-step run that only searches).
+//! `cargo run --release --example smooth_timing [points] [steps]`
+use nbhd::geometry::neighbors::mean_spacing;
+use nbhd::shapes::{add_noise, sample, NoiseKind, Torus};
+use nbhd::smooth::{smooth, SmoothOptions};
+use std::time::Instant;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(20_000);
+    let steps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10);
+    let s = sample(&Torus::new(1.0, 0.4), n, 1);
+    let h = mean_spacing(&s.points).unwrap();
+    let p = add_noise(&s, 1.0, h, NoiseKind::Gaussian, 2).unwrap();
+    let time = |o: SmoothOptions| {
+        let t = Instant::now();
+        smooth(&p, &o).unwrap();
+        t.elapsed().as_secs_f64()
+    };
+    let base = SmoothOptions {
+        outputs: false,
+        ..SmoothOptions::default()
+    };
+    let search = time(SmoothOptions { steps: 0, ..base });
+    let aniso = time(SmoothOptions { steps, ..base });
+    let iso = time(SmoothOptions {
+        steps,
+        ..SmoothOptions {
+            outputs: false,
+            ..SmoothOptions::isotropic()
+        }
+    });
+    println!(
+        "{n} points: search {search:.3} s; {steps} anisotropic steps {:.3} s, isotropic {:.3} s",
+        aniso - search,
+        iso - search
+    );
+}

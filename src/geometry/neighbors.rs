@@ -1,0 +1,82 @@
+//! The single entry point through which the geometry and smoothing code computes
+//! neighbourhoods (Section 2.1.1): a k-d tree with the default build options and its
+//! parallel all-point table.
+
+use crate::error::{NbhdError, Result};
+use crate::query::Neighborhood;
+use crate::table::{NeighborTable, TableOptions};
+use crate::{BuildOptions, KdTree, PointsView};
+use glam::DVec3;
+
+/// The neighbourhood of every point of `points` (row `i` for point `i`), with or without the
+/// point itself, ordered by `(sq_dist, index)`. Non-finite coordinates are refused
+/// ([`NbhdError::NonFinite`]); an empty set gives [`NbhdError::EmptyInput`].
+pub fn neighbor_table(
+    points: &[DVec3],
+    nbhd: Neighborhood<f64>,
+    exclude_self: bool,
+) -> Result<NeighborTable<f64>> {
+    if points.is_empty() {
+        return Err(NbhdError::EmptyInput);
+    }
+    let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
+    let view = PointsView::from_flat(&flat, 3)?;
+    let tree = KdTree::<f64>::build(&view, &BuildOptions::default())?;
+    tree.neighborhoods(
+        nbhd,
+        &TableOptions {
+            exclude_self,
+            threads: 0,
+        },
+    )
+}
+
+/// Mean distance of a point to its nearest other point — the spacing `h` that relative
+/// parameters and the quality metrics are measured in. Summed in index order, so the value does
+/// not depend on the number of threads. Needs at least two points
+/// ([`NbhdError::InvalidOption`] otherwise).
+pub fn mean_spacing(points: &[DVec3]) -> Result<f64> {
+    if points.len() < 2 {
+        return Err(NbhdError::InvalidOption {
+            name: "points",
+            reason: "the mean spacing needs at least two points".into(),
+        });
+    }
+    let table = neighbor_table(points, Neighborhood::Knn { k: 1 }, true)?;
+    Ok(mean_spacing_of(&table))
+}
+
+/// Mean nearest-neighbour distance read off a table whose rows hold the nearest other point
+/// first (rows without neighbours are left out; 0 if no row has one).
+pub fn mean_spacing_of(table: &NeighborTable<f64>) -> f64 {
+    let (mut sum, mut count) = (0.0, 0usize);
+    for i in 0..table.len() {
+        if let Some(&d2) = table.sq_dists_of(i).first() {
+            sum += d2.sqrt();
+            count += 1;
+        }
+    }
+    if count == 0 {
+        0.0
+    } else {
+        sum / count as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spacing_of_a_grid() {
+        let pts: Vec<DVec3> = (0..10)
+            .flat_map(|i| (0..10).map(move |j| DVec3::new(i as f64 * 0.5, j as f64 * 0.5, 0.0)))
+            .collect();
+        assert!((mean_spacing(&pts).unwrap() - 0.5).abs() < 1e-12);
+        assert!(mean_spacing(&pts[..1]).is_err());
+        assert_eq!(
+            neighbor_table(&[], Neighborhood::Knn { k: 1 }, true),
+            Err(NbhdError::EmptyInput)
+        );
+    }
+}

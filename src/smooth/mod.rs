@@ -1,0 +1,584 @@
+//! Point-set smoothing (thesis Section 2.1.3 and 2.3, program settings of Section 7.3).
+//!
+//! One step moves every point at once by `p_i ← p_i + τ Δ_i` (explicit Euler, eq. 2.18, with
+//! `τ = λ·∂t`), where `Δ_i = (1/|N_i|) Σ_j g_ij (x_j − p_i)` is the uniform-umbrella form of the
+//! Laplacian (eq. 2.16 with the factor `1/|N_i|`) and, anisotropically (eq. 2.30), `g_ij`
+//! weighs each neighbour by its directional curvature `κ_ij` (eq. 2.20): `g_sharp` (2.31) or
+//! `g_cont` (2.32), both in `|κ_ij|`. Only *feature* points — chosen by the edge quotient (2.33),
+//! the principal curvature (2.34), the directional curvature (2.35), or all points — are
+//! smoothed anisotropically; the others isotropically (`g = 1`).
+//!
+//! Neighbourhoods `N_i` are the `k` nearest *other* points within `ε` (Section 2.1.1),
+//! computed once on the input and cached (Section 2.1.3), or recomputed every step
+//! ('Update Neighbors', Section 7.3). Lengths and curvature thresholds are given absolutely or
+//! relative to the mean nearest-neighbour spacing `h` of the input (the default), curvatures in
+//! units of `1/h`, so the same settings suit a metre and a millimetre scan.
+//!
+//! Every per-point computation reads the previous positions only and sums its neighbours in
+//! row order, so the result is bit-identical for any number of rayon threads.
+
+use crate::error::{NbhdError, Result};
+use crate::geometry::curvature::{
+    all_principal_curvatures, directional_curvature, DensityForm, PrincipalCurvatures,
+    PrincipalFormula,
+};
+use crate::geometry::neighbors::{mean_spacing_of, neighbor_table};
+use crate::geometry::normals::{local_frames, orient, LocalFrame, Orientation};
+use crate::query::Neighborhood;
+use crate::table::NeighborTable;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// A length, absolute or in units of the input's mean spacing `h`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Length {
+    /// In the points' own units.
+    Absolute(f64),
+    /// Multiples of `h`.
+    Relative(f64),
+}
+
+impl Length {
+    /// The absolute value for spacing `h`.
+    pub fn resolve(self, h: f64) -> f64 {
+        match self {
+            Length::Absolute(v) => v,
+            Length::Relative(v) => v * h,
+        }
+    }
+}
+
+/// A curvature (inverse length), absolute or in units of `1/h`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Curvature {
+    /// In inverse units of the points.
+    Absolute(f64),
+    /// Multiples of `1/h`.
+    Relative(f64),
+}
+
+impl Curvature {
+    /// The absolute value for spacing `h`.
+    pub fn resolve(self, h: f64) -> f64 {
+        match self {
+            Curvature::Absolute(v) => v,
+            Curvature::Relative(v) => v / h,
+        }
+    }
+
+    fn is_relative(self) -> bool {
+        matches!(self, Curvature::Relative(_))
+    }
+}
+
+/// The weights `g_ij` of the anisotropic Laplacian (eq. 2.30).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Weighting {
+    /// `g = 1`: isotropic Gaussian fairing (eq. 2.16).
+    Isotropic,
+    /// `g_sharp` (2.31): 1 below the threshold λ, 0 from it on.
+    #[default]
+    Sharp,
+    /// `g_cont` (2.32): 1 below λ, `λ²/(λ² + 10(|κ| − λ)²)` from it on.
+    Continuous,
+}
+
+impl Weighting {
+    /// `g` for `|κ| = abs_kappa` and threshold `lambda`.
+    #[inline]
+    pub fn weight(self, abs_kappa: f64, lambda: f64) -> f64 {
+        match self {
+            Weighting::Isotropic => 1.0,
+            _ if abs_kappa < lambda => 1.0,
+            Weighting::Sharp => 0.0,
+            Weighting::Continuous => {
+                let l2 = lambda * lambda;
+                l2 / (l2 + 10.0 * (abs_kappa - lambda).powi(2))
+            }
+        }
+    }
+}
+
+/// Which points are features, smoothed anisotropically (the others isotropically).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FeatureCriterion {
+    /// Every point.
+    AllPoints,
+    /// Edge quotient (2.33): `min(|k1|,|k2|)/max(|k1|,|k2|) < Q` (principal curvatures
+    /// compared by magnitude, since covariance normals carry no sign).
+    EdgeQuotient(f64),
+    /// Principal curvature (2.34): `max(|k1|, |k2|) > K`.
+    PrincipalCurvature(Curvature),
+    /// Directional curvature (2.35): some neighbour has `|κ_ij| > D`.
+    DirectionalCurvature(Curvature),
+}
+
+/// What the run is doing when the progress callback is called.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Neighbourhood search (and the spacing estimate).
+    Neighbors,
+    /// Normals and curvatures of a step.
+    Geometry,
+    /// Moving the points.
+    Step,
+    /// Per-point outputs of the result.
+    Outputs,
+    /// Finished.
+    Done,
+}
+
+/// Settings of [`smooth`]. `Default` gives the faithful anisotropic method with the settings
+/// of the smoothing notes: 15 nearest other points within 6h, computed once, 3 steps of
+/// τ = 0.5, `g_sharp` at λ = 0.2/h on all points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SmoothOptions {
+    /// Maximum valence `k` (≥ 1).
+    pub k: usize,
+    /// Influence radius `ε` (> 0).
+    pub epsilon: Length,
+    /// Number of steps.
+    pub steps: usize,
+    /// Step size `τ = λ·∂t` of eq. 2.18 (finite, ≥ 0).
+    pub tau: f64,
+    /// The anisotropic weights `g_ij`.
+    pub weighting: Weighting,
+    /// Curvature threshold `λ` of (2.31)/(2.32) (> 0).
+    pub lambda: Curvature,
+    /// Which points are smoothed anisotropically.
+    pub feature: FeatureCriterion,
+    /// 'Constrain interior' (Section 7.3): points whose covariance quotient
+    /// `λ0/(λ0 + λ1 + λ2)` is below this threshold count as interior points of a flat
+    /// surface and are not moved. `None` moves every point.
+    pub constrain_interior: Option<f64>,
+    /// 'Update Neighbors': recompute the neighbourhoods before every step (with the same ε).
+    pub update_neighbors: bool,
+    /// Density form of eq. 2.27 for the principal curvatures.
+    pub density: DensityForm,
+    /// How principal curvatures are read off the Weingarten estimate.
+    pub formula: PrincipalFormula,
+    /// Orientation of the normals reported in the outputs (smoothing itself uses `|κ|`).
+    pub orientation: Orientation,
+    /// Compute the per-point outputs of the result.
+    pub outputs: bool,
+}
+
+impl Default for SmoothOptions {
+    fn default() -> Self {
+        Self {
+            k: 15,
+            epsilon: Length::Relative(6.0),
+            steps: 3,
+            tau: 0.5,
+            weighting: Weighting::Sharp,
+            lambda: Curvature::Relative(0.2),
+            feature: FeatureCriterion::AllPoints,
+            constrain_interior: None,
+            update_neighbors: false,
+            density: DensityForm::AbsLinear,
+            formula: PrincipalFormula::Eq225,
+            orientation: Orientation::Unoriented,
+            outputs: true,
+        }
+    }
+}
+
+impl SmoothOptions {
+    /// Isotropic fairing with the notes' settings (2 steps of τ = 0.5).
+    pub fn isotropic() -> Self {
+        Self {
+            weighting: Weighting::Isotropic,
+            steps: 2,
+            ..Self::default()
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        let bad = |name, reason: String| Err(NbhdError::InvalidOption { name, reason });
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        if self.k == 0 {
+            return Err(NbhdError::ZeroK);
+        }
+        let eps = match self.epsilon {
+            Length::Absolute(v) | Length::Relative(v) => v,
+        };
+        if !pos(eps) {
+            return bad("epsilon", format!("{eps} must be finite and > 0"));
+        }
+        if !(self.tau.is_finite() && self.tau >= 0.0) {
+            return bad("tau", format!("{} must be finite and >= 0", self.tau));
+        }
+        let curv = |c: Curvature| match c {
+            Curvature::Absolute(v) | Curvature::Relative(v) => v,
+        };
+        if !pos(curv(self.lambda)) {
+            return bad(
+                "lambda",
+                format!("{} must be finite and > 0", curv(self.lambda)),
+            );
+        }
+        match self.feature {
+            FeatureCriterion::EdgeQuotient(q) if !q.is_finite() => {
+                return bad("feature", format!("edge quotient {q} must be finite"))
+            }
+            FeatureCriterion::PrincipalCurvature(c) | FeatureCriterion::DirectionalCurvature(c)
+                if !curv(c).is_finite() =>
+            {
+                return bad("feature", format!("threshold {} must be finite", curv(c)))
+            }
+            _ => {}
+        }
+        if let Some(t) = self.constrain_interior {
+            if !t.is_finite() {
+                return bad("constrain_interior", format!("{t} must be finite"));
+            }
+        }
+        Ok(())
+    }
+
+    fn needs_relative(&self) -> bool {
+        matches!(self.epsilon, Length::Relative(_))
+            || self.lambda.is_relative()
+            || matches!(
+                self.feature,
+                FeatureCriterion::PrincipalCurvature(c) | FeatureCriterion::DirectionalCurvature(c)
+                    if c.is_relative()
+            )
+    }
+}
+
+/// The per-point values the thesis' program colours by (Section 7.3), on the final points.
+/// Curvatures are signed relative to the reported normal (see
+/// [`crate::geometry::curvature`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointOutput {
+    /// Unit normal (eq. 2.10), oriented as `SmoothOptions::orientation` asks.
+    pub normal: DVec3,
+    /// 'Mean': `(k1 + k2)/2`.
+    pub mean_curvature: f64,
+    /// 'Max Princ': `max(|k1|, |k2|)`.
+    pub max_principal_curvature: f64,
+    /// 'CovQuotient': `λ0/(λ0 + λ1 + λ2)` of the covariance (0 = flat; at most 1/3).
+    pub covariance_quotient: f64,
+    /// 'MeanAni': mean of `κ_ij` weighted by `g_ij` of the chosen weighting,
+    /// `Σ g κ / Σ g` (0 when every weight vanishes).
+    pub anisotropic_mean_curvature: f64,
+    /// 'PrincQuotient': `min(|k1|,|k2|)/max(|k1|,|k2|)` in `[0, 1]`.
+    pub principal_curvature_quotient: f64,
+    /// 'MaxCov': the largest covariance eigenvalue divided by `|N_i| + 1` (the variance along
+    /// the main direction).
+    pub max_covariance: f64,
+    /// Principal curvatures and directions.
+    pub principal: PrincipalCurvatures,
+    /// Degeneracy flags of the normal (`geometry::normals::FLAG_*`).
+    pub normal_flags: u8,
+    /// Whether the feature criterion selects this point.
+    pub feature: bool,
+    /// Whether 'constrain interior' holds this point fixed.
+    pub interior: bool,
+}
+
+/// What [`smooth`] returns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SmoothResult {
+    /// The smoothed points, in input order.
+    pub points: Vec<DVec3>,
+    /// Per-point outputs on the smoothed points (empty unless `SmoothOptions::outputs`).
+    pub outputs: Vec<PointOutput>,
+    /// Mean nearest-neighbour spacing `h` of the input.
+    pub spacing: f64,
+    /// Absolute ε used.
+    pub epsilon: f64,
+    /// Absolute λ used.
+    pub lambda: f64,
+    /// 'Min Neighbors': the smallest `|N_i|` of the input neighbourhoods.
+    pub min_neighbors: usize,
+}
+
+/// Thresholds resolved to absolute values.
+#[derive(Clone, Copy)]
+struct Resolved {
+    lambda: f64,
+    feature: FeatureCriterion,
+}
+
+/// Smooths `points` with `options` (see the module documentation).
+pub fn smooth(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult> {
+    smooth_with_progress(points, options, &mut |_, _| true)
+}
+
+/// [`smooth`] with a progress callback, called on the calling thread with the fraction done
+/// (0 to 1) and the stage; returning `false` stops the run with [`NbhdError::Cancelled`].
+pub fn smooth_with_progress(
+    points: &[DVec3],
+    options: &SmoothOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+) -> Result<SmoothResult> {
+    options.validate()?;
+    if points.is_empty() {
+        return Err(NbhdError::EmptyInput);
+    }
+    if let Some((index, coordinate)) = points.iter().enumerate().find_map(|(i, p)| {
+        p.to_array()
+            .iter()
+            .position(|c| !c.is_finite())
+            .map(|c| (i, c))
+    }) {
+        return Err(NbhdError::NonFinite { index, coordinate });
+    }
+    let total = options.steps as f64 + 1.0;
+    let mut report = |f: f64, s: Stage| {
+        if progress((f / total).clamp(0.0, 1.0), s) {
+            Ok(())
+        } else {
+            Err(NbhdError::Cancelled)
+        }
+    };
+    report(0.0, Stage::Neighbors)?;
+    let knn = neighbor_table(points, Neighborhood::Knn { k: options.k }, true)?;
+    let h = mean_spacing_of(&knn);
+    if options.needs_relative() && !(h > 0.0 && h.is_finite()) {
+        return Err(NbhdError::InvalidOption {
+            name: "epsilon",
+            reason: "relative parameters need a mean spacing > 0 (at least two distinct points)"
+                .into(),
+        });
+    }
+    let eps = options.epsilon.resolve(h);
+    let res = Resolved {
+        lambda: options.lambda.resolve(h),
+        feature: match options.feature {
+            FeatureCriterion::PrincipalCurvature(c) => {
+                FeatureCriterion::PrincipalCurvature(Curvature::Absolute(c.resolve(h)))
+            }
+            FeatureCriterion::DirectionalCurvature(c) => {
+                FeatureCriterion::DirectionalCurvature(Curvature::Absolute(c.resolve(h)))
+            }
+            f => f,
+        },
+    };
+    let mut table = within(&knn, eps);
+    let min_neighbors = table.min_row_len();
+    let mut cur = points.to_vec();
+    for step in 0..options.steps {
+        let base = step as f64 + 0.2;
+        if step > 0 && options.update_neighbors {
+            report(base, Stage::Neighbors)?;
+            table = within(
+                &neighbor_table(&cur, Neighborhood::Knn { k: options.k }, true)?,
+                eps,
+            );
+        }
+        report(base + 0.1, Stage::Geometry)?;
+        let geo = Geometry::compute(&cur, &table, options, &res)?;
+        report(base + 0.5, Stage::Step)?;
+        cur = (0..cur.len())
+            .into_par_iter()
+            .map(|i| {
+                let p = cur[i];
+                let row = table.indices_of(i);
+                if row.is_empty() || geo.interior(i, options) {
+                    return p;
+                }
+                let aniso =
+                    options.weighting != Weighting::Isotropic && geo.feature(i, &cur, &table, &res);
+                let n = geo.frames.as_ref().map_or(DVec3::ZERO, |f| f[i].normal);
+                let mut acc = DVec3::ZERO;
+                for &j in row {
+                    let x = cur[j as usize];
+                    let g = if aniso {
+                        options
+                            .weighting
+                            .weight(directional_curvature(p, n, x).abs(), res.lambda)
+                    } else {
+                        1.0
+                    };
+                    acc += g * (x - p);
+                }
+                p + options.tau * acc / row.len() as f64
+            })
+            .collect();
+    }
+    let outputs = if options.outputs {
+        report(options.steps as f64 + 0.2, Stage::Outputs)?;
+        if options.update_neighbors && options.steps > 0 {
+            table = within(
+                &neighbor_table(&cur, Neighborhood::Knn { k: options.k }, true)?,
+                eps,
+            );
+        }
+        point_outputs_with(&cur, &table, options, &res)?
+    } else {
+        Vec::new()
+    };
+    report(total, Stage::Done)?;
+    Ok(SmoothResult {
+        points: cur,
+        outputs,
+        spacing: h,
+        epsilon: eps,
+        lambda: res.lambda,
+        min_neighbors,
+    })
+}
+
+/// The per-point outputs (Section 7.3) of `points` themselves, without smoothing: the
+/// neighbourhoods, thresholds and orientation of `options` apply.
+pub fn analyze(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult> {
+    let opts = SmoothOptions {
+        steps: 0,
+        outputs: true,
+        ..*options
+    };
+    smooth(points, &opts)
+}
+
+/// Rows of `knn` cut to the points within `eps` (the ε-k-neighbourhood, Section 2.1.1: the
+/// k nearest among those within ε are the within-ε prefix of the k nearest).
+fn within(knn: &NeighborTable<f64>, eps: f64) -> NeighborTable<f64> {
+    let e2 = eps * eps;
+    let mut offsets = Vec::with_capacity(knn.len() + 1);
+    offsets.push(0);
+    let (mut idx, mut d2) = (
+        Vec::with_capacity(knn.total()),
+        Vec::with_capacity(knn.total()),
+    );
+    for i in 0..knn.len() {
+        for (&j, &d) in knn.indices_of(i).iter().zip(knn.sq_dists_of(i)) {
+            if d <= e2 {
+                idx.push(j);
+                d2.push(d);
+            }
+        }
+        offsets.push(idx.len());
+    }
+    NeighborTable::from_parts(offsets, idx, d2).unwrap_or_default()
+}
+
+/// Normals and principal curvatures of one state, computed only when needed.
+struct Geometry {
+    frames: Option<Vec<LocalFrame>>,
+    principal: Option<Vec<PrincipalCurvatures>>,
+}
+
+impl Geometry {
+    fn compute(
+        points: &[DVec3],
+        table: &NeighborTable<f64>,
+        options: &SmoothOptions,
+        res: &Resolved,
+    ) -> Result<Self> {
+        let aniso = options.weighting != Weighting::Isotropic;
+        let needs_frames = aniso || options.constrain_interior.is_some();
+        let needs_principal = aniso
+            && matches!(
+                res.feature,
+                FeatureCriterion::EdgeQuotient(_) | FeatureCriterion::PrincipalCurvature(_)
+            );
+        let frames = if needs_frames {
+            Some(local_frames(points, table)?)
+        } else {
+            None
+        };
+        let principal = match (&frames, needs_principal) {
+            (Some(f), true) => Some(all_principal_curvatures(
+                points,
+                table,
+                f,
+                options.density,
+                options.formula,
+            )?),
+            _ => None,
+        };
+        Ok(Self { frames, principal })
+    }
+
+    fn interior(&self, i: usize, options: &SmoothOptions) -> bool {
+        match (&self.frames, options.constrain_interior) {
+            (Some(f), Some(t)) => covariance_quotient(&f[i]) < t,
+            _ => false,
+        }
+    }
+
+    fn feature(
+        &self,
+        i: usize,
+        points: &[DVec3],
+        table: &NeighborTable<f64>,
+        res: &Resolved,
+    ) -> bool {
+        let pc = self.principal.as_ref().map(|v| v[i]);
+        match (res.feature, pc) {
+            (FeatureCriterion::AllPoints, _) => true,
+            (FeatureCriterion::EdgeQuotient(q), Some(pc)) => pc.quotient() < q,
+            (FeatureCriterion::PrincipalCurvature(k), Some(pc)) => pc.max_abs() > k.resolve(1.0),
+            (FeatureCriterion::DirectionalCurvature(d), _) => {
+                let (p, d) = (points[i], d.resolve(1.0));
+                let n = self.frames.as_ref().map_or(DVec3::ZERO, |f| f[i].normal);
+                table
+                    .indices_of(i)
+                    .iter()
+                    .any(|&j| directional_curvature(p, n, points[j as usize]).abs() > d)
+            }
+            _ => true,
+        }
+    }
+}
+
+fn covariance_quotient(f: &LocalFrame) -> f64 {
+    let s = f.eigenvalues.x + f.eigenvalues.y + f.eigenvalues.z;
+    if s > 0.0 {
+        f.eigenvalues.x / s
+    } else {
+        0.0
+    }
+}
+
+fn point_outputs_with(
+    points: &[DVec3],
+    table: &NeighborTable<f64>,
+    options: &SmoothOptions,
+    res: &Resolved,
+) -> Result<Vec<PointOutput>> {
+    let mut frames = local_frames(points, table)?;
+    orient(points, table, &mut frames, options.orientation)?;
+    let principal =
+        all_principal_curvatures(points, table, &frames, options.density, options.formula)?;
+    let geo = Geometry {
+        frames: Some(frames),
+        principal: Some(principal),
+    };
+    let (frames, principal) = (
+        geo.frames.as_deref().unwrap_or_default(),
+        geo.principal.as_deref().unwrap_or_default(),
+    );
+    Ok((0..points.len())
+        .into_par_iter()
+        .map(|i| {
+            let (f, pc, p) = (&frames[i], principal[i], points[i]);
+            let (mut gs, mut gk) = (0.0, 0.0);
+            for &j in table.indices_of(i) {
+                let kappa = directional_curvature(p, f.normal, points[j as usize]);
+                let g = options.weighting.weight(kappa.abs(), res.lambda);
+                gs += g;
+                gk += g * kappa;
+            }
+            PointOutput {
+                normal: f.normal,
+                mean_curvature: pc.mean(),
+                max_principal_curvature: pc.max_abs(),
+                covariance_quotient: covariance_quotient(f),
+                anisotropic_mean_curvature: if gs > 0.0 { gk / gs } else { 0.0 },
+                principal_curvature_quotient: pc.quotient(),
+                max_covariance: f.eigenvalues.z / f.count as f64,
+                principal: pc,
+                normal_flags: f.flags,
+                feature: geo.feature(i, points, table, res),
+                interior: geo.interior(i, options),
+            }
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests;
