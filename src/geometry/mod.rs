@@ -3,6 +3,7 @@
 //! Weingarten-map estimate of principal curvatures and directions (eq. 2.26–2.29, 2.25).
 
 pub mod curvature;
+mod eigen;
 pub mod neighbors;
 pub mod normals;
 

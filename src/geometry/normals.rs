@@ -3,7 +3,6 @@
 //! smallest eigenvalue, the two other eigenvectors span the tangent plane.
 
 use crate::error::{NbhdError, Result};
-use crate::linalg::sym_eigen3;
 use crate::table::NeighborTable;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -67,7 +66,7 @@ pub fn local_frame(p: DVec3, neighbors: &[DVec3]) -> LocalFrame {
     for &x in neighbors {
         add(x - p - bary);
     }
-    let (values, vectors) = sym_eigen3(m);
+    let (values, vectors) = super::eigen::sym_eigen3_fast(m);
     let values = values.max(DVec3::ZERO); // round-off can leave tiny negatives
     let scale = values.z;
     let mut flags = 0;
