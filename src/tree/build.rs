@@ -50,15 +50,16 @@ impl<L: Layout<T>, T: Scalar> NodeFacts<T> for ScanFacts<'_, L, T> {
     fn widest(&self, d: usize) -> (usize, T, T) {
         const MAX_D: usize = 8;
         if d > MAX_D {
-            return (0..d)
-                .map(|j| (j, self.range(j)))
-                .fold((0, T::ZERO, T::ZERO), |best, (j, (l, h))| {
+            return (0..d).map(|j| (j, self.range(j))).fold(
+                (0, T::ZERO, T::ZERO),
+                |best, (j, (l, h))| {
                     if j == 0 || h - l > best.2 - best.1 {
                         (j, l, h)
                     } else {
                         best
                     }
-                });
+                },
+            );
         }
         // One pass over the items for all dimensions.
         let mut lo = [T::ZERO; MAX_D];

@@ -109,10 +109,12 @@ pub(crate) fn build_presorted<T: Scalar, L: Layout<T>>(
         };
         let (j, rank, value) = match choose_split(input.options.pivot, depth, d, &facts) {
             Plan::Rank(split) => (split.dim, split.rank, None),
-            Plan::Below { dim, value } => match resolve_below(facts.count_below(dim, value), end - start) {
-                Ok(rank) => (dim, rank, Some(value)),
-                Err(rank) => (dim, rank, None),
-            },
+            Plan::Below { dim, value } => {
+                match resolve_below(facts.count_below(dim, value), end - start) {
+                    Ok(rank) => (dim, rank, Some(value)),
+                    Err(rank) => (dim, rank, None),
+                }
+            }
         };
         let mid = start + rank;
         let value = value.unwrap_or_else(|| facts.coord(j, mid));

@@ -80,10 +80,9 @@ pub(crate) fn choose_split<T: Scalar>(
     let half = T::from_f64(0.5);
     let middle = lo * half + hi * half;
     match policy {
-        PivotPolicy::CyclicMedian | PivotPolicy::SpreadMedian => Plan::Rank(Split {
-            dim,
-            rank: median,
-        }),
+        PivotPolicy::CyclicMedian | PivotPolicy::SpreadMedian => {
+            Plan::Rank(Split { dim, rank: median })
+        }
         // eq. 5.1: the pivot is the (lexicographically first) point whose coordinate is
         // closest to the middle; it starts the right child.
         PivotPolicy::ClosestToMiddle => Plan::Below {

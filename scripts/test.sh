@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Runs every test of nbhd on a fresh machine: installs what is missing (Debian packages), then
+# formatting, lints, the Rust tests (which include the C ABI checks: a C program against the
+# cdylib, under valgrind, and a threaded C test) and the C++ comparisons under ctest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# --- system packages --------------------------------------------------------------------
+apt_install() {
+    local sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    echo "== installing Debian packages: $*"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "$@" >/dev/null
+}
+missing=()
+command -v cc >/dev/null 2>&1 || missing+=(gcc libc6-dev)
+command -v valgrind >/dev/null 2>&1 || missing+=(valgrind)
+if [ -f cpp_examples/CMakeLists.txt ]; then
+    command -v cmake >/dev/null 2>&1 || missing+=(cmake)
+    command -v c++ >/dev/null 2>&1 || missing+=(g++)
+    for pkg in libflann-dev libpcl-dev libopenmesh-dev libnanoflann-dev libeigen3-dev liblz4-dev; do
+        dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
+    done
+fi
+if [ "${#missing[@]}" -gt 0 ]; then apt_install "${missing[@]}"; fi
+
+# --- Rust ---------------------------------------------------------------------------------
+echo "== cargo fmt --check"
+cargo fmt --all -- --check
+echo "== cargo clippy"
+cargo clippy --workspace --all-targets -- -D warnings
+echo "== cargo test"
+cargo test --workspace
+
+# --- C++ examples under ctest ---------------------------------------------------------------
+if [ -f cpp_examples/CMakeLists.txt ]; then
+    echo "== C++ examples (ctest)"
+    scripts/cpp-test.sh
+fi
+echo "== all tests passed"
