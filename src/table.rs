@@ -184,14 +184,28 @@ fn rows_in_parallel<T: Scalar>(
     nbhd: Neighborhood<T>,
 ) -> Result<NeighborTable<T>> {
     nbhd.validate()?;
-    let chunks: Vec<Result<RowsChunk<T>>> = (0..n.div_ceil(CHUNK))
+    rows_in_work_order(n, n, |w| w, query)
+}
+
+/// Runs `query(w, row, scratch)` for the work items `w` in `0..work` in fixed chunks on the
+/// current rayon pool, and places the row of item `w` at table row `row_of(w)` (rows no item
+/// maps to stay empty). The work order is free — the tree answers its own points in tree order
+/// for cache locality — while the table comes out in row order, identical for any number of
+/// threads. Rows are gathered in per-chunk buffers that grow as needed: no allocation per row.
+pub(crate) fn rows_in_work_order<T: Scalar>(
+    rows: usize,
+    work: usize,
+    row_of: impl Fn(usize) -> usize + Sync,
+    query: impl Fn(usize, &mut Vec<Neighbor<T>>, &mut Vec<T>) -> Result<()> + Sync,
+) -> Result<NeighborTable<T>> {
+    let chunks: Vec<Result<RowsChunk<T>>> = (0..work.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let mut row: Vec<Neighbor<T>> = Vec::new();
             let mut scratch: Vec<T> = Vec::new();
             let (mut lens, mut ids, mut dists) = (Vec::new(), Vec::new(), Vec::new());
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                query(i, &mut row, &mut scratch)?;
+            for w in c * CHUNK..((c + 1) * CHUNK).min(work) {
+                query(w, &mut row, &mut scratch)?;
                 lens.push(row.len());
                 ids.extend(row.iter().map(|nb| nb.index));
                 dists.extend(row.iter().map(|nb| nb.sq_dist));
@@ -199,16 +213,26 @@ fn rows_in_parallel<T: Scalar>(
             Ok((lens, ids, dists))
         })
         .collect();
-    let mut offsets = Vec::with_capacity(n + 1);
-    offsets.push(0);
-    let (mut indices, mut sq_dists) = (Vec::new(), Vec::new());
-    for chunk in chunks {
-        let (lens, ids, dists) = chunk?;
-        for len in lens {
-            offsets.push(offsets.last().copied().unwrap_or(0) + len);
+    let chunks: Vec<RowsChunk<T>> = chunks.into_iter().collect::<Result<_>>()?;
+    let mut offsets = vec![0usize; rows + 1];
+    for (c, (lens, _, _)) in chunks.iter().enumerate() {
+        for (j, &len) in lens.iter().enumerate() {
+            offsets[row_of(c * CHUNK + j) + 1] = len;
         }
-        indices.extend_from_slice(&ids);
-        sq_dists.extend_from_slice(&dists);
+    }
+    for r in 0..rows {
+        offsets[r + 1] += offsets[r];
+    }
+    let total = offsets[rows];
+    let (mut indices, mut sq_dists) = (vec![0u32; total], vec![T::ZERO; total]);
+    for (c, (lens, ids, dists)) in chunks.iter().enumerate() {
+        let mut at = 0;
+        for (j, &len) in lens.iter().enumerate() {
+            let to = offsets[row_of(c * CHUNK + j)];
+            indices[to..to + len].copy_from_slice(&ids[at..at + len]);
+            sq_dists[to..to + len].copy_from_slice(&dists[at..at + len]);
+            at += len;
+        }
     }
     Ok(NeighborTable {
         offsets,

@@ -32,7 +32,7 @@ fn check_set<T: Scalar>(coords: &[T], d: usize, seed: u64) {
     let view = PointsView::from_flat(coords, d).unwrap();
     let n = view.len();
     let brute = BruteForce::<T>::new(&view, NonFinitePolicy::Reject).unwrap();
-    let mut rng = Rng(seed ^ 0xABCD);
+    let mut rng = Rng::new(seed ^ 0xABCD);
     // Queries: some stored points (with and without self) and some arbitrary points.
     let stored: Vec<u32> = (0..6).map(|_| rng.below(n) as u32).collect();
     let free: Vec<Vec<T>> = (0..3)

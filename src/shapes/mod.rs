@@ -11,6 +11,7 @@
 //! [`CYLINDER_SIZES`] and [`TORUS_SIZES`].
 
 mod analytic;
+pub mod datasets;
 pub mod metrics;
 mod rng;
 

@@ -18,7 +18,7 @@ use crate::parallel::with_threads;
 use crate::points::PointsView;
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
-use crate::table::{NeighborTable, TableOptions};
+use crate::table::{rows_in_work_order, NeighborTable, TableOptions};
 use build::{build_parallel, build_serial, BuildInput, Subtree};
 use layout::{BySlot, Inline, Layout, Record};
 use node::Node;
@@ -266,8 +266,20 @@ impl<T: Scalar> KdTree<T> {
         nbhd: Neighborhood<T>,
         options: &TableOptions,
     ) -> Result<NeighborTable<T>> {
+        nbhd.validate()?;
+        // Answered in tree order (neighbouring queries touch the same nodes and leaves, so
+        // they hit the cache), written back in the caller's order.
         with_threads(options.threads, || {
-            crate::table::neighborhoods_of_all(self, nbhd, options.exclude_self)
+            rows_in_work_order(
+                self.source_len,
+                self.len(),
+                |pos| self.ids[pos] as usize,
+                |pos, row, _| {
+                    let exclude = options.exclude_self.then_some(self.ids[pos]);
+                    self.search_resolved(self.point_at(pos), exclude, nbhd, row);
+                    Ok(())
+                },
+            )
         })?
     }
 
@@ -309,6 +321,20 @@ impl<T: Scalar> NeighborSearch<T> for KdTree<T> {
         let (q, exclude) = resolve_query(query, self.dim, self.source_len, positions, |p| {
             self.point_at(p)
         })?;
+        self.search_resolved(q, exclude, nbhd, out);
+        Ok(())
+    }
+}
+
+impl<T: Scalar> KdTree<T> {
+    /// The search proper, on validated input.
+    fn search_resolved(
+        &self,
+        q: &[T],
+        exclude: Option<u32>,
+        nbhd: Neighborhood<T>,
+        out: &mut Vec<Neighbor<T>>,
+    ) {
         let (k, sq_radius) = nbhd.limits();
         let tree = self.view();
         if k == usize::MAX {
@@ -322,6 +348,5 @@ impl<T: Scalar> NeighborSearch<T> for KdTree<T> {
             search::search(&tree, q, exclude, &mut heap);
             heap.finish();
         }
-        Ok(())
     }
 }

@@ -1,25 +1,7 @@
 //! Point sets for the tests: seeded, in any dimension, of the kinds that break trees.
 #![allow(dead_code)]
 
-/// SplitMix64: a tiny seeded generator so test data is reproducible without dependencies.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
+pub use nbhd::shapes::Rng;
 
 /// The kinds of point sets the property tests run on.
 #[derive(Clone, Copy, Debug)]
@@ -47,7 +29,7 @@ pub const KINDS: [Kind; 7] = [
 
 /// `n` points of dimension `d`, packed, as f64.
 pub fn points(kind: Kind, n: usize, d: usize, seed: u64) -> Vec<f64> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut v = Vec::with_capacity(n * d);
     match kind {
         Kind::Random => (0..n * d).for_each(|_| v.push(rng.unit() * 10.0 - 5.0)),
