@@ -5,8 +5,9 @@
 //! the median of `NBHD_BENCH_REPS` runs (default 5); ratios are peer / nbhd, so > 1 means
 //! nbhd is faster. Writing the table (indices and squared distances) is included for both.
 //!
-//! Run: `cargo bench --bench compare` (all sets) or
-//! `NBHD_BENCH_SETS=torus-77k,cube-1M cargo bench --bench compare`.
+//! Run: `cargo bench --bench compare` (all sets and operations) or, e.g.,
+//! `NBHD_BENCH_SETS=torus-77k,cube-1M NBHD_BENCH_OPS=build,knn10 cargo bench --bench compare`
+//! (radius: ~20 neighbours; epsk: k = 16 within that radius).
 
 use std::num::NonZero;
 use std::time::Instant;
@@ -80,6 +81,13 @@ fn main() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(5);
     let wanted = std::env::var("NBHD_BENCH_SETS").ok();
+    // Operations to run: a comma list of build, knn10, knn30, radius, epsk (default all).
+    let ops_wanted = std::env::var("NBHD_BENCH_OPS").ok();
+    let run = |op: &str| {
+        ops_wanted
+            .as_ref()
+            .is_none_or(|w| w.split(',').any(|o| o == op))
+    };
     println!("| set | operation | threads | nbhd [ms] | kiddo [ms] | kiddo / nbhd |");
     println!("|---|---|---|---:|---:|---:|");
     for set in Dataset::ALL {
@@ -99,7 +107,7 @@ fn main() {
                 peer / ours
             );
         };
-        for threads in [1, 2] {
+        for threads in [1, 2].into_iter().filter(|_| run("build")) {
             let opts = BuildOptions {
                 threads,
                 ..BuildOptions::default()
@@ -126,10 +134,10 @@ fn main() {
         d20.sort_by(f32::total_cmp);
         let radius = d20[d20.len() / 2];
         let ops = [
-            ("kNN k=10", Op::Knn(10), Neighborhood::Knn { k: 10 }),
-            ("kNN k=30", Op::Knn(30), Neighborhood::Knn { k: 30 }),
+            ("knn10", Op::Knn(10), Neighborhood::Knn { k: 10 }),
+            ("knn30", Op::Knn(30), Neighborhood::Knn { k: 30 }),
             (
-                "radius ~20",
+                "radius",
                 Op::Radius,
                 Neighborhood::Radius {
                     radius,
@@ -137,12 +145,15 @@ fn main() {
                 },
             ),
             (
-                "eps-k k=16",
+                "epsk",
                 Op::EpsK(16),
                 Neighborhood::KnnRadius { k: 16, radius },
             ),
         ];
         for (name, op, nbhd) in ops {
+            if !run(name) {
+                continue;
+            }
             for threads in [1, 2] {
                 let opts = TableOptions {
                     exclude_self: false,

@@ -36,10 +36,12 @@ impl<T: Scalar> Cloud<T> {
         let (n, dim) = (view.len(), view.dim());
         let mut coords = Vec::with_capacity(n * dim);
         let mut ids = Vec::with_capacity(n);
-        let mut p = vec![T::ZERO; dim];
         for i in 0..n {
-            view.read_point(i, &mut p);
-            if let Some(j) = p.iter().position(|c| !c.is_finite()) {
+            let start = coords.len();
+            for j in 0..dim {
+                coords.push(view.coord::<T>(i, j));
+            }
+            if let Some(j) = coords[start..].iter().position(|c| !c.is_finite()) {
                 match policy {
                     NonFinitePolicy::Reject => {
                         return Err(NbhdError::NonFinite {
@@ -47,11 +49,11 @@ impl<T: Scalar> Cloud<T> {
                             coordinate: j,
                         })
                     }
-                    NonFinitePolicy::Skip => continue,
+                    NonFinitePolicy::Skip => coords.truncate(start),
                 }
+            } else {
+                ids.push(i as u32);
             }
-            coords.extend_from_slice(&p);
-            ids.push(i as u32);
         }
         if ids.is_empty() {
             return Err(NbhdError::EmptyInput);

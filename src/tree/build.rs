@@ -124,20 +124,29 @@ fn split_node<T: Scalar, L: Layout<T>>(
 }
 
 /// Moves the items with coordinate `< value` in `dim` to the front; returns their count.
+/// Hoare's scheme from both ends: every misplaced pair is fixed by one swap.
 fn partition_below<T: Scalar, L: Layout<T>>(
     layout: &L,
     items: &mut [L::Item],
     dim: usize,
     value: T,
 ) -> usize {
-    let mut k = 0;
-    for i in 0..items.len() {
-        if layout.coord(&items[i], dim) < value {
-            items.swap(i, k);
-            k += 1;
+    let below = |it: &L::Item| layout.coord(it, dim) < value;
+    let (mut lo, mut hi) = (0, items.len());
+    loop {
+        while lo < hi && below(&items[lo]) {
+            lo += 1;
         }
+        while lo < hi && !below(&items[hi - 1]) {
+            hi -= 1;
+        }
+        if lo >= hi {
+            return lo;
+        }
+        items.swap(lo, hi - 1);
+        lo += 1;
+        hi -= 1;
     }
-    k
 }
 
 /// Puts the item of rank `k` in the composite order of `dim` at `k`, smaller before, larger

@@ -73,25 +73,25 @@ impl<T: Scalar> KdTree<T> {
         options.validate()?;
         let cloud = Cloud::<T>::from_view(view, options.non_finite)?;
         let n = cloud.len();
-        let (subtree, order) = match cloud.dim {
+        let dim = cloud.dim;
+        let (subtree, coords, order) = match dim {
             1 => build_inline::<T, 1>(&cloud, options)?,
             2 => build_inline::<T, 2>(&cloud, options)?,
             3 => build_inline::<T, 3>(&cloud, options)?,
             _ => {
                 let layout = BySlot {
                     coords: &cloud.coords,
-                    dim: cloud.dim,
+                    dim,
                 };
                 let mut slots: Vec<u32> = (0..n as u32).collect();
                 let subtree = run_build(layout, options, &mut slots)?;
-                (subtree, slots)
+                let coords = slots
+                    .iter()
+                    .flat_map(|&s| cloud.point(s as usize).iter().copied())
+                    .collect();
+                (subtree, coords, slots)
             }
         };
-        let dim = cloud.dim;
-        let mut coords = Vec::with_capacity(n * dim);
-        for &s in &order {
-            coords.extend_from_slice(cloud.point(s as usize));
-        }
         let ids = order.iter().map(|&s| cloud.ids[s as usize]).collect();
         Ok(Self {
             dim,
@@ -222,12 +222,12 @@ impl<T: Scalar> KdTree<T> {
     }
 }
 
-/// Builds with compact records of dimension `D`; returns the nodes and the slots in tree
-/// order.
+/// Builds with compact records of dimension `D`; returns the nodes, the coordinates and the
+/// slots in tree order.
 fn build_inline<T: Scalar, const D: usize>(
     cloud: &Cloud<T>,
     options: &BuildOptions,
-) -> Result<(Subtree<T>, Vec<u32>)> {
+) -> Result<(Subtree<T>, Vec<T>, Vec<u32>)> {
     let mut records: Vec<Record<T, D>> = (0..cloud.len())
         .map(|s| Record {
             p: std::array::from_fn(|j| cloud.coords[s * D + j]),
@@ -235,7 +235,8 @@ fn build_inline<T: Scalar, const D: usize>(
         })
         .collect();
     let subtree = run_build(Inline::<D>, options, &mut records)?;
-    Ok((subtree, records.iter().map(|r| r.slot).collect()))
+    let coords = records.iter().flat_map(|r| r.p).collect();
+    Ok((subtree, coords, records.iter().map(|r| r.slot).collect()))
 }
 
 /// Runs the build the options ask for over `items` (given in slot order, left in tree order).
