@@ -1,0 +1,165 @@
+#!/usr/bin/env bash
+# Builds the nbhd library in release and installs it into PREFIX for C and C++ users:
+#
+#   PREFIX/include/nbhd.h
+#   PREFIX/lib/libnbhd.so, PREFIX/lib/libnbhd.a
+#   PREFIX/lib/cmake/nbhd/nbhdConfig.cmake, nbhdConfigVersion.cmake
+#       find_package(nbhd CONFIG REQUIRED) gives nbhd::nbhd (shared library) and
+#       nbhd::nbhd_static (static library plus the system libraries Rust's std needs)
+#   PREFIX/lib/pkgconfig/nbhd.pc
+#       pkg-config --cflags --libs nbhd            (shared)
+#       pkg-config --static --cflags --libs nbhd   (shared, plus the static library's needs)
+#   PREFIX/lib/pkgconfig/nbhd-static.pc
+#       pkg-config --cflags --libs nbhd-static     (libnbhd.a by path, and the system libraries)
+#
+# The installed files are relocatable: the CMake config and the .pc file locate the prefix from
+# their own place, so the prefix directory may be moved after installation.
+#
+# Usage: scripts/install.sh PREFIX     (PREFIX relative to the current directory, or absolute)
+set -euo pipefail
+
+if [ "$#" -ne 1 ] || [ -z "$1" ]; then
+    echo "usage: $0 PREFIX" >&2
+    exit 2
+fi
+mkdir -p "$1"
+prefix="$(cd "$1" && pwd)"
+repo="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$repo"
+
+# Version of the [package] section of Cargo.toml (the nbhd crate, not a dependency).
+version="$(awk '
+    /^\[/ { in_pkg = ($0 == "[package]") }
+    in_pkg && /^version[ \t]*=/ { gsub(/.*=[ \t]*"|".*/, ""); print; exit }
+' Cargo.toml)"
+if ! [[ "$version" =~ ^[0-9]+\.[0-9]+\.[0-9]+ ]]; then
+    echo "install.sh: cannot read the package version from Cargo.toml (got '$version')" >&2
+    exit 1
+fi
+if ! grep -q "^#define NBHD_VERSION_MAJOR ${version%%.*}\$" include/nbhd.h; then
+    echo "install.sh: include/nbhd.h does not match version $version of Cargo.toml" >&2
+    exit 1
+fi
+
+echo "== building nbhd $version (cargo build --release --lib)"
+cargo build --release --lib -p nbhd
+target_dir="${CARGO_TARGET_DIR:-$repo/target}"
+case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
+release="$target_dir/release"
+for f in libnbhd.so libnbhd.a; do
+    [ -f "$release/$f" ] || { echo "install.sh: $release/$f was not built" >&2; exit 1; }
+done
+
+# System libraries the static library needs on Linux: those Rust's std links
+# (`cargo rustc --release -- --print native-static-libs` lists them; computing them here would
+# rebuild the crate with different flags, so they are written down, and the C++ examples' ctest
+# links a program against nbhd::nbhd_static to prove the list complete).
+static_deps_cmake="Threads::Threads;\${CMAKE_DL_LIBS};m;rt;util;gcc_s"
+static_deps_pc="-lgcc_s -lutil -lrt -lpthread -lm -ldl -lc"
+
+echo "== installing into $prefix"
+install -d "$prefix/include" "$prefix/lib/cmake/nbhd" "$prefix/lib/pkgconfig"
+install -m 644 include/nbhd.h "$prefix/include/nbhd.h"
+install -m 755 "$release/libnbhd.so" "$prefix/lib/libnbhd.so"
+install -m 644 "$release/libnbhd.a" "$prefix/lib/libnbhd.a"
+
+cat >"$prefix/lib/cmake/nbhd/nbhdConfig.cmake" <<EOF
+# CMake package of nbhd $version, written by scripts/install.sh.
+#
+#   find_package(nbhd CONFIG REQUIRED)
+#   target_link_libraries(app PRIVATE nbhd::nbhd)          # shared library
+#   target_link_libraries(app PRIVATE nbhd::nbhd_static)   # static library
+#
+# Sets nbhd_FOUND, nbhd_VERSION, nbhd_INCLUDE_DIR, nbhd_LIBRARY, nbhd_STATIC_LIBRARY.
+include(CMakeFindDependencyMacro)
+find_dependency(Threads)
+
+get_filename_component(_nbhd_prefix "\${CMAKE_CURRENT_LIST_DIR}/../../.." ABSOLUTE)
+set(nbhd_INCLUDE_DIR "\${_nbhd_prefix}/include")
+set(nbhd_LIBRARY "\${_nbhd_prefix}/lib/libnbhd.so")
+set(nbhd_STATIC_LIBRARY "\${_nbhd_prefix}/lib/libnbhd.a")
+foreach(_nbhd_file IN ITEMS "\${nbhd_INCLUDE_DIR}/nbhd.h" "\${nbhd_LIBRARY}" "\${nbhd_STATIC_LIBRARY}")
+  if(NOT EXISTS "\${_nbhd_file}")
+    set(nbhd_FOUND FALSE)
+    set(nbhd_NOT_FOUND_MESSAGE "nbhd: \${_nbhd_file} is missing; reinstall with scripts/install.sh")
+    return()
+  endif()
+endforeach()
+
+if(NOT TARGET nbhd::nbhd)
+  # The library is built by cargo and has no SONAME: IMPORTED_NO_SONAME makes CMake link it
+  # as -lnbhd (with its directory in the search path and the build RPATH) instead of by path.
+  add_library(nbhd::nbhd SHARED IMPORTED)
+  set_target_properties(nbhd::nbhd PROPERTIES
+    IMPORTED_LOCATION "\${nbhd_LIBRARY}"
+    IMPORTED_NO_SONAME TRUE
+    INTERFACE_INCLUDE_DIRECTORIES "\${nbhd_INCLUDE_DIR}")
+endif()
+if(NOT TARGET nbhd::nbhd_static)
+  add_library(nbhd::nbhd_static STATIC IMPORTED)
+  set_target_properties(nbhd::nbhd_static PROPERTIES
+    IMPORTED_LOCATION "\${nbhd_STATIC_LIBRARY}"
+    IMPORTED_LINK_INTERFACE_LANGUAGES "C"
+    INTERFACE_INCLUDE_DIRECTORIES "\${nbhd_INCLUDE_DIR}"
+    INTERFACE_LINK_LIBRARIES "$static_deps_cmake")
+endif()
+unset(_nbhd_file)
+unset(_nbhd_prefix)
+EOF
+
+IFS=. read -r v_major v_minor v_patch <<<"${version%%[-+]*}"
+cat >"$prefix/lib/cmake/nbhd/nbhdConfigVersion.cmake" <<EOF
+# Version of the nbhd package, written by scripts/install.sh. Compatible with a requested
+# version that is not newer and has the same major version (for 0.x: the same minor version,
+# as Cargo's semver rules say).
+set(PACKAGE_VERSION "$version")
+set(PACKAGE_VERSION_COMPATIBLE FALSE)
+set(PACKAGE_VERSION_EXACT FALSE)
+if(PACKAGE_FIND_VERSION VERSION_EQUAL PACKAGE_VERSION)
+  set(PACKAGE_VERSION_EXACT TRUE)
+endif()
+if(NOT PACKAGE_FIND_VERSION VERSION_GREATER PACKAGE_VERSION)
+  if("$v_major" STREQUAL "0")
+    if(PACKAGE_FIND_VERSION_MAJOR STREQUAL "0" AND PACKAGE_FIND_VERSION_MINOR STREQUAL "$v_minor")
+      set(PACKAGE_VERSION_COMPATIBLE TRUE)
+    endif()
+  elseif(PACKAGE_FIND_VERSION_MAJOR STREQUAL "$v_major")
+    set(PACKAGE_VERSION_COMPATIBLE TRUE)
+  endif()
+endif()
+# A 64-bit library: refuse a 32-bit consumer.
+if(DEFINED CMAKE_SIZEOF_VOID_P AND NOT CMAKE_SIZEOF_VOID_P EQUAL 8)
+  set(PACKAGE_VERSION "\${PACKAGE_VERSION} (64bit)")
+  set(PACKAGE_VERSION_UNSUITABLE TRUE)
+endif()
+EOF
+: "$v_patch"
+
+cat >"$prefix/lib/pkgconfig/nbhd.pc" <<EOF
+prefix=\${pcfiledir}/../..
+libdir=\${prefix}/lib
+includedir=\${prefix}/include
+
+Name: nbhd
+Description: Exact neighbourhoods in point clouds with k-d trees, and point-set smoothing (C API)
+Version: $version
+Libs: -L\${libdir} -lnbhd
+Libs.private: $static_deps_pc
+Cflags: -I\${includedir}
+EOF
+
+# -lnbhd picks libnbhd.so when both libraries are present, so static linking gets its own file.
+cat >"$prefix/lib/pkgconfig/nbhd-static.pc" <<EOF
+prefix=\${pcfiledir}/../..
+libdir=\${prefix}/lib
+includedir=\${prefix}/include
+
+Name: nbhd-static
+Description: nbhd, linked statically (libnbhd.a and the system libraries it needs)
+Version: $version
+Libs: \${libdir}/libnbhd.a $static_deps_pc
+Cflags: -I\${includedir}
+EOF
+
+echo "== installed nbhd $version:"
+(cd "$prefix" && find include/nbhd.h lib/libnbhd.so lib/libnbhd.a lib/cmake/nbhd lib/pkgconfig/nbhd.pc lib/pkgconfig/nbhd-static.pc -type f | sort | sed 's/^/   /')
