@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Builds nbhd, installs it into a build-local prefix, builds the C++ examples against that
+# installation (find_package(nbhd) through CMAKE_PREFIX_PATH) and runs their tests with ctest:
+# nbhd's neighbourhoods compared with FLANN's and PCL's on the real data in ../shared/data, and
+# a program linked against the static library.
+#
+# Needs cmake, g++, libflann-dev, libpcl-dev, libopenmesh-dev, libnanoflann-dev, libeigen3-dev,
+# liblz4-dev (scripts/test.sh installs them when missing).
+#
+# Environment:
+#   NBHD_DATA_DIR   the data directory (default: ../shared/data from the repository root)
+#   CTEST_PARALLEL  ctest jobs (default: number of cores)
+#   Extra arguments are passed to ctest (e.g. scripts/cpp-test.sh -R bunny).
+set -euo pipefail
+repo="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$repo"
+
+target_dir="${CARGO_TARGET_DIR:-$repo/target}"
+case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
+prefix="$target_dir/cpp/prefix"
+build="$target_dir/cpp/build"
+
+data="${NBHD_DATA_DIR:-$repo/../shared/data}"
+if [ ! -d "$data/pcl" ] || [ ! -d "$data/meshes" ]; then
+    echo "cpp-test.sh: no data at $data (expected pcl/*.pcd and meshes/*.obj); set NBHD_DATA_DIR" >&2
+    exit 1
+fi
+data="$(cd "$data" && pwd)"
+
+for tool in cmake c++ pkg-config; do
+    command -v "$tool" >/dev/null 2>&1 || { echo "cpp-test.sh: $tool is missing (scripts/test.sh installs it)" >&2; exit 1; }
+done
+
+echo "== installing nbhd into $prefix"
+scripts/install.sh "$prefix"
+
+echo "== configuring cpp_examples (Release, -O2, no -march=native)"
+cmake -S cpp_examples -B "$build" \
+    -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_PREFIX_PATH="$prefix" \
+    -DNBHD_DATA_DIR="$data" >"$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
+grep -E "nbhd [0-9]|Found PCL|Found flann|liblz4" "$build.configure.log" || true
+
+jobs="$(nproc 2>/dev/null || echo 2)"
+echo "== building cpp_examples"
+cmake --build "$build" -j "$jobs"
+
+# The pkg-config file must give a working link line too: build a C program with it alone.
+echo "== linking a C program with pkg-config --cflags --libs nbhd"
+pc_out="$build/pkgconfig_check"
+# shellcheck disable=SC2046
+cc -O2 -o "$pc_out" cpp_examples/link_check.c \
+    $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs nbhd) \
+    -Wl,-rpath,"$prefix/lib"
+"$pc_out"
+# shellcheck disable=SC2046
+cc -O2 -o "$pc_out-static" cpp_examples/link_check.c \
+    $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs nbhd-static)
+if readelf -d "$pc_out-static" | grep -q 'libnbhd'; then
+    echo "cpp-test.sh: nbhd-static.pc linked libnbhd dynamically" >&2
+    exit 1
+fi
+"$pc_out-static"
+
+echo "== ctest"
+cd "$build"
+ctest --output-on-failure -j "${CTEST_PARALLEL:-$jobs}" "$@"
