@@ -12,6 +12,7 @@
 
 pub mod cloud;
 pub mod error;
+pub mod ffi;
 pub mod geometry;
 #[cfg(feature = "io")]
 pub mod io;

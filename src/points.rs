@@ -34,6 +34,45 @@ impl<'a> PointsView<'a> {
         stride: usize,
         scalar: ScalarType,
     ) -> Result<Self> {
+        let needed = Self::required_bytes(count, dim, stride, scalar).map_err(|e| match e {
+            NbhdError::BufferTooSmall { what, needed, .. } => NbhdError::BufferTooSmall {
+                what,
+                len: bytes.len(),
+                needed,
+            },
+            e => e,
+        })?;
+        if bytes.len() < needed {
+            return Err(NbhdError::BufferTooSmall {
+                what: "point buffer (bytes)",
+                len: bytes.len(),
+                needed,
+            });
+        }
+        Ok(Self {
+            bytes,
+            count,
+            dim,
+            stride,
+            scalar,
+        })
+    }
+
+    /// The number of bytes a buffer of `count` points of dimension `dim`, `stride` bytes apart,
+    /// must hold: `(count - 1) * stride + dim * scalar.size()`, after the same geometry checks
+    /// as [`Self::new`]. Lets a caller that only has a pointer (the C ABI) know how many bytes
+    /// it may view before making the view.
+    ///
+    /// Errors: [`NbhdError::ZeroDimension`], [`NbhdError::StrideTooSmall`],
+    /// [`NbhdError::EmptyInput`], [`NbhdError::TooManyPoints`], and
+    /// [`NbhdError::BufferTooSmall`] (with `len` 0 and `needed` `usize::MAX`) when the size
+    /// overflows the address space.
+    pub fn required_bytes(
+        count: usize,
+        dim: usize,
+        stride: usize,
+        scalar: ScalarType,
+    ) -> Result<usize> {
         if dim == 0 {
             return Err(NbhdError::ZeroDimension);
         }
@@ -55,28 +94,15 @@ impl<'a> PointsView<'a> {
                 max: MAX_POINTS,
             });
         }
-        let needed = (count - 1)
+        (count - 1)
             .checked_mul(stride)
             .and_then(|b| b.checked_add(point_bytes))
+            .filter(|&b| b <= isize::MAX as usize)
             .ok_or(NbhdError::BufferTooSmall {
                 what: "point buffer (bytes)",
-                len: bytes.len(),
+                len: 0,
                 needed: usize::MAX,
-            })?;
-        if bytes.len() < needed {
-            return Err(NbhdError::BufferTooSmall {
-                what: "point buffer (bytes)",
-                len: bytes.len(),
-                needed,
-            });
-        }
-        Ok(Self {
-            bytes,
-            count,
-            dim,
-            stride,
-            scalar,
-        })
+            })
     }
 
     /// A view of a tightly packed slice `[x0, y0, z0, x1, ...]` of dimension `dim`.
@@ -207,6 +233,34 @@ mod tests {
             Err(NbhdError::BufferTooSmall { needed: 72, .. })
         ));
         assert!(PointsView::from_flat(&raw[..5], 3).is_err());
+    }
+
+    #[test]
+    fn required_bytes_matches_new() {
+        assert_eq!(
+            PointsView::required_bytes(3, 3, 16, ScalarType::F32),
+            Ok(2 * 16 + 12)
+        );
+        assert_eq!(
+            PointsView::required_bytes(1, 2, 16, ScalarType::F64),
+            Ok(16)
+        );
+        assert_eq!(
+            PointsView::required_bytes(0, 3, 12, ScalarType::F32),
+            Err(NbhdError::EmptyInput)
+        );
+        assert_eq!(
+            PointsView::required_bytes(2, 0, 12, ScalarType::F32),
+            Err(NbhdError::ZeroDimension)
+        );
+        assert!(matches!(
+            PointsView::required_bytes(2, 3, 11, ScalarType::F32),
+            Err(NbhdError::StrideTooSmall { .. })
+        ));
+        assert!(matches!(
+            PointsView::required_bytes(1 << 31, 1, usize::MAX / 4, ScalarType::F32),
+            Err(NbhdError::BufferTooSmall { .. })
+        ));
     }
 
     #[test]

@@ -1,0 +1,75 @@
+//! Checks of the pointers C passes in, before anything is read or written through them.
+
+use std::ffi::c_void;
+
+use super::status::FfiError;
+
+/// Checks that `p` is not NULL and is aligned for `T`; `arg` names it for the message.
+pub(crate) fn check_ptr<T>(p: *const T, arg: &str) -> Result<(), FfiError> {
+    check_aligned(p.cast(), std::mem::align_of::<T>(), arg)
+}
+
+/// Checks that `p` is not NULL and is a multiple of `align`; `arg` names it for the message.
+pub(crate) fn check_aligned(p: *const c_void, align: usize, arg: &str) -> Result<(), FfiError> {
+    if p.is_null() {
+        return Err(FfiError::Null(arg.to_owned()));
+    }
+    let addr = p as usize;
+    if addr % align != 0 {
+        return Err(FfiError::Misaligned {
+            what: arg.to_owned(),
+            addr,
+            align,
+        });
+    }
+    Ok(())
+}
+
+/// Checks an optional pointer: NULL is fine, anything else must be aligned for `T`.
+pub(crate) fn check_optional<T>(p: *const T, arg: &str) -> Result<(), FfiError> {
+    if p.is_null() {
+        Ok(())
+    } else {
+        check_ptr(p, arg)
+    }
+}
+
+/// The object behind a handle or struct pointer, after the NULL and alignment checks.
+///
+/// # Safety
+/// `p` must be NULL or point to a live `T` that is not written during `'a`.
+pub(crate) unsafe fn deref<'a, T>(p: *const T, arg: &str) -> Result<&'a T, FfiError> {
+    check_ptr(p, arg)?;
+    // SAFETY: non-NULL and aligned (checked above); live and not written (caller).
+    Ok(unsafe { &*p })
+}
+
+/// Checks an out-pointer and stores `value` in it at once, so that the caller's variable
+/// holds a defined value (NULL, 0) whatever happens next; returns the pointer for later writes.
+///
+/// # Safety
+/// `p` must be NULL or point to writable memory for a `T`.
+pub(crate) unsafe fn init_out<T>(p: *mut T, arg: &str, value: T) -> Result<*mut T, FfiError> {
+    check_ptr(p.cast_const(), arg)?;
+    // SAFETY: non-NULL and aligned (checked above) and writable (caller); `T` is a plain
+    // pointer or integer, so nothing is dropped by overwriting it.
+    unsafe { p.write(value) };
+    Ok(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn null_and_misaligned_pointers_are_named() {
+        let x = [0u64; 2];
+        assert!(check_ptr(x.as_ptr(), "x").is_ok());
+        let e = check_ptr(std::ptr::null::<u32>(), "indices").unwrap_err();
+        assert_eq!(e.to_string(), "argument indices is NULL");
+        let odd = (x.as_ptr() as usize + 1) as *const u32;
+        let e = check_ptr(odd, "indices").unwrap_err();
+        assert!(e.to_string().ends_with("is not aligned to 4 bytes"), "{e}");
+        assert!(check_optional(std::ptr::null::<f64>(), "sq_dists").is_ok());
+    }
+}

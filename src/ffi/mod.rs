@@ -1,0 +1,82 @@
+//! The C ABI: `nbhd_*` functions over opaque handles and plain structs, a thin, mechanical
+//! layer over the safe API of this crate. No logic lives only here: every export checks its
+//! pointers, converts C values to the core's types, calls the core and converts back.
+//!
+//! `include/nbhd.h` is generated from this module by cbindgen (`scripts/gen-header.sh`, with
+//! `cbindgen.toml` at the crate root); a test fails when the committed header is stale. The
+//! overview C users read first (ownership, units, index limits, thread safety, errors) is the
+//! header's preamble, kept in `cbindgen.toml`.
+//!
+//! Rules of this layer:
+//! - every export runs inside a panic guard ([`status`]): a Rust panic becomes
+//!   `NBHD_STATUS_INTERNAL` with its message, and no unwinding ever reaches C;
+//! - every pointer is checked for NULL and for the alignment of the type it is read or
+//!   written as, before anything is read; C enum values inside structs are read as integers
+//!   and checked, so an out-of-range value is an error, never undefined behaviour;
+//! - `unsafe` appears only in this module, each block with a `// SAFETY:` comment.
+#![allow(non_camel_case_types)]
+#![deny(unsafe_op_in_unsafe_fn)]
+#![warn(clippy::undocumented_unsafe_blocks)]
+
+// The header follows the order of these modules (cbindgen reads them in turn): errors first,
+// then the plain types, the tree, single queries and tables. Blank lines keep rustfmt from
+// sorting them.
+pub mod status;
+
+pub mod types;
+
+pub mod tree;
+
+pub mod query;
+
+pub mod table;
+
+mod args;
+
+pub use query::*;
+pub use status::*;
+pub use table::*;
+pub use tree::*;
+pub use types::*;
+
+/// Major version of the nbhd library this header belongs to.
+pub const NBHD_VERSION_MAJOR: u32 = 0;
+/// Minor version of the nbhd library this header belongs to.
+pub const NBHD_VERSION_MINOR: u32 = 1;
+/// Patch version of the nbhd library this header belongs to.
+pub const NBHD_VERSION_PATCH: u32 = 0;
+/// The version of this header as one number, `MAJOR * 1000000 + MINOR * 1000 + PATCH`;
+/// compare it with `nbhd_version()` to detect a header/library mismatch at run time.
+pub const NBHD_VERSION: u32 =
+    NBHD_VERSION_MAJOR * 1_000_000 + NBHD_VERSION_MINOR * 1_000 + NBHD_VERSION_PATCH;
+
+/// The version of the library that is linked, as `MAJOR * 1000000 + MINOR * 1000 + PATCH`
+/// (compare with `NBHD_VERSION` from the header you compiled against).
+#[no_mangle]
+pub extern "C" fn nbhd_version() -> u32 {
+    NBHD_VERSION
+}
+
+/// The version of the library that is linked, as a string such as "0.1.0". The string is
+/// static: never free it.
+#[no_mangle]
+pub extern "C" fn nbhd_version_string() -> *const std::ffi::c_char {
+    concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr().cast()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn version_constants_follow_cargo_toml() {
+        let parse = |s: &str| s.parse::<u32>().unwrap();
+        assert_eq!(NBHD_VERSION_MAJOR, parse(env!("CARGO_PKG_VERSION_MAJOR")));
+        assert_eq!(NBHD_VERSION_MINOR, parse(env!("CARGO_PKG_VERSION_MINOR")));
+        assert_eq!(NBHD_VERSION_PATCH, parse(env!("CARGO_PKG_VERSION_PATCH")));
+        assert_eq!(nbhd_version(), NBHD_VERSION);
+        // SAFETY: nbhd_version_string returns a static NUL-terminated string.
+        let s = unsafe { std::ffi::CStr::from_ptr(nbhd_version_string()) };
+        assert_eq!(s.to_str().unwrap(), env!("CARGO_PKG_VERSION"));
+    }
+}

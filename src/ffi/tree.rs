@@ -1,0 +1,148 @@
+//! The tree handle: build options, build, free, statistics.
+
+use super::args::{deref, init_out};
+use super::status::{guard, guard_value, nbhd_status};
+use super::types::{nbhd_build_options, nbhd_points, nbhd_stats, read_build_options, PointsArg};
+use crate::scalar::ScalarType;
+use crate::tree::{BuildOptions, KdTree};
+use crate::NeighborSearch;
+
+/// A built k-d tree (opaque). It holds its own copy of the points, in the scalar type of the
+/// points it was built from, and is immutable: any number of threads may query one tree at
+/// once. Made by nbhd_tree_build, freed by nbhd_tree_free.
+pub struct nbhd_tree {
+    pub(crate) inner: AnyTree,
+}
+
+/// A tree of either scalar type.
+pub(crate) enum AnyTree {
+    F32(KdTree<f32>),
+    F64(KdTree<f64>),
+}
+
+/// Runs `$body` with `$t` bound to the typed tree inside an [`AnyTree`], for both types.
+macro_rules! with_tree {
+    ($tree:expr, $t:ident => $body:expr) => {
+        match $tree {
+            $crate::ffi::tree::AnyTree::F32($t) => $body,
+            $crate::ffi::tree::AnyTree::F64($t) => $body,
+        }
+    };
+}
+pub(crate) use with_tree;
+
+impl AnyTree {
+    pub(crate) fn scalar_type(&self) -> ScalarType {
+        match self {
+            AnyTree::F32(_) => ScalarType::F32,
+            AnyTree::F64(_) => ScalarType::F64,
+        }
+    }
+}
+
+/// The default build options: sliding-midpoint pivots, Floyd-Rivest selection, leaf size 12,
+/// non-finite points rejected, the shared thread pool.
+#[no_mangle]
+pub extern "C" fn nbhd_build_options_default() -> nbhd_build_options {
+    let defaults = BuildOptions::default().into();
+    guard_value("nbhd_build_options_default", defaults, || defaults)
+}
+
+/// Builds a k-d tree over `*points` and stores a new handle in `*out_tree`.
+///
+/// The tree computes in `points->scalar_type` and keeps its own copy of the points, so the
+/// point buffer may be changed or freed as soon as this returns. `options` may be NULL
+/// for the defaults. On any error `*out_tree` is set to NULL (if `out_tree` is not NULL) and
+/// nothing needs freeing.
+///
+/// Errors: NULL_POINTER (`points`, `points->data`, `out_tree`), MISALIGNED_POINTER,
+/// INVALID_ARGUMENT (`points->scalar_type` not a value of the enum), EMPTY_INPUT (count 0, or
+/// every point skipped), ZERO_DIMENSION, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (the
+/// message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum field
+/// out of range), THREAD_POOL.
+///
+/// Ownership: the caller owns `*out_tree` and frees it with nbhd_tree_free.
+///
+/// # Safety
+/// `points` must describe readable memory (see nbhd_points); `options` must be NULL or point
+/// to an nbhd_build_options; `out_tree` must be writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_tree_build(
+    points: *const nbhd_points,
+    options: *const nbhd_build_options,
+    out_tree: *mut *mut nbhd_tree,
+) -> nbhd_status {
+    guard("nbhd_tree_build", || {
+        // SAFETY: `out_tree` is NULL or writable (caller).
+        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
+        // SAFETY: `points` and `options` are NULL or readable structs (caller).
+        let (arg, options) = unsafe {
+            (
+                PointsArg::read(points, "points")?,
+                read_build_options(options)?,
+            )
+        };
+        // SAFETY: the caller's description of the point memory is true (contract above).
+        let view = unsafe { arg.view() }?;
+        let inner = match arg.scalar {
+            ScalarType::F32 => AnyTree::F32(KdTree::build(&view, &options)?),
+            ScalarType::F64 => AnyTree::F64(KdTree::build(&view, &options)?),
+        };
+        let handle = Box::into_raw(Box::new(nbhd_tree { inner }));
+        // SAFETY: `out` was checked by `init_out`; the handle is a fresh Box the caller now owns.
+        unsafe { out.write(handle) };
+        Ok(())
+    })
+}
+
+/// Frees a tree made by nbhd_tree_build. NULL is ignored. The tree must not be in use by
+/// another thread, and must not be used after this call.
+///
+/// # Safety
+/// `tree` must be NULL or a handle from nbhd_tree_build not freed before.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_tree_free(tree: *mut nbhd_tree) {
+    guard_value("nbhd_tree_free", (), || {
+        if tree.is_null() {
+            return;
+        }
+        if (tree as usize) % std::mem::align_of::<nbhd_tree>() != 0 {
+            // Not a handle of ours: freeing it would corrupt the heap. Leak it, and say so.
+            let _ = guard("nbhd_tree_free", || {
+                super::args::check_ptr(tree.cast_const(), "tree")
+            });
+            return;
+        }
+        // SAFETY: `tree` came from Box::into_raw in nbhd_tree_build and is freed only once
+        // (caller).
+        drop(unsafe { Box::from_raw(tree) });
+    })
+}
+
+/// Writes the shape and memory of `tree` to `*out_stats`, including its scalar type (the
+/// type of query coordinates and of squared distances) and `source_points` (the range of
+/// valid indices).
+///
+/// Errors: NULL_POINTER, MISALIGNED_POINTER.
+///
+/// # Safety
+/// `tree` must be NULL or a live handle from nbhd_tree_build; `out_stats` must be NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_tree_stats(
+    tree: *const nbhd_tree,
+    out_stats: *mut nbhd_stats,
+) -> nbhd_status {
+    guard("nbhd_tree_stats", || {
+        // SAFETY: `out_stats` is NULL or writable (caller).
+        let out = unsafe { init_out(out_stats, "out_stats", nbhd_stats::default()) }?;
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        let scalar = tree.inner.scalar_type();
+        let stats =
+            with_tree!(&tree.inner, t => nbhd_stats::new(t.stats(), t.source_len(), scalar));
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { out.write(stats) };
+        Ok(())
+    })
+}
