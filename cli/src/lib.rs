@@ -3,4 +3,5 @@
 
 pub mod commands;
 pub mod output;
+pub mod progress;
 pub mod render;

@@ -2,7 +2,8 @@
 //! `commands/` of the `nbhd_cli` library; to add one, add a variant to [`Command`], a module,
 //! and a line in [`run`].
 
-use clap::{Parser, Subcommand};
+use clap::parser::ValueSource;
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use nbhd_cli::commands;
 use nbhd_cli::output::Output;
 use std::process::ExitCode;
@@ -13,12 +14,19 @@ const LONG_ABOUT: &str = "\
 nbhd computes exact neighbourhoods in point clouds with the k-d trees of M. Skrodzki, \
 'Neighborhood Computation of Point Set Surfaces', and uses them to smooth scanned surfaces.
 
+Without a command nbhd runs the demo (nbhd demo): noisy cube, torus and cylinder samples, k-d \
+trees with every pivot policy, ε-k neighbourhoods, isotropic and anisotropic smoothing, PLY \
+files and PNG pictures in ./nbhd-demo, and a summary of times and errors.
+
 Terms of the neighbourhood and smoothing options, as in the thesis:
   ε (--radius)      influence radius: a neighbourhood holds the points within Euclidean
                     distance ε of the query point (inclusive)
   k (--k)           maximum valence: at most the k nearest of them (the ε-k neighbourhood)
   λ (--lambda)      curvature threshold of anisotropic smoothing
-  Q (--quotient)    edge quotient of the feature detection
+  Q (--quotient)    edge quotient of the feature detection (eq. 2.33)
+  τ (--tau)         step size of one smoothing step (eq. 2.18)
+  h                 mean spacing: mean distance of a point to its nearest other point;
+                    lengths can be given in it (6h), curvatures in 1/h (0.2/h)
 
 Files: PLY (ascii, binary), PCD (ascii, binary, binary_compressed), OBJ (vertices) and XYZ \
 text are read; PLY, PCD and XYZ are written, with normals and per-point scalar fields \
@@ -27,22 +35,53 @@ text are read; PLY, PCD and XYZ are written, with normals and per-point scalar f
 
 /// Command line of `nbhd`.
 #[derive(Parser, Debug)]
-#[command(name = "nbhd", version, about = ABOUT, long_about = LONG_ABOUT)]
+#[command(
+    name = "nbhd",
+    version,
+    about = ABOUT,
+    long_about = LONG_ABOUT
+)]
 struct Cli {
     /// Print the result as one JSON document on standard output, nothing else
     #[arg(long, global = true)]
     json: bool,
 
-    /// Print nothing but errors (and the JSON document if --json is given)
+    /// Print no messages and no progress bars, only errors and the results that go to
+    /// standard output (the JSON document with --json, neighbourhoods without --output)
     #[arg(long, short, global = true)]
     quiet: bool,
 
+    /// Worker threads [default: one per core]
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+
+    /// What to do [default: demo]
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
+
+    /// Without a command: the options of `nbhd demo`
+    #[command(flatten, next_help_heading = "Demo options (without a command)")]
+    demo: commands::demo::Args,
 }
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    Demo(commands::demo::Args),
+    Knn(commands::neighbors::KnnArgs),
+    Radius(commands::neighbors::RadiusArgs),
+    Neighbors(commands::neighbors::NeighborsArgs),
+    /// PCA normals of every point over its ε-k neighbourhood (thesis eq. 2.8–2.10)
+    ///
+    /// Writes the input with normals (nx ny nz) and the surface variation λ0/(λ0+λ1+λ2) of
+    /// the covariance as a scalar property.
+    Normals(commands::geometry::Args),
+    /// Normals and curvatures of every point over its ε-k neighbourhood (thesis Section 2.2)
+    ///
+    /// Writes the input with normals and the scalar properties curvature (max(|k1|,|k2|),
+    /// 'Max Princ'), mean_curvature ((k1+k2)/2), k1, k2 (Weingarten estimate, eq. 2.25, signed
+    /// against the normal) and surface_variation, which MeshLab and CloudCompare colour by.
+    Curvature(commands::geometry::Args),
+    Smooth(commands::smooth::Args),
     Info(commands::info::Args),
     Convert(commands::convert::Args),
     Render(commands::render::Args),
@@ -50,15 +89,59 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), String> {
     let out = Output::new(cli.json, cli.quiet);
+    if let Some(t) = cli.threads {
+        if t == 0 {
+            return Err("--threads must be at least 1".into());
+        }
+        rayon_threads(t)?;
+    }
+    use commands::geometry::What;
     match cli.command {
-        Command::Info(a) => commands::info::run(a, &out),
-        Command::Convert(a) => commands::convert::run(a, &out),
-        Command::Render(a) => commands::render::run(a, &out),
+        None => commands::demo::run(cli.demo, &out),
+        Some(Command::Demo(a)) => commands::demo::run(a, &out),
+        Some(Command::Knn(a)) => commands::neighbors::run_knn(a, &out),
+        Some(Command::Radius(a)) => commands::neighbors::run_radius(a, &out),
+        Some(Command::Neighbors(a)) => commands::neighbors::run_neighbors(a, &out),
+        Some(Command::Normals(a)) => commands::geometry::run(a, What::Normals, &out),
+        Some(Command::Curvature(a)) => commands::geometry::run(a, What::Curvature, &out),
+        Some(Command::Smooth(a)) => commands::smooth::run(a, &out),
+        Some(Command::Info(a)) => commands::info::run(a, &out),
+        Some(Command::Convert(a)) => commands::convert::run(a, &out),
+        Some(Command::Render(a)) => commands::render::run(a, &out),
     }
 }
 
+/// Sizes the global rayon pool that the library's parallel loops run on.
+fn rayon_threads(n: usize) -> Result<(), String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .map_err(|e| format!("could not create {n} threads: {e}"))
+}
+
+/// Parses the command line; the demo's options are refused after a command.
+fn parse() -> Cli {
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    if cli.command.is_some() {
+        let demo = <commands::demo::Args as clap::Args>::augment_args(clap::Command::new("demo"));
+        for arg in demo.get_arguments() {
+            if matches.value_source(arg.get_id().as_str()) == Some(ValueSource::CommandLine) {
+                let name = arg.get_long().unwrap_or(arg.get_id().as_str());
+                Cli::command()
+                    .error(
+                        clap::error::ErrorKind::ArgumentConflict,
+                        format!("--{name} is an option of the demo: put it after `nbhd demo`, or leave out the command"),
+                    )
+                    .exit();
+            }
+        }
+    }
+    cli
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -71,7 +154,6 @@ fn main() -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::CommandFactory;
 
     #[test]
     fn command_line_definition_is_consistent() {

@@ -21,6 +21,14 @@ impl Output {
         }
     }
 
+    /// Prints a message on standard error unless `--json` or `--quiet` (for commands whose
+    /// result goes to standard output).
+    pub fn note(&self, s: impl AsRef<str>) {
+        if !self.json && !self.quiet {
+            eprintln!("{}", s.as_ref());
+        }
+    }
+
     /// Prints the JSON document if `--json`.
     pub fn json(&self, v: &serde_json::Value) {
         if self.json {

@@ -18,6 +18,9 @@ pub enum ColorMap {
     Turbo,
     /// Black to white.
     Gray,
+    /// Pale grey-blue through yellow and orange to dark red: flat regions stay light, so the
+    /// light still shows the shape, and high values stand out.
+    Heat,
 }
 
 impl ColorMap {
@@ -55,6 +58,20 @@ impl ColorMap {
                 ]
             }
             ColorMap::Gray => [t, t, t],
+            ColorMap::Heat => {
+                const STOPS: [[f64; 3]; 5] = [
+                    [225.0, 232.0, 245.0],
+                    [245.0, 225.0, 140.0],
+                    [245.0, 150.0, 50.0],
+                    [215.0, 50.0, 30.0],
+                    [140.0, 10.0, 30.0],
+                ];
+                let x = t * 4.0;
+                let i = (x.floor() as usize).min(3);
+                let f = x - i as f64;
+                let (a, b) = (STOPS[i], STOPS[i + 1]);
+                [0, 1, 2].map(|j| (a[j] + (b[j] - a[j]) * f) / 255.0)
+            }
         };
         c.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
     }
@@ -234,7 +251,7 @@ pub fn render(
         // About half the points face the camera; cover their share of the projected area.
         let area = (ex * scale).max(1.0) * (ey * scale).max(1.0);
         let per_point = area / (proj.len() as f64 / 2.0).max(1.0);
-        (per_point / std::f64::consts::PI).sqrt().clamp(1.0, 12.0) * 1.6
+        (per_point / std::f64::consts::PI).sqrt().clamp(1.0, 12.0) * 2.0
     });
     // Scalar range.
     let range = scalars.map(|s| {
@@ -486,6 +503,14 @@ pub(crate) mod tests {
         }
         assert_eq!(ColorMap::Viridis.color(0.0), [68, 1, 84]);
         assert_eq!(ColorMap::Viridis.color(1.0), [253, 231, 37]);
+        // Heat runs the other way: light where flat, dark red at the hot end.
+        let lum = |c: [u8; 3]| c.iter().map(|&v| v as u32).sum::<u32>();
+        let heat: Vec<u32> = (0..=10)
+            .map(|i| lum(ColorMap::Heat.color(i as f64 / 10.0)))
+            .collect();
+        assert!(heat[0] > heat[10] + 300, "{heat:?}");
+        let hot = ColorMap::Heat.color(1.0);
+        assert!(hot[0] > 2 * hot[1] && hot[0] > 2 * hot[2], "{hot:?}");
     }
 
     #[test]

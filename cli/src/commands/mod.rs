@@ -1,10 +1,17 @@
 //! One module per subcommand: each has `Args` (clap) and `run(args, &Output)`.
 
 pub mod convert;
+pub mod demo;
+pub mod geometry;
 pub mod info;
+pub mod neighbors;
 pub mod render;
+pub mod smooth;
 
-use nbhd::io::Format;
+use nbhd::io::{Format, PointCloud};
+use nbhd::smooth::{Curvature, Length};
+use nbhd::{BuildOptions, MedianAlgorithm, NonFinitePolicy, PivotPolicy};
+use std::path::Path;
 
 /// Input format named on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -34,4 +41,146 @@ pub fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
         .collect::<Result<_, _>>()
         .map_err(|_| format!("'{s}' is not three numbers x,y,z"))?;
     <[f64; 3]>::try_from(v).map_err(|_| format!("'{s}' is not three numbers x,y,z"))
+}
+
+/// Parses a length: `0.05` in the points' units, or `6h` in units of the mean spacing `h`
+/// (mean distance of a point to its nearest other point). Range checks are the library's.
+pub fn parse_length(s: &str) -> Result<Length, String> {
+    let t = s.trim();
+    let bad = || format!("'{s}' is not a length (a number like 0.05, or a multiple of h like 6h)");
+    match t.strip_suffix('h') {
+        Some(v) => v.trim().parse().map(Length::Relative).map_err(|_| bad()),
+        None => t.parse().map(Length::Absolute).map_err(|_| bad()),
+    }
+}
+
+/// Parses a curvature: `3.5` in inverse units of the points, or `0.2/h` in units of `1/h`.
+pub fn parse_curvature(s: &str) -> Result<Curvature, String> {
+    let t = s.trim();
+    let bad =
+        || format!("'{s}' is not a curvature (a number like 3.5, or a multiple of 1/h like 0.2/h)");
+    match t.strip_suffix("/h") {
+        Some(v) => v.trim().parse().map(Curvature::Relative).map_err(|_| bad()),
+        None => t.parse().map(Curvature::Absolute).map_err(|_| bad()),
+    }
+}
+
+/// A length as text, as the user would type it.
+pub fn length_text(l: Length) -> String {
+    match l {
+        Length::Absolute(v) => format!("{v}"),
+        Length::Relative(v) => format!("{v}h"),
+    }
+}
+
+/// A curvature as text, as the user would type it.
+pub fn curvature_text(c: Curvature) -> String {
+    match c {
+        Curvature::Absolute(v) => format!("{v}"),
+        Curvature::Relative(v) => format!("{v}/h"),
+    }
+}
+
+/// Pivot policy of the k-d tree (thesis Sections 3.2 and 5.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PivotArg {
+    /// Dimensions in turn, split at the median (thesis Algorithm 4)
+    CyclicMedian,
+    /// Median of the dimension of largest spread (Omohundro)
+    SpreadMedian,
+    /// Point closest to the middle of the most spread dimension (Moore, eq. 5.1); unbalanced
+    ClosestToMiddle,
+    /// Middle of the most spread dimension, slid to the nearest point (ANN, FLANN)
+    SlidingMidpoint,
+}
+
+impl From<PivotArg> for PivotPolicy {
+    fn from(p: PivotArg) -> Self {
+        match p {
+            PivotArg::CyclicMedian => PivotPolicy::CyclicMedian,
+            PivotArg::SpreadMedian => PivotPolicy::SpreadMedian,
+            PivotArg::ClosestToMiddle => PivotPolicy::ClosestToMiddle,
+            PivotArg::SlidingMidpoint => PivotPolicy::SlidingMidpoint,
+        }
+    }
+}
+
+/// How the median policies find the median (thesis Section 3.3 and Chapter 6).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MedianArg {
+    /// Lists presorted once and kept sorted by stable partition (Algorithm 6, "Sorting")
+    Presorted,
+    /// Sort each node's points, then pick ("Median (Sorting)")
+    Sort,
+    /// Randomised quickselect, median-of-three pivot (Algorithm 10)
+    Quickselect,
+    /// Floyd-Rivest selection ("Median (Floyd-Rivest)")
+    FloydRivest,
+    /// Deterministic median of medians (Algorithm 11, "Median (Linear Det.)")
+    MedianOfMedians,
+}
+
+impl From<MedianArg> for MedianAlgorithm {
+    fn from(m: MedianArg) -> Self {
+        match m {
+            MedianArg::Presorted => MedianAlgorithm::Presorted,
+            MedianArg::Sort => MedianAlgorithm::Sort,
+            MedianArg::Quickselect => MedianAlgorithm::Quickselect,
+            MedianArg::FloydRivest => MedianAlgorithm::FloydRivest,
+            MedianArg::MedianOfMedians => MedianAlgorithm::MedianOfMedians,
+        }
+    }
+}
+
+/// How the k-d tree is built.
+#[derive(clap::Args, Debug, Clone)]
+pub struct TreeArgs {
+    /// Pivot policy: how a node picks its splitting dimension and value
+    #[arg(long, value_enum, default_value = "sliding-midpoint")]
+    pub pivot: PivotArg,
+
+    /// Median algorithm of the median policies (every one gives the identical tree)
+    #[arg(long, value_enum, default_value = "floyd-rivest")]
+    pub median: MedianArg,
+
+    /// Most points in a leaf bucket (1 gives the thesis' one point per node)
+    #[arg(long, default_value_t = nbhd::tree::DEFAULT_LEAF_SIZE)]
+    pub leaf_size: usize,
+}
+
+impl TreeArgs {
+    /// Build options; points with a NaN or infinite coordinate are skipped (they keep their
+    /// indices and get empty neighbourhoods).
+    pub fn options(&self) -> BuildOptions {
+        BuildOptions {
+            pivot: self.pivot.into(),
+            median: self.median.into(),
+            leaf_size: self.leaf_size,
+            non_finite: NonFinitePolicy::Skip,
+            threads: 0,
+        }
+    }
+}
+
+/// Reads a cloud; errors name the file.
+pub fn read_cloud(path: &Path, format: Option<FormatArg>) -> Result<PointCloud, String> {
+    nbhd::io::read_as(path, format.map(Into::into))
+        .map(|(c, _)| c)
+        .map_err(|e| e.to_string())
+}
+
+/// The finite points of a cloud as `DVec3` and their indices in the file.
+pub fn finite_points(cloud: &PointCloud) -> (Vec<glam::DVec3>, Vec<usize>) {
+    cloud
+        .positions
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.iter().all(|c| c.is_finite()))
+        .map(|(i, p)| (glam::DVec3::from_array(*p), i))
+        .unzip()
+}
+
+/// Seconds since `t`, in milliseconds.
+pub fn ms(t: std::time::Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
 }
