@@ -424,6 +424,7 @@ int main(int argc, char** argv) {
             files.push_back(arg);
         }
     }
+    std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress shows when redirected to a file
     std::printf("bench_neighbors: nbhd %s; nanoflann 0x%x; FLANN %s; PCL %s\n", nbhd_version_string(),
                 NANOFLANN_VERSION, FLANN_VERSION_, PCL_VERSION_PRETTY);
     bool ok = true;
