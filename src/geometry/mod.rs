@@ -6,6 +6,7 @@ pub mod curvature;
 mod eigen;
 pub mod neighbors;
 pub mod normals;
+pub mod robust_plane;
 
 pub use curvature::{
     directional_curvature, principal_curvatures, DensityForm, PrincipalCurvatures, PrincipalFormula,

@@ -29,6 +29,11 @@ use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
 
+pub mod robust;
+pub use robust::{
+    smooth_robust, smooth_robust_report, smooth_robust_with_progress, RobustOptions, RobustReport,
+};
+
 /// A length, absolute or in units of the input's mean spacing `h`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Length {
