@@ -168,3 +168,631 @@ fn help_explains_the_terms() {
     let o = nbhd(&["convert", "--help"]);
     assert!(stdout(&o).contains("binary-compressed") || stdout(&o).contains("compressed"));
 }
+
+// ---- the demo ----------------------------------------------------------------------------
+
+fn json_of(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", stdout(o)))
+}
+
+/// Decodes a PNG file and returns (width, height, RGB bytes).
+fn read_png(path: &std::path::Path) -> (u32, u32, Vec<u8>) {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    buf.truncate(info.buffer_size());
+    (info.width, info.height, buf)
+}
+
+/// Share of the pixels that are not the white background.
+fn covered(rgb: &[u8]) -> f64 {
+    let px = rgb.chunks(3);
+    let n = px.len() as f64;
+    px.filter(|c| *c != [255, 255, 255]).count() as f64 / n
+}
+
+#[test]
+fn demo_writes_files_pictures_and_a_summary_where_smoothing_reduces_the_error() {
+    let dir = PathBuf::from(tmp("demo"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = nbhd(&[
+        "--json",
+        "demo",
+        "--points",
+        "3000",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let v = json_of(&o);
+    assert_eq!(v["points_per_shape"], 3000);
+    let shapes = v["shapes"].as_array().unwrap();
+    let names: Vec<&str> = shapes
+        .iter()
+        .map(|s| s["shape"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["cube", "torus", "cylinder+plane"]);
+    for s in shapes {
+        let name = s["shape"].as_str().unwrap();
+        // Every pivot policy, with its statistics, and the same ε-k table from each.
+        let trees = s["trees"].as_array().unwrap();
+        assert_eq!(trees.len(), 4, "{name}");
+        for t in trees {
+            assert!(t["depth"].as_u64().unwrap() >= 8, "{name}: {t}");
+            assert!(t["leaves"].as_u64().unwrap() * 12 >= 3000, "{name}: {t}");
+            assert!(t["bytes"].as_u64().unwrap() > 3000 * 28, "{name}: {t}");
+        }
+        assert_eq!(s["tables_identical"], true, "{name}");
+        assert_eq!(s["neighbors"]["max"], 15, "{name}");
+        // RMS distance to the true surface: 0.5h of noise, less after either smoothing.
+        let rms = |i: usize| s["runs"][i]["quality"]["rms_h"].as_f64().unwrap();
+        assert!((rms(0) - 0.5).abs() < 0.05, "{name}: noisy RMS {}", rms(0));
+        assert!(rms(1) < 0.7 * rms(0), "{name}: isotropic RMS {}", rms(1));
+        assert!(rms(2) < 0.8 * rms(0), "{name}: anisotropic RMS {}", rms(2));
+        if name == "cube" {
+            // The anisotropic flow keeps the edges better than the isotropic one.
+            let edge = |i: usize| s["runs"][i]["quality"]["edge_rms_h"].as_f64().unwrap();
+            assert!(
+                edge(2) < edge(1),
+                "{name}: edge RMS {} vs {}",
+                edge(2),
+                edge(1)
+            );
+        }
+        for run in s["runs"].as_array().unwrap() {
+            let ply = dir.join(run["ply"].as_str().unwrap());
+            let cloud = nbhd::io::read(&ply).unwrap();
+            assert_eq!(cloud.len(), 3000, "{}", ply.display());
+            assert!(cloud.normals.is_some(), "{}", ply.display());
+            for f in ["curvature", "mean_curvature", "surface_variation"] {
+                let values = cloud.scalar(f).unwrap();
+                assert!(values.iter().all(|x| x.is_finite()), "{f}");
+            }
+            let (w, h, rgb) = read_png(&dir.join(run["png"].as_str().unwrap()));
+            assert_eq!((w, h), (640, 480));
+            let c = covered(&rgb);
+            assert!(c > 0.15 && c < 0.9, "{}: coverage {c}", run["png"]);
+        }
+    }
+    let (w, h, _) = read_png(&dir.join("overview.png"));
+    assert_eq!((w, h), (3 * 640, 3 * 480));
+    let md = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(md.contains("| cube "), "{md}");
+}
+
+#[test]
+fn nbhd_without_a_command_runs_the_demo_and_prints_the_summary() {
+    let dir = tmp("demo-default");
+    let o = nbhd(&["--points", "1000", "--out", &dir]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    for want in [
+        "cyclic-median",
+        "spread-median",
+        "closest-to-middle",
+        "sliding-midpoint",
+        "identical for all four trees",
+        "| shape ",
+        "| cube ",
+        "| torus ",
+        "| cylinder+plane ",
+        "overview.png",
+        "done in",
+    ] {
+        assert!(s.contains(want), "no '{want}' in:\n{s}");
+    }
+    // The summary row of the cube: noisy RMS first, then isotropic and anisotropic, smaller.
+    let row = s.lines().find(|l| l.starts_with("| cube")).unwrap();
+    let cells: Vec<f64> = row
+        .split('|')
+        .filter_map(|c| c.trim().parse::<f64>().ok())
+        .collect();
+    assert!(cells[1] < cells[0] && cells[2] < cells[0], "{row}");
+    assert!(std::path::Path::new(&dir)
+        .join("cube-anisotropic.png")
+        .is_file());
+    // Demo options belong to the demo.
+    let o = nbhd(&["--points", "1000", "info", "x.ply"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--points is an option of the demo"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+// ---- neighbourhoods against brute force -----------------------------------------------------
+
+use nbhd::{BruteForce, NeighborSearch, Neighborhood, NonFinitePolicy, PointsView, Query};
+
+/// 400 points of a noisy sphere, 40 of them duplicates, one NaN point (index 17); written as
+/// XYZ text with every digit.
+fn sphere_file(name: &str) -> (String, Vec<[f64; 3]>) {
+    let s = nbhd::shapes::sample(&nbhd::shapes::Sphere::new(1.0), 400, 5);
+    let mut pts: Vec<[f64; 3]> = s.points.iter().map(|p| p.to_array()).collect();
+    for i in 0..40 {
+        pts[360 + i] = pts[3 * i];
+    }
+    pts[17] = [f64::NAN; 3];
+    let path = tmp(name);
+    let cloud = nbhd::io::PointCloud::from_positions(pts.clone());
+    nbhd::io::write(&path, &cloud, &nbhd::io::WriteOptions::ascii()).unwrap();
+    (path, pts)
+}
+
+fn brute(pts: &[[f64; 3]]) -> BruteForce<f64> {
+    BruteForce::new(&PointsView::from_rows(pts).unwrap(), NonFinitePolicy::Skip).unwrap()
+}
+
+/// Rows of a `--json` neighbourhood document.
+fn rows(v: &serde_json::Value) -> Vec<(Vec<u32>, Vec<f64>)> {
+    v["neighbors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let i = r["indices"].as_array().unwrap();
+            let d = r["sq_dists"].as_array().unwrap();
+            (
+                i.iter().map(|x| x.as_u64().unwrap() as u32).collect(),
+                d.iter().map(|x| x.as_f64().unwrap()).collect(),
+            )
+        })
+        .collect()
+}
+
+fn expect_brute(
+    bf: &BruteForce<f64>,
+    got: &[(Vec<u32>, Vec<f64>)],
+    nbhd: Neighborhood<f64>,
+    exclude_self: bool,
+    what: &str,
+) {
+    assert_eq!(got.len(), 400, "{what}");
+    let mut want = Vec::new();
+    for (i, (idx, d)) in got.iter().enumerate() {
+        if i == 17 {
+            assert!(idx.is_empty(), "{what}: the NaN point has an empty row");
+            continue;
+        }
+        bf.search(
+            Query::Stored {
+                index: i as u32,
+                exclude_self,
+            },
+            nbhd,
+            &mut want,
+        )
+        .unwrap();
+        let wi: Vec<u32> = want.iter().map(|n| n.index).collect();
+        let wd: Vec<f64> = want.iter().map(|n| n.sq_dist).collect();
+        assert_eq!(idx, &wi, "{what}: row {i}");
+        assert_eq!(d, &wd, "{what}: row {i}");
+    }
+}
+
+#[test]
+fn knn_radius_and_neighbors_equal_brute_force_for_every_tree_variant() {
+    let (file, pts) = sphere_file("sphere.xyz");
+    let bf = brute(&pts);
+    let variants: [&[&str]; 4] = [
+        &[],
+        &[
+            "--pivot",
+            "cyclic-median",
+            "--median",
+            "presorted",
+            "--leaf-size",
+            "1",
+        ],
+        &[
+            "--pivot",
+            "spread-median",
+            "--median",
+            "median-of-medians",
+            "--leaf-size",
+            "3",
+        ],
+        &["--pivot", "closest-to-middle", "--median", "quickselect"],
+    ];
+    for tree in variants {
+        for exclude in [false, true] {
+            let mut cases: Vec<(Vec<&str>, Neighborhood<f64>)> = vec![
+                (vec!["knn", "-k", "7"], Neighborhood::Knn { k: 7 }),
+                (
+                    vec!["radius", "--radius", "0.2"],
+                    Neighborhood::Radius {
+                        radius: 0.2,
+                        sorted: true,
+                    },
+                ),
+                (
+                    vec!["neighbors", "-k", "5", "-r", "0.15"],
+                    Neighborhood::KnnRadius { k: 5, radius: 0.15 },
+                ),
+            ];
+            for (args, nb) in cases.drain(..) {
+                let mut a = vec!["--json"];
+                a.extend(&args);
+                a.push(&file);
+                a.extend(tree);
+                if exclude {
+                    a.push("--exclude-self");
+                }
+                let v = json_of(&nbhd(&a));
+                assert_eq!(v["skipped_non_finite"], 1);
+                expect_brute(&bf, &rows(&v), nb, exclude, &a.join(" "));
+            }
+        }
+    }
+}
+
+#[test]
+fn neighbour_files_csv_and_json_and_query_files() {
+    let (file, pts) = sphere_file("sphere2.xyz");
+    let bf = brute(&pts);
+    // CSV file: query,rank,index,sq_dist, the same numbers as brute force.
+    let csv = tmp("nb.csv");
+    let o = nbhd(&["knn", &file, "-k", "4", "--exclude-self", "-o", &csv]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("wrote"), "{}", stdout(&o));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("query,rank,index,sq_dist"));
+    let mut got = vec![(Vec::new(), Vec::new()); 400];
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        let q: usize = f[0].parse().unwrap();
+        assert_eq!(f[1].parse::<usize>().unwrap(), got[q].0.len());
+        got[q].0.push(f[2].parse::<u32>().unwrap());
+        got[q].1.push(f[3].parse::<f64>().unwrap());
+    }
+    expect_brute(&bf, &got, Neighborhood::Knn { k: 4 }, true, "csv");
+    // The same table on standard output, the summary on standard error.
+    let o = nbhd(&["knn", &file, "-k", "4", "--exclude-self"]);
+    assert_eq!(stdout(&o), text);
+    assert!(stderr(&o).contains("knn of 400 queries"), "{}", stderr(&o));
+    // A .json file holds the document.
+    let js = tmp("nb.json");
+    let o = nbhd(&["radius", &file, "-r", "0.25", "-o", &js]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&js).unwrap()).unwrap();
+    let nb = Neighborhood::Radius {
+        radius: 0.25,
+        sorted: true,
+    };
+    expect_brute(&bf, &rows(&v), nb, false, "json file");
+    // A radius in units of h: h is the mean nearest-neighbour distance of the finite points.
+    let v = json_of(&nbhd(&[
+        "--json",
+        "neighbors",
+        &file,
+        "-k",
+        "6",
+        "-r",
+        "2.5h",
+    ]));
+    let h = v["spacing_h"].as_f64().unwrap();
+    let mut row = Vec::new();
+    let (mut sum, mut count) = (0.0, 0);
+    for i in 0..400u32 {
+        if bf
+            .search(
+                Query::stored_excluding_self(i),
+                Neighborhood::Knn { k: 1 },
+                &mut row,
+            )
+            .is_ok()
+        {
+            sum += row[0].sq_dist.sqrt();
+            count += 1;
+        }
+    }
+    assert!((h - sum / count as f64).abs() < 1e-12 * h, "{h}");
+    assert_eq!(v["radius"].as_f64().unwrap(), 2.5 * h);
+    let nb = Neighborhood::KnnRadius {
+        k: 6,
+        radius: 2.5 * h,
+    };
+    expect_brute(&bf, &rows(&v), nb, false, "2.5h");
+    // Queries from another file: arbitrary points.
+    let qs: Vec<[f64; 3]> = vec![[0.0, 0.0, 0.0], [1.0, 0.2, -0.1], [0.3, -0.9, 0.5]];
+    let qfile = tmp("queries.xyz");
+    nbhd::io::write(
+        &qfile,
+        &nbhd::io::PointCloud::from_positions(qs.clone()),
+        &nbhd::io::WriteOptions::ascii(),
+    )
+    .unwrap();
+    let v = json_of(&nbhd(&[
+        "--json",
+        "knn",
+        &file,
+        "-k",
+        "9",
+        "--queries",
+        &qfile,
+    ]));
+    let got = rows(&v);
+    assert_eq!(got.len(), 3);
+    for (q, (idx, d)) in qs.iter().zip(&got) {
+        bf.search(Query::point(q), Neighborhood::Knn { k: 9 }, &mut row)
+            .unwrap();
+        assert_eq!(idx, &row.iter().map(|n| n.index).collect::<Vec<_>>());
+        assert_eq!(d, &row.iter().map(|n| n.sq_dist).collect::<Vec<_>>());
+    }
+}
+
+// ---- normals, curvature, smoothing ------------------------------------------------------
+
+use glam::DVec3;
+use nbhd::smooth::{Curvature, Length, SmoothOptions};
+
+/// A noisy sphere of radius 1 (2000 points, 0.5h Gaussian noise), as PLY, and its points.
+fn noisy_sphere_file(name: &str) -> (String, Vec<DVec3>) {
+    let ns = nbhd::shapes::noisy_sample(
+        &nbhd::shapes::Sphere::new(1.0),
+        2000,
+        0.5,
+        nbhd::shapes::NoiseKind::Gaussian,
+        9,
+    )
+    .unwrap();
+    let path = tmp(name);
+    let cloud =
+        nbhd::io::PointCloud::from_positions(ns.points.iter().map(|p| p.to_array()).collect());
+    nbhd::io::write(&path, &cloud, &nbhd::io::WriteOptions::default()).unwrap();
+    (path, ns.points)
+}
+
+#[test]
+fn normals_and_curvature_match_the_library_and_point_outward() {
+    let (file, pts) = noisy_sphere_file("nsphere.ply");
+    let out = tmp("nsphere-curv.ply");
+    let png = tmp("nsphere-curv.png");
+    let o = nbhd(&[
+        "curvature",
+        &file,
+        &out,
+        "-k",
+        "12",
+        "-r",
+        "5h",
+        "--png",
+        &png,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cloud = nbhd::io::read(&out).unwrap();
+    assert_eq!(
+        cloud.field_names(),
+        [
+            "x",
+            "y",
+            "z",
+            "nx",
+            "ny",
+            "nz",
+            "curvature",
+            "mean_curvature",
+            "k1",
+            "k2",
+            "surface_variation"
+        ]
+    );
+    let lib = nbhd::smooth::analyze(
+        &pts,
+        &SmoothOptions {
+            k: 12,
+            epsilon: Length::Relative(5.0),
+            orientation: nbhd::geometry::Orientation::Propagate,
+            ..SmoothOptions::default()
+        },
+    )
+    .unwrap();
+    let normals = cloud.normals.as_ref().unwrap();
+    for (i, o) in lib.outputs.iter().enumerate() {
+        assert_eq!(normals[i], o.normal.to_array(), "normal {i}");
+        assert_eq!(cloud.scalar("k1").unwrap()[i], o.principal.k1);
+        assert_eq!(
+            cloud.scalar("curvature").unwrap()[i],
+            o.max_principal_curvature
+        );
+        // Propagated orientation is outward on a sphere.
+        assert!(o.normal.dot(pts[i]) > 0.5, "normal {i} points inward");
+    }
+    // Mean curvature about 1/R with outward normals on the unit sphere (curvatures are
+    // signed against the normal: negative).
+    let mean: f64 = cloud.scalar("mean_curvature").unwrap().iter().sum::<f64>() / 2000.0;
+    assert!((mean + 1.0).abs() < 0.35, "mean curvature {mean}");
+    let (w, h, _) = read_png(std::path::Path::new(&png));
+    assert_eq!((w, h), (800, 600));
+
+    // normals: normals and the surface variation only.
+    let out = tmp("nsphere-normals.pcd");
+    let o = nbhd(&["--json", "normals", &file, &out, "--orient", "none"]);
+    let v = json_of(&o);
+    assert_eq!(v["points"], 2000);
+    let cloud = nbhd::io::read(&out).unwrap();
+    assert_eq!(
+        cloud.field_names(),
+        ["x", "y", "z", "nx", "ny", "nz", "surface_variation"]
+    );
+    let head = std::fs::read(&out).unwrap();
+    let fields = b"FIELDS x y z normal_x normal_y normal_z surface_variation";
+    assert!(head.windows(fields.len()).any(|w| w == fields));
+}
+
+#[test]
+fn smooth_matches_the_library_and_brings_points_closer_to_the_surface() {
+    let (file, pts) = noisy_sphere_file("nsphere-s.ply");
+    let dist = |p: &[f64; 3]| (DVec3::from_array(*p).length() - 1.0).powi(2);
+    let rms = |c: &[[f64; 3]]| (c.iter().map(dist).sum::<f64>() / c.len() as f64).sqrt();
+    let before = rms(&pts.iter().map(|p| p.to_array()).collect::<Vec<_>>());
+    for (args, opts) in [
+        (
+            vec!["--method", "isotropic"],
+            SmoothOptions {
+                orientation: nbhd::geometry::Orientation::Propagate,
+                ..SmoothOptions::isotropic()
+            },
+        ),
+        (
+            vec![
+                "--lambda",
+                "0.3/h",
+                "--weighting",
+                "cont",
+                "--criterion",
+                "directional",
+                "--feature-curvature",
+                "0.4/h",
+                "--steps",
+                "4",
+                "--tau",
+                "0.4",
+                "-k",
+                "12",
+                "--radius",
+                "5h",
+            ],
+            SmoothOptions {
+                lambda: Curvature::Relative(0.3),
+                weighting: nbhd::smooth::Weighting::Continuous,
+                feature: nbhd::smooth::FeatureCriterion::DirectionalCurvature(Curvature::Relative(
+                    0.4,
+                )),
+                steps: 4,
+                tau: 0.4,
+                k: 12,
+                epsilon: Length::Relative(5.0),
+                orientation: nbhd::geometry::Orientation::Propagate,
+                ..SmoothOptions::default()
+            },
+        ),
+        (
+            vec![
+                "--criterion",
+                "q",
+                "--quotient",
+                "0.4",
+                "--update-neighbors",
+            ],
+            SmoothOptions {
+                feature: nbhd::smooth::FeatureCriterion::EdgeQuotient(0.4),
+                update_neighbors: true,
+                orientation: nbhd::geometry::Orientation::Propagate,
+                ..SmoothOptions::default()
+            },
+        ),
+    ] {
+        let out = tmp("nsphere-smooth.ply");
+        let png = tmp("nsphere-smooth.png");
+        let mut a = vec!["--json", "smooth", &file, &out, "--png", &png];
+        a.extend(&args);
+        let v = json_of(&nbhd(&a));
+        let lib = nbhd::smooth::smooth(&pts, &opts).unwrap();
+        let cloud = nbhd::io::read(&out).unwrap();
+        let want: Vec<[f64; 3]> = lib.points.iter().map(|p| p.to_array()).collect();
+        assert_eq!(cloud.positions, want, "{args:?}");
+        assert_eq!(v["steps"], opts.steps as u64);
+        let after = rms(&cloud.positions);
+        assert!(after < 0.8 * before, "{args:?}: RMS {after} vs {before}");
+        assert!(read_png(std::path::Path::new(&png)).0 == 800);
+    }
+}
+
+#[test]
+fn nan_points_keep_their_place_through_smoothing() {
+    let (file, pts) = sphere_file("sphere-nan.xyz");
+    let out = tmp("sphere-nan-smooth.xyz");
+    let o = nbhd(&["smooth", &file, &out, "--method", "isotropic"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("(1 skipped as non-finite)"),
+        "{}",
+        stdout(&o)
+    );
+    let cloud = nbhd::io::read(&out).unwrap();
+    assert_eq!(cloud.len(), pts.len());
+    assert!(cloud.positions[17].iter().all(|c| c.is_nan()));
+    assert!(cloud.positions[18].iter().all(|c| c.is_finite()));
+}
+
+// ---- errors ------------------------------------------------------------------------------
+
+#[test]
+fn bad_arguments_and_missing_files_are_reported() {
+    let (file, _) = sphere_file("sphere-err.xyz");
+    let missing = tmp("no-such-file.ply");
+    let out = tmp("err-out.ply");
+    for (args, want) in [
+        (vec!["knn", &missing, "-k", "3"], "no-such-file.ply"),
+        (vec!["radius", &missing, "-r", "1"], "no-such-file.ply"),
+        (vec!["smooth", &missing, &out], "no-such-file.ply"),
+        (vec!["curvature", &missing, &out], "no-such-file.ply"),
+        (vec!["knn", &file, "-k", "0"], "k must be at least 1"),
+        (
+            vec!["neighbors", &file, "-k", "-2", "-r", "1"],
+            "k must be at least 1",
+        ),
+        (
+            vec!["radius", &file, "-r", "-1"],
+            "radius -1 is not a finite number >= 0",
+        ),
+        (
+            vec!["neighbors", &file, "-k", "3", "--radius=-0.5h"],
+            "radius",
+        ),
+        (
+            vec!["radius", &file, "-r", "wide"],
+            "'wide' is not a length",
+        ),
+        (
+            vec!["smooth", &file, &out, "--lambda", "x/h"],
+            "'x/h' is not a curvature",
+        ),
+        (
+            vec!["smooth", &file, &out, "-k", "0"],
+            "k must be at least 1",
+        ),
+        (vec!["smooth", &file, &out, "--tau", "-1"], "tau"),
+        (vec!["normals", &file, &out, "--radius", "0"], "epsilon"),
+        (
+            vec!["knn", &file, "-k", "2", "--leaf-size", "0"],
+            "leaf_size",
+        ),
+        (
+            vec![
+                "knn",
+                &file,
+                "-k",
+                "2",
+                "--exclude-self",
+                "--queries",
+                &file,
+            ],
+            "--queries",
+        ),
+        (
+            vec!["knn", &file, "-k", "2", "-o", "/nonexistent-dir/x.csv"],
+            "/nonexistent-dir/x.csv",
+        ),
+        (
+            vec!["smooth", &file, "/nonexistent-dir/x.ply"],
+            "/nonexistent-dir/x.ply",
+        ),
+        (vec!["demo", "--points", "10"], "--points 10 is too few"),
+    ] {
+        let o = nbhd(&args);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(
+            stderr(&o).contains(want),
+            "{args:?}: '{}' lacks '{want}'",
+            stderr(&o)
+        );
+        assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
+    }
+}
