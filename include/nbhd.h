@@ -276,6 +276,113 @@ typedef enum {
 } nbhd_neighborhood_kind;
 
 /**
+ * Whether a length or curvature option is absolute or relative to the mean spacing `h` of
+ * the input (the mean distance of a point to its nearest other point, estimated by nbhd).
+ */
+typedef enum {
+    /**
+     * A length in multiples of `h`, a curvature in multiples of `1/h`: the same settings suit
+     * a metre and a millimetre scan. The default.
+     */
+    NBHD_UNITS_RELATIVE = 0,
+    /**
+     * In the points' own units (a curvature in inverse units).
+     */
+    NBHD_UNITS_ABSOLUTE = 1,
+} nbhd_units;
+
+/**
+ * The weights `g_ij` of the smoothing step (thesis eq. 2.30–2.32).
+ */
+typedef enum {
+    /**
+     * `g = 1`: isotropic Laplacian fairing (eq. 2.16).
+     */
+    NBHD_WEIGHTING_ISOTROPIC = 0,
+    /**
+     * `g_sharp` (eq. 2.31): 1 where the directional curvature `|κ_ij|` is below `lambda`, 0
+     * from it on. The default.
+     */
+    NBHD_WEIGHTING_SHARP = 1,
+    /**
+     * `g_cont` (eq. 2.32): 1 below `lambda`, `λ²/(λ² + 10(|κ| − λ)²)` from it on.
+     */
+    NBHD_WEIGHTING_CONTINUOUS = 2,
+} nbhd_weighting;
+
+/**
+ * Which points are smoothed anisotropically (thesis eq. 2.33–2.35); the others are smoothed
+ * isotropically.
+ */
+typedef enum {
+    /**
+     * Every point. The default.
+     */
+    NBHD_FEATURE_CRITERION_ALL_POINTS = 0,
+    /**
+     * Edge quotient Q (eq. 2.33): `min(|k1|,|k2|) / max(|k1|,|k2|) < feature_threshold`.
+     */
+    NBHD_FEATURE_CRITERION_EDGE_QUOTIENT = 1,
+    /**
+     * Principal curvature K (eq. 2.34): `max(|k1|,|k2|) > feature_threshold`.
+     */
+    NBHD_FEATURE_CRITERION_PRINCIPAL_CURVATURE = 2,
+    /**
+     * Directional curvature D (eq. 2.35): some neighbour has `|κ_ij| > feature_threshold`.
+     */
+    NBHD_FEATURE_CRITERION_DIRECTIONAL_CURVATURE = 3,
+} nbhd_feature_criterion;
+
+/**
+ * How the sign-free covariance normals are oriented in the outputs.
+ */
+typedef enum {
+    /**
+     * The eigen-solver's sign: arbitrary but deterministic. The default.
+     */
+    NBHD_ORIENTATION_UNORIENTED = 0,
+    /**
+     * Every normal points toward `orientation_point` (a scanner's viewpoint).
+     */
+    NBHD_ORIENTATION_TOWARD_POINT = 1,
+    /**
+     * Every normal points away from `orientation_point` (outward for star-shaped surfaces).
+     */
+    NBHD_ORIENTATION_AWAY_FROM_POINT = 2,
+    /**
+     * One consistent orientation spread over the neighbour graph along smooth paths
+     * (Hoppe et al. 1992); in each connected part the highest point's normal has `z >= 0`.
+     */
+    NBHD_ORIENTATION_PROPAGATE = 3,
+} nbhd_orientation;
+
+/**
+ * What a smoothing run is doing when it calls the progress callback.
+ */
+typedef enum {
+    /**
+     * Neighbourhood search and the spacing estimate.
+     */
+    NBHD_STAGE_NEIGHBORS = 0,
+    /**
+     * Normals and curvatures of a step.
+     */
+    NBHD_STAGE_GEOMETRY = 1,
+    /**
+     * Moving the points.
+     */
+    NBHD_STAGE_STEP = 2,
+    /**
+     * Per-point geometry of the result.
+     */
+    NBHD_STAGE_OUTPUTS = 3,
+    /**
+     * Finished (fraction 1).
+     */
+    NBHD_STAGE_DONE = 4,
+} nbhd_stage;
+
+/**
  * A table of neighbourhoods (opaque): row i holds the neighbours of point i (or of query i),
  * ordered by (squared distance, index). Made by nbhd_tree_neighborhoods or
  * nbhd_tree_neighborhoods_of, freed by nbhd_neighborhoods_free. It does not refer to the
@@ -429,6 +536,195 @@ typedef struct {
      */
     double radius;
 } nbhd_neighborhood_spec;
+
+/**
+ * A progress callback: `fraction` grows from 0 to 1 over the run; return `true` to go on,
+ * `false` to stop the run, which then returns NBHD_STATUS_CANCELLED and writes no output.
+ * It is called from the thread that runs the computation (the calling thread when
+ * `threads` is 0, otherwise a worker of the call's own pool), never from two threads at
+ * once, and must return normally (no longjmp, no C++ exception).
+ */
+typedef bool (*nbhd_progress_fn)(double fraction, nbhd_stage stage, void *user_data);
+
+/**
+ * Options of nbhd_smooth, nbhd_estimate_normals and nbhd_estimate_curvatures. Start from
+ * nbhd_smooth_options_default() and change what you need.
+ *
+ * Neighbourhoods are the thesis' ε-k-neighbourhoods (Section 2.1.1): the `k` nearest other
+ * points within `epsilon`, computed once on the input and cached (Section 2.1.3) unless
+ * `update_neighbors` is set. One step moves every point at once by
+ * `p_i += tau * (1/|N_i|) Σ_j g_ij (x_j − p_i)` (eq. 2.16, 2.18, 2.30).
+ */
+typedef struct {
+    /**
+     * Maximum valence k (>= 1). Default 15.
+     */
+    size_t k;
+    /**
+     * Influence radius ε (> 0), plain (not squared), inclusive. Default 6 (relative: 6h).
+     */
+    double epsilon;
+    /**
+     * Units of `epsilon`. Default relative.
+     */
+    nbhd_units epsilon_units;
+    /**
+     * Number of smoothing steps (0 only analyses). Default 3.
+     */
+    size_t steps;
+    /**
+     * Step size τ = λ·∂t of eq. 2.18 (finite, >= 0). Default 0.5.
+     */
+    double tau;
+    /**
+     * The weights g_ij. Default NBHD_WEIGHTING_SHARP.
+     */
+    nbhd_weighting weighting;
+    /**
+     * Curvature threshold λ of g_sharp / g_cont (> 0). Default 0.2 (relative: 0.2/h).
+     */
+    double lambda;
+    /**
+     * Units of `lambda`. Default relative.
+     */
+    nbhd_units lambda_units;
+    /**
+     * Which points are smoothed anisotropically. Default all points.
+     */
+    nbhd_feature_criterion feature;
+    /**
+     * Threshold of the feature criterion: the quotient Q (a plain number) for
+     * EDGE_QUOTIENT, a curvature for PRINCIPAL_CURVATURE and DIRECTIONAL_CURVATURE.
+     * Ignored for ALL_POINTS. Default 0.5.
+     */
+    double feature_threshold;
+    /**
+     * Units of a curvature `feature_threshold`. Default relative.
+     */
+    nbhd_units feature_units;
+    /**
+     * 'Constrain interior' (thesis Section 7.3): points whose covariance quotient
+     * λ0/(λ0 + λ1 + λ2) is below `interior_threshold` are held fixed. Default false.
+     */
+    bool constrain_interior;
+    /**
+     * The covariance-quotient threshold of `constrain_interior` (finite). Default 0.01.
+     */
+    double interior_threshold;
+    /**
+     * 'Update Neighbors' (Section 7.3): recompute the neighbourhoods before every step.
+     * Default false.
+     */
+    bool update_neighbors;
+    /**
+     * Orientation of the normals written to the outputs (smoothing itself uses |κ| and does
+     * not depend on it). Default unoriented.
+     */
+    nbhd_orientation orientation;
+    /**
+     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+     */
+    double orientation_point[3];
+    /**
+     * Worker threads: 0 the shared pool with a thread per core, n >= 1 a pool of n threads
+     * made for this call. Results are identical for every value. Default 0.
+     */
+    size_t threads;
+    /**
+     * Called with the progress of the run; NULL for none. Default NULL.
+     */
+    nbhd_progress_fn progress;
+    /**
+     * Passed to `progress` unchanged. Default NULL.
+     */
+    void *progress_user_data;
+} nbhd_smooth_options;
+
+/**
+ * The per-point geometry the thesis' program colours by (Section 7.3), on the final points.
+ * Curvatures are signed relative to the reported normal.
+ */
+typedef struct {
+    /**
+     * Unit normal (eq. 2.10), oriented as the options ask.
+     */
+    double normal[3];
+    /**
+     * Larger principal curvature k1 (Weingarten estimate, eq. 2.25–2.29).
+     */
+    double k1;
+    /**
+     * Smaller principal curvature k2.
+     */
+    double k2;
+    /**
+     * Unit principal direction of k1.
+     */
+    double dir1[3];
+    /**
+     * Unit principal direction of k2.
+     */
+    double dir2[3];
+    /**
+     * 'Mean': (k1 + k2) / 2.
+     */
+    double mean_curvature;
+    /**
+     * 'Max Princ': max(|k1|, |k2|).
+     */
+    double max_principal_curvature;
+    /**
+     * 'CovQuotient': λ0/(λ0 + λ1 + λ2) of the covariance (0 flat, at most 1/3).
+     */
+    double covariance_quotient;
+    /**
+     * 'MeanAni': Σ g κ / Σ g over the neighbours, with the chosen weights (0 if all vanish).
+     */
+    double anisotropic_mean_curvature;
+    /**
+     * 'PrincQuotient': min(|k1|,|k2|) / max(|k1|,|k2|) in [0, 1].
+     */
+    double principal_curvature_quotient;
+    /**
+     * 'MaxCov': the largest covariance eigenvalue over the neighbourhood size.
+     */
+    double max_covariance;
+    /**
+     * Why the normal is not to be trusted, 0 if it is: 1 fewer than 3 points, 2 collinear or
+     * coincident points, 4 the normal is not unique (isotropic neighbourhood).
+     */
+    uint8_t normal_flags;
+    /**
+     * Whether the feature criterion selects the point.
+     */
+    bool feature;
+    /**
+     * Whether 'constrain interior' holds the point fixed.
+     */
+    bool interior;
+} nbhd_point_geometry;
+
+/**
+ * Scalars a run resolved: the spacing estimate and the absolute thresholds it used.
+ */
+typedef struct {
+    /**
+     * Mean nearest-neighbour spacing h of the input.
+     */
+    double spacing;
+    /**
+     * The absolute ε used.
+     */
+    double epsilon;
+    /**
+     * The absolute λ used.
+     */
+    double lambda;
+    /**
+     * 'Min Neighbors': the smallest neighbourhood size |N_i| of the input.
+     */
+    size_t min_neighbors;
+} nbhd_smooth_summary;
 
 #ifdef __cplusplus
 extern "C" {
@@ -766,6 +1062,83 @@ nbhd_status nbhd_neighborhoods_row(const nbhd_neighborhoods *table,
                                    const uint32_t **indices,
                                    const void **sq_dists,
                                    size_t *len);
+
+/**
+ * The default smoothing options: the thesis' anisotropic flow with g_sharp at λ = 0.2/h on
+ * all points, 3 steps of τ = 0.5, the 15 nearest other points within 6h, no progress
+ * callback, the shared thread pool.
+ */
+nbhd_smooth_options nbhd_smooth_options_default(void);
+
+/**
+ * Smooths 3-D points (thesis Chapter 2) and writes the smoothed coordinates to `out_coords`.
+ *
+ * `out_coords` is laid out like the input: `points->count` points `points->stride` bytes
+ * apart (a stride of 0 means packed), three coordinates of `points->scalar_type` each; only
+ * the coordinates are written, other bytes in a strided layout are left alone. It may be
+ * `points->data` itself, to smooth in place (the input is read completely first).
+ * `out_geometry` (`points->count` elements) receives the per-point geometry of the smoothed
+ * points and `out_summary` the spacing and thresholds used; either may be NULL, and leaving
+ * `out_geometry` NULL skips that work. `options` may be NULL for the defaults.
+ *
+ * Nothing is written unless the call succeeds. Results are identical for any number of
+ * threads.
+ *
+ * Errors: NULL_POINTER (`points`, `points->data`, `out_coords`), MISALIGNED_POINTER,
+ * INVALID_ARGUMENT (dimension other than 3, an enum field out of range), EMPTY_INPUT,
+ * STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (the message names the point), INVALID_K,
+ * INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two distinct
+ * points, ...), THREAD_POOL, CANCELLED (the progress callback returned false).
+ *
+ * # Safety
+ * `points` must describe readable memory (see nbhd_points); `out_coords` must be writable
+ * with the same layout; `out_geometry` and `out_summary` must be NULL or writable for
+ * `points->count` elements / one element; `options` must be NULL or readable.
+ */
+nbhd_status nbhd_smooth(const nbhd_points *points,
+                        const nbhd_smooth_options *options,
+                        void *out_coords,
+                        nbhd_point_geometry *out_geometry,
+                        nbhd_smooth_summary *out_summary);
+
+/**
+ * Estimates the normal of every point (thesis eq. 2.8–2.10: the eigenvector of the smallest
+ * eigenvalue of the covariance of the point and its ε-k-neighbourhood), oriented as
+ * `options->orientation` asks. `out_normals` receives `3 * points->count` doubles (x, y, z
+ * per point); `out_flags` (may be NULL) one byte per point, 0 for a well-defined normal and
+ * otherwise the bits of nbhd_point_geometry.normal_flags. Degenerate neighbourhoods give a
+ * finite unit vector and a flag, never NaN. Only the neighbourhood options (`k`, `epsilon`,
+ * `epsilon_units`), `orientation` and `threads`/`progress` apply.
+ *
+ * Errors: as nbhd_smooth.
+ *
+ * # Safety
+ * `points` must describe readable memory; `out_normals` must be writable for
+ * `3 * points->count` doubles; `out_flags` NULL or writable for `points->count` bytes;
+ * `options` NULL or readable.
+ */
+nbhd_status nbhd_estimate_normals(const nbhd_points *points,
+                                  const nbhd_smooth_options *options,
+                                  double *out_normals,
+                                  uint8_t *out_flags);
+
+/**
+ * Estimates normals and curvatures of every point without moving it: the normal, the
+ * principal curvatures and directions of the Weingarten estimate (thesis eq. 2.26–2.29 with
+ * 2.25) and the other per-point values of nbhd_point_geometry, over the ε-k-neighbourhoods
+ * of `options`. `out_geometry` receives `points->count` elements; `out_summary` (may be NULL)
+ * the spacing and thresholds used.
+ *
+ * Errors: as nbhd_smooth.
+ *
+ * # Safety
+ * `points` must describe readable memory; `out_geometry` must be writable for
+ * `points->count` elements; `out_summary` NULL or writable; `options` NULL or readable.
+ */
+nbhd_status nbhd_estimate_curvatures(const nbhd_points *points,
+                                     const nbhd_smooth_options *options,
+                                     nbhd_point_geometry *out_geometry,
+                                     nbhd_smooth_summary *out_summary);
 
 #ifdef __cplusplus
 }  // extern "C"

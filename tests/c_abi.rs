@@ -205,6 +205,21 @@ fn c_threads_are_clean_under_valgrind() {
     }
 }
 
+#[test]
+fn c_smoothing_checks_against_a_sphere() {
+    run(Command::new(compiled("smooth_test")), "tests/c/smooth_test");
+}
+
+#[test]
+fn c_smoothing_is_clean_under_valgrind() {
+    let exe = compiled("smooth_test");
+    if let Some(mut cmd) = valgrind() {
+        // Fewer points: valgrind is some 30 times slower.
+        cmd.arg(exe).arg("400");
+        run(cmd, "valgrind tests/c/smooth_test");
+    }
+}
+
 /// Names of the functions the header declares.
 fn header_functions() -> Vec<String> {
     let header = std::fs::read_to_string(Path::new(ROOT).join("include/nbhd.h")).unwrap();
@@ -225,17 +240,23 @@ fn header_functions() -> Vec<String> {
 }
 
 #[test]
-fn c_program_calls_every_export() {
+fn c_tests_call_every_export() {
     let names = header_functions();
     assert!(names.len() >= 20, "too few functions found: {names:?}");
-    let source = std::fs::read_to_string(Path::new(ROOT).join("tests/c/abi_test.c")).unwrap();
+    let mut source = String::new();
+    for entry in std::fs::read_dir(Path::new(ROOT).join("tests/c")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "c") {
+            source += &std::fs::read_to_string(path).unwrap();
+        }
+    }
     let missing: Vec<_> = names
         .iter()
         .filter(|n| !source.contains(&format!("{n}(")))
         .collect();
     assert!(
         missing.is_empty(),
-        "tests/c/abi_test.c never calls {missing:?}"
+        "no C test in tests/c/ calls {missing:?}"
     );
 }
 

@@ -71,6 +71,14 @@ fn header_declares_only_nbhd_names() {
     let mut names = Vec::new();
     for line in header.lines() {
         let words: Vec<&str> = line.split_whitespace().collect();
+        // A function-pointer type: `typedef ret (*name)(args);`.
+        if let Some((_, rest)) = line
+            .split_once("(*")
+            .filter(|_| line.starts_with("typedef"))
+        {
+            names.push(rest.split(')').next().unwrap_or(""));
+            continue;
+        }
         match words.as_slice() {
             ["#define", name, ..] if *name != "NBHD_H" => names.push(*name),
             // `typedef struct {` / `typedef enum {`: the name follows on the closing line.

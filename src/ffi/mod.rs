@@ -19,8 +19,8 @@
 #![warn(clippy::undocumented_unsafe_blocks)]
 
 // The header follows the order of these modules (cbindgen reads them in turn): errors first,
-// then the plain types, the tree, single queries and tables. Blank lines keep rustfmt from
-// sorting them.
+// then the plain types, the tree, single queries, tables, and normals, curvatures and
+// smoothing. Blank lines keep rustfmt from sorting them.
 pub mod status;
 
 pub mod types;
@@ -31,9 +31,12 @@ pub mod query;
 
 pub mod table;
 
+pub mod smooth;
+
 mod args;
 
 pub use query::*;
+pub use smooth::*;
 pub use status::*;
 pub use table::*;
 pub use tree::*;

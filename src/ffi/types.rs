@@ -43,6 +43,7 @@ macro_rules! c_enum {
         const _: () = assert!(std::mem::size_of::<$ty>() == std::mem::size_of::<c_int>());
     };
 }
+pub(crate) use c_enum;
 
 /// Reads the enum field at `field` as the `int` C stored there: the variant of `E` it
 /// names, or the raw value if it names none.
@@ -262,7 +263,8 @@ pub(crate) struct PointsArg {
     data: *const u8,
     count: usize,
     dim: usize,
-    stride: usize,
+    /// Bytes from one point to the next (a stride of 0 given by C is already made packed).
+    pub(crate) stride: usize,
     pub(crate) scalar: ScalarType,
 }
 

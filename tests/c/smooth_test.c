@@ -1,0 +1,352 @@
+/*
+ * Normals, curvatures and smoothing through the C ABI, checked against the analytic truth of a
+ * sphere: normals parallel to the radius, mean curvature 1/R, smoothing that brings noisy
+ * points back toward the sphere. Also: in-place smoothing of a PCL-like strided float cloud,
+ * progress and cancellation, identical results for 1 and 2 threads, and every error path.
+ * Run by tests/c_abi.rs (also under valgrind, with fewer points: argv[1]).
+ */
+#include "nbhd.h"
+#include "check.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define R 2.0
+#define PI 3.14159265358979323846
+
+static uint64_t rng_state = 0x9E3779B97F4A7C15ULL;
+
+static double uniform01(void) {
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return (double)(rng_state >> 11) / 9007199254740992.0;
+}
+
+/* n points spread evenly on the sphere of radius R (a Fibonacci lattice), each moved along
+ * its radius by up to `noise` (uniform). */
+static void sphere(double *p, size_t n, double noise) {
+    size_t i;
+    const double golden = PI * (3.0 - sqrt(5.0));
+    for (i = 0; i < n; i++) {
+        double z = 1.0 - 2.0 * ((double)i + 0.5) / (double)n;
+        double r = sqrt(1.0 - z * z), t = golden * (double)i;
+        double len = R + noise * (2.0 * uniform01() - 1.0);
+        p[3 * i] = len * r * cos(t);
+        p[3 * i + 1] = len * r * sin(t);
+        p[3 * i + 2] = len * z;
+    }
+}
+
+/* Spread of the radii |p| about their mean over n packed double points: the noise that
+ * smoothing removes, apart from the shrinkage (the change of the mean radius) that isotropic
+ * fairing of a closed surface also causes. */
+static double radial_spread(const double *p, size_t n, double *mean_radius) {
+    size_t i;
+    double s = 0.0, s2 = 0.0;
+    for (i = 0; i < n; i++) {
+        double r = sqrt(p[3 * i] * p[3 * i] + p[3 * i + 1] * p[3 * i + 1] + p[3 * i + 2] * p[3 * i + 2]);
+        s += r;
+        s2 += r * r;
+    }
+    *mean_radius = s / (double)n;
+    return sqrt(fmax(s2 / (double)n - *mean_radius * *mean_radius, 0.0));
+}
+
+/* The mean spacing of n points evenly spread on the sphere. */
+static double spacing(size_t n) {
+    return sqrt(4.0 * PI * R * R / (double)n);
+}
+
+static nbhd_points describe(const void *data, size_t n, size_t stride, nbhd_scalar_type type) {
+    nbhd_points p;
+    p.data = data;
+    p.count = n;
+    p.dim = 3;
+    p.stride = stride;
+    p.scalar_type = type;
+    return p;
+}
+
+static void test_defaults(void) {
+    nbhd_smooth_options o = nbhd_smooth_options_default();
+    CHECK(o.k == 15);
+    CHECK(o.epsilon == 6.0 && o.epsilon_units == NBHD_UNITS_RELATIVE);
+    CHECK(o.steps == 3 && o.tau == 0.5);
+    CHECK(o.weighting == NBHD_WEIGHTING_SHARP);
+    CHECK(o.lambda == 0.2 && o.lambda_units == NBHD_UNITS_RELATIVE);
+    CHECK(o.feature == NBHD_FEATURE_CRITERION_ALL_POINTS);
+    CHECK(!o.constrain_interior && !o.update_neighbors);
+    CHECK(o.orientation == NBHD_ORIENTATION_UNORIENTED);
+    CHECK(o.threads == 0 && o.progress == NULL && o.progress_user_data == NULL);
+}
+
+static void test_normals_and_curvatures(size_t n) {
+    double *p = malloc(3 * n * sizeof *p);
+    double *normals = malloc(3 * n * sizeof *normals);
+    uint8_t *flags = malloc(n);
+    nbhd_point_geometry *geo = malloc(n * sizeof *geo);
+    nbhd_smooth_summary summary;
+    nbhd_smooth_options o = nbhd_smooth_options_default();
+    nbhd_points pts;
+    size_t i, outward = 0, flagged = 0;
+    double worst_cos = 1.0, mean_h = 0.0, mean_kmax = 0.0;
+
+    sphere(p, n, 0.0);
+    pts = describe(p, n, 0, NBHD_SCALAR_TYPE_F64);
+    o.orientation = NBHD_ORIENTATION_AWAY_FROM_POINT;
+    o.orientation_point[0] = o.orientation_point[1] = o.orientation_point[2] = 0.0;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, &o, normals, flags), NBHD_STATUS_OK);
+    for (i = 0; i < n; i++) {
+        const double *q = p + 3 * i, *m = normals + 3 * i;
+        double len = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        double c = (m[0] * q[0] + m[1] * q[1] + m[2] * q[2]) / R;
+        CHECK(fabs(len - 1.0) < 1e-9);
+        if (c < worst_cos) worst_cos = c;
+        outward += c > 0.0;
+        flagged += flags[i] != 0;
+    }
+    /* Away from the centre: every normal points outward, within 3 degrees of the radius. */
+    CHECK(outward == n);
+    CHECK(worst_cos > cos(3.0 * PI / 180.0));
+    CHECK(flagged == 0);
+
+    CHECK_STATUS(nbhd_estimate_curvatures(&pts, &o, geo, &summary), NBHD_STATUS_OK);
+    for (i = 0; i < n; i++) {
+        mean_h += geo[i].mean_curvature;
+        mean_kmax += geo[i].max_principal_curvature;
+        CHECK(geo[i].normal[0] == normals[3 * i] && geo[i].normal[2] == normals[3 * i + 2]);
+        CHECK(geo[i].principal_curvature_quotient >= 0.0 && geo[i].principal_curvature_quotient <= 1.0);
+        CHECK(geo[i].covariance_quotient >= 0.0 && geo[i].covariance_quotient <= 1.0 / 3.0 + 1e-12);
+    }
+    mean_h /= (double)n;
+    mean_kmax /= (double)n;
+    /* Outward normals on a sphere: the surface bends away from the normal, so the signed mean
+     * curvature is -1/R; its magnitude within 5 %. */
+    CHECK(fabs(fabs(mean_h) - 1.0 / R) < 0.05 / R);
+    CHECK(mean_kmax >= fabs(mean_h));
+    CHECK(summary.spacing > 0.0 && summary.min_neighbors >= 3);
+    CHECK(fabs(summary.epsilon - 6.0 * summary.spacing) < 1e-12 * summary.epsilon);
+    CHECK(fabs(summary.lambda - 0.2 / summary.spacing) < 1e-12 * summary.lambda);
+    free(p);
+    free(normals);
+    free(flags);
+    free(geo);
+}
+
+typedef struct {
+    int calls;
+    double last;
+    int monotone;
+    int saw_done;
+    double stop_after; /* return false once the fraction exceeds this */
+} progress_log;
+
+static bool on_progress(double fraction, nbhd_stage stage, void *user_data) {
+    progress_log *log = user_data;
+    log->calls++;
+    if (fraction < log->last || fraction < 0.0 || fraction > 1.0) log->monotone = 0;
+    log->last = fraction;
+    if (stage == NBHD_STAGE_DONE) log->saw_done = fraction == 1.0;
+    return fraction <= log->stop_after;
+}
+
+/* Isotropic smoothing of a noisy sphere given as a PCL-like cloud: x y z and a fourth float,
+ * 16 bytes apart, smoothed in place. */
+static void test_smooth_in_place(size_t n) {
+    double *p = malloc(3 * n * sizeof *p);
+    float *cloud = malloc(4 * n * sizeof *cloud);
+    float *copy = malloc(4 * n * sizeof *copy);
+    double *back = malloc(3 * n * sizeof *back);
+    nbhd_smooth_options o = nbhd_smooth_options_default();
+    progress_log log = {0, 0.0, 1, 0, 2.0};
+    nbhd_points pts;
+    size_t i;
+    double before, after, r_before, r_after;
+    int padding_kept = 1;
+
+    sphere(p, n, 0.5 * spacing(n));
+    for (i = 0; i < n; i++) {
+        cloud[4 * i] = (float)p[3 * i];
+        cloud[4 * i + 1] = (float)p[3 * i + 1];
+        cloud[4 * i + 2] = (float)p[3 * i + 2];
+        cloud[4 * i + 3] = (float)i; /* PCL's padding: must survive */
+        back[3 * i] = cloud[4 * i];
+        back[3 * i + 1] = cloud[4 * i + 1];
+        back[3 * i + 2] = cloud[4 * i + 2];
+    }
+    before = radial_spread(back, n, &r_before);
+    memcpy(copy, cloud, 4 * n * sizeof *cloud);
+    pts = describe(cloud, n, 16, NBHD_SCALAR_TYPE_F32);
+    o.weighting = NBHD_WEIGHTING_ISOTROPIC;
+    o.steps = 2;
+    o.progress = on_progress;
+    o.progress_user_data = &log;
+
+    /* Cancelled half-way: the status says so and the cloud is untouched. */
+    log.stop_after = 0.5;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, cloud, NULL, NULL), NBHD_STATUS_CANCELLED);
+    CHECK(memcmp(copy, cloud, 4 * n * sizeof *cloud) == 0);
+
+    log = (progress_log){0, 0.0, 1, 0, 2.0};
+    CHECK_STATUS(nbhd_smooth(&pts, &o, cloud, NULL, NULL), NBHD_STATUS_OK);
+    CHECK(log.calls >= 4 && log.monotone && log.saw_done);
+    for (i = 0; i < n; i++) {
+        padding_kept &= cloud[4 * i + 3] == (float)i;
+        back[3 * i] = cloud[4 * i];
+        back[3 * i + 1] = cloud[4 * i + 1];
+        back[3 * i + 2] = cloud[4 * i + 2];
+    }
+    after = radial_spread(back, n, &r_after);
+    CHECK(padding_kept);
+    /* Uniform radial noise of half a spacing (RMS 0.29 spacings): two isotropic steps remove
+     * most of it, and shrink the sphere by less than half a spacing. */
+    CHECK(after < 0.5 * before);
+    CHECK(r_after < R && R - r_after < 0.5 * spacing(n));
+    if (!(after < 0.5 * before) || !(R - r_after < 0.5 * spacing(n)))
+        fprintf(stderr, "radial spread before %g after %g; mean radius %g -> %g (h = %g)\n", before,
+                after, r_before, r_after, spacing(n));
+    free(p);
+    free(cloud);
+    free(copy);
+    free(back);
+}
+
+/* The anisotropic default on 1 and on 2 threads: the same bytes. */
+static void test_threads_agree(size_t n) {
+    double *p = malloc(3 * n * sizeof *p);
+    double *a = malloc(3 * n * sizeof *a);
+    double *b = malloc(3 * n * sizeof *b);
+    nbhd_point_geometry *ga = malloc(n * sizeof *ga);
+    nbhd_point_geometry *gb = malloc(n * sizeof *gb);
+    nbhd_smooth_options o = nbhd_smooth_options_default();
+    nbhd_points pts;
+    size_t i;
+    int same = 1;
+
+    sphere(p, n, 0.5 * spacing(n));
+    pts = describe(p, n, 3 * sizeof(double), NBHD_SCALAR_TYPE_F64);
+    o.threads = 1;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, a, ga, NULL), NBHD_STATUS_OK);
+    o.threads = 2;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, b, gb, NULL), NBHD_STATUS_OK);
+    CHECK(memcmp(a, b, 3 * n * sizeof *a) == 0);
+    for (i = 0; i < n; i++) {
+        same &= memcmp(ga[i].normal, gb[i].normal, sizeof ga[i].normal) == 0;
+        same &= ga[i].k1 == gb[i].k1 && ga[i].k2 == gb[i].k2 && ga[i].feature == gb[i].feature;
+    }
+    CHECK(same);
+    free(p);
+    free(a);
+    free(b);
+    free(ga);
+    free(gb);
+}
+
+static void test_errors(void) {
+    double p[3 * 40], out[3 * 40];
+    double flat2[2 * 40];
+    uint8_t flags[40];
+    nbhd_point_geometry geo[40];
+    nbhd_smooth_options o;
+    nbhd_points pts;
+    size_t i;
+
+    sphere(p, 40, 0.0);
+    memset(flat2, 0, sizeof flat2);
+    pts = describe(p, 40, 0, NBHD_SCALAR_TYPE_F64);
+
+    CHECK_STATUS(nbhd_smooth(NULL, NULL, out, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_MESSAGE("points");
+    CHECK_STATUS(nbhd_smooth(&pts, NULL, NULL, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_MESSAGE("out_coords");
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, NULL, flags), NBHD_STATUS_NULL_POINTER);
+    CHECK_MESSAGE("out_normals");
+    CHECK_STATUS(nbhd_estimate_curvatures(&pts, NULL, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_MESSAGE("out_geometry");
+    CHECK_STATUS(nbhd_estimate_curvatures(&pts, NULL, (nbhd_point_geometry *)((char *)geo + 1), NULL),
+                 NBHD_STATUS_MISALIGNED_POINTER);
+
+    /* Zero points, wrong dimension. */
+    pts.count = 0;
+    CHECK_STATUS(nbhd_smooth(&pts, NULL, out, NULL, NULL), NBHD_STATUS_EMPTY_INPUT);
+    pts = describe(flat2, 40, 0, NBHD_SCALAR_TYPE_F64);
+    pts.dim = 2;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, out, NULL), NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_MESSAGE("need 3-D points");
+
+    /* A NaN coordinate: named by index. */
+    pts = describe(p, 40, 0, NBHD_SCALAR_TYPE_F64);
+    p[3 * 17 + 1] = NAN;
+    CHECK_STATUS(nbhd_smooth(&pts, NULL, out, NULL, NULL), NBHD_STATUS_NON_FINITE);
+    CHECK_MESSAGE("17");
+    p[3 * 17 + 1] = INFINITY;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, out, NULL), NBHD_STATUS_NON_FINITE);
+    sphere(p, 40, 0.0);
+
+    /* Options out of range. */
+    o = nbhd_smooth_options_default();
+    o.k = 0;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_K);
+    o = nbhd_smooth_options_default();
+    o.epsilon = -1.0;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("epsilon");
+    o.epsilon = NAN;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
+    o = nbhd_smooth_options_default();
+    o.tau = -0.5;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("tau");
+    o = nbhd_smooth_options_default();
+    o.lambda = 0.0;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("lambda");
+    o = nbhd_smooth_options_default();
+    {
+        int bad = 7; /* C may store any int in an enum field: it must be refused, not trusted */
+        memcpy(&o.weighting, &bad, sizeof bad);
+    }
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_MESSAGE("weighting");
+    o = nbhd_smooth_options_default();
+    o.orientation = NBHD_ORIENTATION_TOWARD_POINT;
+    o.orientation_point[1] = NAN;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, &o, out, NULL), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("orientation_point");
+
+    /* All points identical: relative units have no spacing to refer to, and say so; with
+     * absolute units the normals are defined, finite and flagged. */
+    for (i = 0; i < 40; i++) {
+        p[3 * i] = 1.0;
+        p[3 * i + 1] = 2.0;
+        p[3 * i + 2] = 3.0;
+    }
+    CHECK_STATUS(nbhd_smooth(&pts, NULL, out, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("spacing");
+    o = nbhd_smooth_options_default();
+    o.epsilon = 1.0;
+    o.epsilon_units = NBHD_UNITS_ABSOLUTE;
+    o.lambda_units = NBHD_UNITS_ABSOLUTE;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, &o, out, flags), NBHD_STATUS_OK);
+    for (i = 0; i < 40; i++) {
+        CHECK(isfinite(out[3 * i]) && isfinite(out[3 * i + 1]) && isfinite(out[3 * i + 2]));
+        CHECK(flags[i] != 0);
+    }
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, geo, NULL), NBHD_STATUS_OK);
+    CHECK(out[0] == 1.0 && out[1] == 2.0 && out[2] == 3.0);
+}
+
+int main(int argc, char **argv) {
+    size_t n = argc > 1 ? (size_t)strtoul(argv[1], NULL, 10) : 3000;
+    test_defaults();
+    test_normals_and_curvatures(n);
+    test_smooth_in_place(n);
+    test_threads_agree(n / 2);
+    test_errors();
+    printf("smooth_test: %d checks, %d failed\n", checks, failures);
+    return failures == 0 ? 0 : 1;
+}
