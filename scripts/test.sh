@@ -32,6 +32,8 @@ cargo fmt --all -- --check
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== cargo test"
+# valgrind was installed above: its memcheck runs of the C ABI tests must not be skipped.
+export NBHD_REQUIRE_VALGRIND=1
 cargo test --workspace
 
 # --- C++ examples under ctest ---------------------------------------------------------------
