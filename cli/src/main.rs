@@ -82,6 +82,7 @@ enum Command {
     /// against the normal) and surface_variation, which MeshLab and CloudCompare colour by.
     Curvature(commands::geometry::Args),
     Smooth(commands::smooth::Args),
+    Bench(commands::bench::Args),
     Info(commands::info::Args),
     Convert(commands::convert::Args),
     Render(commands::render::Args),
@@ -105,6 +106,7 @@ fn run(cli: Cli) -> Result<(), String> {
         Some(Command::Normals(a)) => commands::geometry::run(a, What::Normals, &out),
         Some(Command::Curvature(a)) => commands::geometry::run(a, What::Curvature, &out),
         Some(Command::Smooth(a)) => commands::smooth::run(a, &out),
+        Some(Command::Bench(a)) => commands::bench::run(a, &out),
         Some(Command::Info(a)) => commands::info::run(a, &out),
         Some(Command::Convert(a)) => commands::convert::run(a, &out),
         Some(Command::Render(a)) => commands::render::run(a, &out),

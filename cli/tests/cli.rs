@@ -796,3 +796,87 @@ fn bad_arguments_and_missing_files_are_reported() {
         assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
     }
 }
+
+// ---- the thesis benchmark ----------------------------------------------------------------
+
+#[test]
+fn bench_thesis_quick_writes_the_report_plots_and_checks() {
+    let dir = PathBuf::from(tmp("bench"));
+    let o = nbhd(&[
+        "--json",
+        "bench",
+        "thesis",
+        "--quick",
+        "--repeats",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let v = json_of(&o);
+    // Build times and depths of every variant on the three geometries.
+    let build = v["build"].as_array().unwrap();
+    assert_eq!(build.len(), 3);
+    for g in build {
+        let variants = g["variants"].as_array().unwrap();
+        assert_eq!(variants.len(), 8);
+        for var in variants {
+            assert!(var["ms"][0].as_f64().unwrap() > 0.0, "{var}");
+            let depth = var["depth"][0].as_u64().unwrap();
+            // 4,851 to 5,249 points, one per leaf: balanced depth 13.
+            if var["variant"].as_str().unwrap().starts_with("Median") || var["variant"] == "Sorting"
+            {
+                assert_eq!(depth, 13, "{var}");
+            } else {
+                assert!(depth >= 13, "{var}");
+            }
+        }
+    }
+    // The identical-tree property of Section 8.1 holds (it is checked, not assumed).
+    let checks = v["checks"].as_array().unwrap();
+    let identical: Vec<_> = checks
+        .iter()
+        .filter(|c| c["claim"].as_str().unwrap().contains("identical tree"))
+        .collect();
+    assert_eq!(identical.len(), 3);
+    assert!(
+        identical.iter().all(|c| c["holds"] == true),
+        "{identical:?}"
+    );
+    // Brute force scans every point for every query: slower than the tree at k = 1.
+    let knn = v["kd_vs_pca_knn"].as_array().unwrap();
+    assert_eq!(knn[0]["label"], "kd-tree (Sorting)");
+    assert_eq!(knn[2]["label"], "brute force");
+    assert!(knn[0]["ms"][0].as_f64().unwrap() < knn[2]["ms"][0].as_f64().unwrap());
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    for want in [
+        "Fig. 8.8",
+        "Fig. 8.9",
+        "Fig. 8.13",
+        "thesis ms",
+        "conclusions",
+    ] {
+        assert!(report.contains(want), "report lacks {want}");
+    }
+    for svg in [
+        "build-costa.svg",
+        "build-cylinder.svg",
+        "build-torus.svg",
+        "fig8.9-knn.svg",
+        "fig8.10-radius.svg",
+        "fig8.11-cylinder-knn.svg",
+        "fig8.12-costa-knn.svg",
+        "fig8.13-torus-radius.svg",
+    ] {
+        let s = std::fs::read_to_string(dir.join(svg)).unwrap();
+        assert!(
+            s.starts_with("<svg") && s.trim_end().ends_with("</svg>"),
+            "{svg}"
+        );
+        assert!(
+            s.contains("<polyline") || s.contains("<path"),
+            "{svg} has no curve"
+        );
+        assert!(report.contains(svg), "report does not show {svg}");
+    }
+    assert!(dir.join("results.json").is_file());
+}

@@ -1,5 +1,6 @@
 //! One module per subcommand: each has `Args` (clap) and `run(args, &Output)`.
 
+pub mod bench;
 pub mod convert;
 pub mod demo;
 pub mod geometry;
