@@ -29,6 +29,7 @@
 // OUT defaults to STEM_smoothed.obj in the current directory.
 
 #include "nbhd.hpp"
+#include "surface_distance.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
@@ -105,6 +106,18 @@ void check(nbhd_status s, const char* call) {
                                  nbhd_last_error_message() + ")");
 }
 
+std::vector<std::array<std::uint32_t, 3>> triangles(const Mesh& mesh) {
+    std::vector<std::array<std::uint32_t, 3>> tris;
+    tris.reserve(mesh.n_faces());
+    for (auto f : mesh.faces()) {
+        std::array<std::uint32_t, 3> t{};
+        int j = 0;
+        for (auto v : f.vertices()) t[j++] = std::uint32_t(v.idx());  // a TriMesh face has 3
+        tris.push_back(t);
+    }
+    return tris;
+}
+
 double mean_edge_length(const Mesh& mesh) {
     double sum = 0;
     std::size_t n = 0;
@@ -136,107 +149,9 @@ Dist distances(const float* pts, const std::vector<float>& reference) {
     return d;
 }
 
-// Closest point to p on triangle (a, b, c): the Voronoi-region walk over vertices, edges and
-// the face (as in Ericson, Real-Time Collision Detection, 5.1.5), in double.
-struct V3 {
-    double x, y, z;
-};
-V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
-double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-
-double sq_dist_to_triangle(V3 p, V3 a, V3 b, V3 c) {
-    V3 ab = b - a, ac = c - a, ap = p - a;
-    double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    V3 q;
-    if (d1 <= 0 && d2 <= 0) {
-        q = a;
-    } else {
-        V3 bp = p - b;
-        double d3 = dot(ab, bp), d4 = dot(ac, bp);
-        V3 cp = p - c;
-        double d5 = dot(ab, cp), d6 = dot(ac, cp);
-        double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-        if (d3 >= 0 && d4 <= d3) q = b;
-        else if (d6 >= 0 && d5 <= d6) q = c;
-        else if (vc <= 0 && d1 >= 0 && d3 <= 0) q = a + (d1 / (d1 - d3)) * ab;
-        else if (vb <= 0 && d2 >= 0 && d6 <= 0) q = a + (d2 / (d2 - d6)) * ac;
-        else if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-            q = b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-        else {
-            double den = 1.0 / (va + vb + vc);
-            q = a + (vb * den) * ab + (vc * den) * ac;
-        }
-    }
-    V3 d = p - q;
-    return dot(d, d);
-}
-
-// Distances of points to the clean mesh's surface (its triangles, exactly). The closest
-// surface point s of q is no farther than q's nearest clean vertex (d_nn), and s lies in a face
-// whose vertices are within the longest edge L of s; so the faces around the clean vertices
-// within d_nn + L of q (an nbhd radius query) contain it.
-class SurfaceDistance {
-public:
-    SurfaceDistance(const Mesh& clean, const std::vector<float>& clean_xyz)
-        : xyz_(clean_xyz),
-          tree_(nbhdpp::build(nbhdpp::points_f32(xyz_.data(), xyz_.size() / 3, 12),
-                              nbhd_build_options_default())) {
-        for (auto e : clean.edges()) longest_ = std::max(longest_, double(clean.calc_edge_length(e)));
-        faces_of_.resize(clean.n_vertices());
-        for (auto f : clean.faces()) {
-            std::array<std::uint32_t, 3> t{};
-            int j = 0;
-            for (auto v : f.vertices()) {
-                if (j < 3) t[j] = std::uint32_t(v.idx());
-                ++j;
-            }
-            if (j != 3) continue;  // TriMesh: always 3
-            for (auto v : t) faces_of_[v].push_back(std::uint32_t(tris_.size()));
-            tris_.push_back(t);
-        }
-        stamp_.assign(tris_.size(), 0);
-    }
-
-    double operator()(const float* q) {
-        nbhdpp::knn(tree_.get(), q, 1, nn_);
-        double r = std::sqrt(double(nn_.sq[0])) + longest_;
-        nbhdpp::radius(tree_.get(), q, r * (1 + 1e-6), near_);
-        ++round_;
-        V3 p{q[0], q[1], q[2]};
-        double best = double(nn_.sq[0]);
-        for (std::uint32_t v : near_.idx)
-            for (std::uint32_t f : faces_of_[v]) {
-                if (stamp_[f] == round_) continue;
-                stamp_[f] = round_;
-                best = std::min(best, sq_dist_to_triangle(p, at(tris_[f][0]), at(tris_[f][1]),
-                                                          at(tris_[f][2])));
-            }
-        return std::sqrt(best);
-    }
-
-private:
-    V3 at(std::uint32_t i) const { return {xyz_[3 * i], xyz_[3 * i + 1], xyz_[3 * i + 2]}; }
-    std::vector<float> xyz_;
-    nbhdpp::Tree tree_;
-    double longest_ = 0;
-    std::vector<std::array<std::uint32_t, 3>> tris_;
-    std::vector<std::vector<std::uint32_t>> faces_of_;
-    std::vector<std::uint64_t> stamp_;
-    std::uint64_t round_ = 0;
-    nbhdpp::Result nn_, near_;
-};
-
-Dist surface_distances(SurfaceDistance& surface, const float* pts, std::size_t n) {
-    Dist d;
-    for (std::size_t i = 0; i < n; ++i) {
-        double t = surface(pts + 3 * i);
-        d.rms += t * t;
-        d.max = std::max(d.max, t);
-    }
-    d.rms = std::sqrt(d.rms / double(n));
-    return d;
+Dist surface_distances(examples::SurfaceDistance& surface, const float* pts, std::size_t n) {
+    examples::SurfaceDistance::Stats st = surface.stats(pts, n);
+    return Dist{st.rms, st.max};
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -264,7 +179,7 @@ int main(int argc, char** argv) try {
 
     const std::vector<float> original(xyz, xyz + 3 * n);
     const double edge = mean_edge_length(mesh);
-    SurfaceDistance surface(mesh, original);  // the clean mesh, before the noise
+    examples::SurfaceDistance surface(original, triangles(mesh));  // the clean mesh
 
     // Seeded noise of amplitude noise * (mean edge length) on every coordinate.
     std::mt19937_64 rng(args.seed);
