@@ -31,8 +31,9 @@ use std::time::Instant;
 /// Generates noisy samples of a cube, a torus and a cylinder united with a plane segment, builds
 /// the k-d tree with every pivot policy, computes the ε-k neighbourhoods, smooths isotropically
 /// and anisotropically, writes PLY files (normals and curvatures as properties) and PNG
-/// pictures coloured by curvature into the output folder, and prints tree statistics,
-/// neighbourhood sizes, times and the RMS distance to the true surface before and after.
+/// pictures coloured by the surface variation λ0/(λ0+λ1+λ2) into the output folder, and prints
+/// tree statistics, neighbourhood sizes, times and the RMS distance to the true surface before
+/// and after.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// Output folder (created if missing)

@@ -57,7 +57,8 @@ pub struct Args {
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub viewpoint: Option<[f64; 3]>,
 
-    /// Also draw the result into this PNG picture, coloured by curvature
+    /// Also draw the result into this PNG picture, coloured by the surface variation
+    /// λ0/(λ0+λ1+λ2) (pale where flat, red at edges and noise), lit by the normals
     #[arg(long)]
     pub png: Option<PathBuf>,
 

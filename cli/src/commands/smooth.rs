@@ -120,7 +120,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "propagate")]
     pub orient: OrientArg,
 
-    /// Also draw the result into this PNG picture, coloured by curvature
+    /// Also draw the result into this PNG picture, coloured by the surface variation
+    /// λ0/(λ0+λ1+λ2) (pale where flat, red at edges and noise), lit by the normals
     #[arg(long)]
     pub png: Option<PathBuf>,
 
