@@ -65,7 +65,7 @@ mod tests {
         // an L: points on z = 0 (x < 0) and on x = 0 (z > 0)
         let mut pts = Vec::new();
         for i in 0..10 {
-            for j in 0..5 {
+            for j in 0..20 {
                 pts.push(DVec3::new(-(i as f64) * 0.1, j as f64 * 0.1, 0.0));
                 pts.push(DVec3::new(0.0, j as f64 * 0.1, 0.1 + i as f64 * 0.1));
             }
