@@ -180,7 +180,8 @@ pub struct RobustReport {
     /// `2·inlier_width·σ̂₀/h²`: a neighbour at distance h whose tangent plane is that far from
     /// the point is cut off.
     pub result: SmoothResult,
-    /// The final robust normals (unit; unoriented), in input order.
+    /// The robust normals (unit, unoriented) the last step used, in input order (the
+    /// covariance normals of the input if no step was taken).
     pub normals: Vec<DVec3>,
     /// Noise estimate σ̂ of each iteration's input, in units of h (the first is the input's).
     pub noise: Vec<f64>,
