@@ -66,7 +66,10 @@ fn torus_isotropic_at_1h() {
 /// 0.207h / 0.615h, so the anisotropic flow does keep the edges far better. The sweep over
 /// λ ∈ {0.1, 0.15, 0.2, 0.3, 0.5}/h, 2–8 steps, `g_sharp` and `g_cont`
 /// (`examples/sweep_cube.rs`) finds no setting that reaches either target: the lowest RMS is
-/// 0.150h (edge 0.35h), the lowest edge RMS 0.291h (RMS 0.22h). At this noise the uniform
+/// 0.150h (edge 0.35h), the lowest edge RMS 0.291h (RMS 0.22h). The feature criteria Q, K, D
+/// (eq. 2.33–2.35) do not help either, and 'constrain interior' (Section 7.3) holds noisy face
+/// points in place, raising the RMS to 0.22–0.27h (`examples/sweep_cube_features.rs`), so the
+/// defaults stay as they are. At this noise the uniform
 /// umbrella's tangential component and the curvature estimates of covariance normals blended
 /// across the edge limit the method. The robust mode reaches both targets here
 /// (`robust_cube_at_0_3h`).
