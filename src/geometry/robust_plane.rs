@@ -8,13 +8,11 @@ use glam::{DMat3, DVec3};
 /// `width ≤ 0`). A robust inlier weight: smooth, 1 on the plane, and exactly 0 for outliers.
 #[inline]
 pub fn biweight(d: f64, width: f64) -> f64 {
-    if d.abs() < width {
-        let u = d / width;
-        let v = 1.0 - u * u;
-        v * v
-    } else {
-        0.0
-    }
+    // branch-free (it runs in the innermost loop of the plane selection): for |d| ≥ width,
+    // 1 − u² ≤ 0 and the max gives 0; a NaN (d or width not finite, 0/0) gives 0 as well
+    let u = d / width;
+    let v = (1.0 - u * u).max(0.0);
+    v * v
 }
 
 /// Unit normal of the weighted covariance of `points` about their weighted barycentre: the
