@@ -473,6 +473,20 @@ fn robust_degenerate_inputs_and_options() {
             .zip(pts)
             .all(|(a, b)| a.distance(*b) < 1e-12));
     }
+    // no iteration: the input comes back, with outputs and covariance normals
+    let r = smooth_robust_report(
+        &grid,
+        &RobustOptions {
+            max_iterations: 0,
+            ..opts
+        },
+        &mut |_, _| true,
+    )
+    .unwrap();
+    assert_eq!(r.result.points, grid);
+    assert_eq!((r.result.outputs.len(), r.normals.len()), (400, 400));
+    assert!(r.noise.is_empty() && r.moved.is_empty());
+    assert!(r.normals.iter().all(|n| (n.z.abs() - 1.0).abs() < 1e-12));
     for bad in [
         RobustOptions { k: 0, ..opts },
         RobustOptions {
