@@ -101,10 +101,10 @@ impl<T: Copy> NeighborTable<T> {
 
 /// Queries per parallel work item: large enough to amortise scheduling, small enough to
 /// balance two to dozens of threads.
-const CHUNK: usize = 1024;
+pub(crate) const CHUNK: usize = 1024;
 
 /// Row lengths, neighbour indices and squared distances of one chunk of queries.
-type RowsChunk<T> = (Vec<usize>, Vec<u32>, Vec<T>);
+pub(crate) type RowsChunk<T> = (Vec<usize>, Vec<u32>, Vec<T>);
 
 /// Options of the all-point neighbourhood table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -198,26 +198,47 @@ pub(crate) fn rows_in_work_order<T: Scalar>(
     row_of: impl Fn(usize) -> usize + Sync,
     query: impl Fn(usize, &mut Vec<Neighbor<T>>, &mut Vec<T>) -> Result<()> + Sync,
 ) -> Result<NeighborTable<T>> {
-    let chunks: Vec<Result<RowsChunk<T>>> = (0..work.div_ceil(CHUNK))
+    let bounds: Vec<usize> = (0..work.div_ceil(CHUNK))
+        .map(|c| c * CHUNK)
+        .chain(std::iter::once(work))
+        .collect();
+    rows_in_chunks(rows, &bounds, row_of, |c, (lens, ids, dists)| {
+        let mut row: Vec<Neighbor<T>> = Vec::new();
+        let mut scratch: Vec<T> = Vec::new();
+        for w in bounds[c]..bounds[c + 1] {
+            query(w, &mut row, &mut scratch)?;
+            lens.push(row.len());
+            ids.extend(row.iter().map(|nb| nb.index));
+            dists.extend(row.iter().map(|nb| nb.sq_dist));
+        }
+        Ok(())
+    })
+}
+
+/// Runs `fill(c, rows)` for the chunks `c` of work items `bounds[c]..bounds[c + 1]` on the
+/// current rayon pool; `fill` appends the rows of its items, in work order, to `rows`. The row
+/// of item `w` goes to table row `row_of(w)` (rows no item maps to stay empty). The chunks are
+/// fixed by `bounds`, not by the threads, and each row is computed on its own, so the table is
+/// identical for any number of threads.
+pub(crate) fn rows_in_chunks<T: Scalar>(
+    rows: usize,
+    bounds: &[usize],
+    row_of: impl Fn(usize) -> usize + Sync,
+    fill: impl Fn(usize, &mut RowsChunk<T>) -> Result<()> + Sync,
+) -> Result<NeighborTable<T>> {
+    let chunks: Vec<Result<RowsChunk<T>>> = (0..bounds.len().saturating_sub(1))
         .into_par_iter()
         .map(|c| {
-            let mut row: Vec<Neighbor<T>> = Vec::new();
-            let mut scratch: Vec<T> = Vec::new();
-            let (mut lens, mut ids, mut dists) = (Vec::new(), Vec::new(), Vec::new());
-            for w in c * CHUNK..((c + 1) * CHUNK).min(work) {
-                query(w, &mut row, &mut scratch)?;
-                lens.push(row.len());
-                ids.extend(row.iter().map(|nb| nb.index));
-                dists.extend(row.iter().map(|nb| nb.sq_dist));
-            }
-            Ok((lens, ids, dists))
+            let mut chunk = (Vec::new(), Vec::new(), Vec::new());
+            fill(c, &mut chunk)?;
+            Ok(chunk)
         })
         .collect();
     let chunks: Vec<RowsChunk<T>> = chunks.into_iter().collect::<Result<_>>()?;
     let mut offsets = vec![0usize; rows + 1];
     for (c, (lens, _, _)) in chunks.iter().enumerate() {
         for (j, &len) in lens.iter().enumerate() {
-            offsets[row_of(c * CHUNK + j) + 1] = len;
+            offsets[row_of(bounds[c] + j) + 1] = len;
         }
     }
     for r in 0..rows {
@@ -228,7 +249,7 @@ pub(crate) fn rows_in_work_order<T: Scalar>(
     for (c, (lens, ids, dists)) in chunks.iter().enumerate() {
         let mut at = 0;
         for (j, &len) in lens.iter().enumerate() {
-            let to = offsets[row_of(c * CHUNK + j)];
+            let to = offsets[row_of(bounds[c] + j)];
             indices[to..to + len].copy_from_slice(&ids[at..at + len]);
             sq_dists[to..to + len].copy_from_slice(&dists[at..at + len]);
             at += len;

@@ -25,6 +25,28 @@ impl<'a, T: Scalar> NeighborHeap<'a, T> {
         }
     }
 
+    /// Continues a heap kept in `items` by an earlier [`NeighborHeap`] with the same `k` and
+    /// `sq_radius` (not cleared): lets one search hold the heaps of many queries.
+    #[inline]
+    pub(crate) fn resume(items: &'a mut Vec<Neighbor<T>>, k: usize, sq_radius: T) -> Self {
+        Self {
+            items,
+            k,
+            sq_radius,
+        }
+    }
+
+    /// The worst key a candidate must precede (or equal in distance with a smaller index) to
+    /// be accepted: `(sq_radius, u32::MAX)` until the heap is full, then the worst item held.
+    #[inline]
+    pub(crate) fn worst_key(&self) -> (T, u32) {
+        if self.items.len() < self.k {
+            (self.sq_radius, u32::MAX)
+        } else {
+            (self.items[0].sq_dist, self.items[0].index)
+        }
+    }
+
     /// The squared distance a candidate must not exceed to be accepted: the radius until the
     /// heap is full, then the k-th best distance (a candidate at exactly that distance may
     /// still win on its index).

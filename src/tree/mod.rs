@@ -3,6 +3,7 @@
 //! caller's indices, answering the exact queries of Chapter 5.
 
 mod build;
+mod group_search;
 mod layout;
 mod node;
 pub mod options;
@@ -268,8 +269,21 @@ impl<T: Scalar> KdTree<T> {
         options: &TableOptions,
     ) -> Result<NeighborTable<T>> {
         nbhd.validate()?;
-        // Answered in tree order (neighbouring queries touch the same nodes and leaves, so
-        // they hit the cache), written back in the caller's order.
+        // Low dimensions: one descent per group of consecutive tree-order points, shared by
+        // the group (see `group_search`); the same rows as the single-query search.
+        let grouped = |f: fn(&TreeView<'_, T>, usize, Neighborhood<T>, bool) -> _| {
+            with_threads(options.threads, || {
+                f(&self.view(), self.source_len, nbhd, options.exclude_self)
+            })?
+        };
+        match self.dim {
+            3 => return grouped(group_search::table::<T, 3>),
+            2 => return grouped(group_search::table::<T, 2>),
+            1 => return grouped(group_search::table::<T, 1>),
+            _ => {}
+        }
+        // Any dimension: answered in tree order (neighbouring queries touch the same nodes and
+        // leaves, so they hit the cache), written back in the caller's order.
         with_threads(options.threads, || {
             rows_in_work_order(
                 self.source_len,

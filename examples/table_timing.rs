@@ -1,0 +1,77 @@
+//! One all-point table on one data set, one thread, f32, self included (as in
+//! `benches/compare.rs`): a small binary to count instructions with
+//! `valgrind --tool=callgrind` or `perf stat -e instructions`, which are repeatable where wall
+//! times on a busy machine are not.
+//!
+//! Run: `cargo run --release --example table_timing -- torus-77k knn10 [reps]`
+//! (operations: build, knn10, knn30, radius, epsk; radius gives about 20 neighbours, epsk is
+//! k = 16 within it).
+
+use std::time::Instant;
+
+use nbhd::shapes::datasets::Dataset;
+use nbhd::{BuildOptions, KdTree, Neighborhood, PointsView, Query, TableOptions};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let set_name = args.get(1).map_or("torus-77k", String::as_str);
+    let op = args.get(2).map_or("knn10", String::as_str);
+    let reps: usize = args.get(3).and_then(|r| r.parse().ok()).unwrap_or(1);
+    let set = Dataset::ALL
+        .into_iter()
+        .find(|s| s.name() == set_name)
+        .expect("unknown set");
+    let pts: Vec<[f32; 3]> = set.points().iter().map(|p| p.map(|c| c as f32)).collect();
+    let view = PointsView::from_rows(&pts).unwrap();
+    let opts = BuildOptions {
+        threads: 1,
+        ..BuildOptions::default()
+    };
+    if op == "build" {
+        for _ in 0..reps {
+            let s = Instant::now();
+            let tree = KdTree::<f32>::build(&view, &opts).unwrap();
+            println!(
+                "build {:.2} ms ({} points)",
+                s.elapsed().as_secs_f64() * 1e3,
+                tree.len()
+            );
+        }
+        return;
+    }
+    let tree = KdTree::<f32>::build(&view, &opts).unwrap();
+    // The radius giving about 20 neighbours (self included), as in benches/compare.rs.
+    let mut out = Vec::new();
+    let mut d20: Vec<f32> = (0..pts.len())
+        .step_by((pts.len() / 2000).max(1))
+        .map(|i| {
+            tree.knn(Query::stored(i as u32), 21, &mut out).unwrap();
+            out.last().unwrap().sq_dist.sqrt()
+        })
+        .collect();
+    d20.sort_by(f32::total_cmp);
+    let radius = d20[d20.len() / 2];
+    let nbhd = match op {
+        "knn10" => Neighborhood::Knn { k: 10 },
+        "knn30" => Neighborhood::Knn { k: 30 },
+        "radius" => Neighborhood::Radius {
+            radius,
+            sorted: true,
+        },
+        "epsk" => Neighborhood::KnnRadius { k: 16, radius },
+        _ => panic!("unknown operation {op}"),
+    };
+    let topts = TableOptions {
+        exclude_self: false,
+        threads: 1,
+    };
+    for _ in 0..reps {
+        let s = Instant::now();
+        let t = tree.neighborhoods(nbhd, &topts).unwrap();
+        println!(
+            "{set_name} {op} {:.2} ms, {} neighbours",
+            s.elapsed().as_secs_f64() * 1e3,
+            t.total()
+        );
+    }
+}

@@ -1,0 +1,545 @@
+//! Grouped all-point search: the neighbourhood table of a tree's own points, answered one
+//! small group of consecutive tree-order points at a time.
+//!
+//! Points of one leaf have nearly the same neighbourhood (the "leaf-to-leaf" sharing of
+//! dual-tree search, Gray & Moore, *'N-Body' Problems in Statistical Learning*, NIPS 2000, and
+//! of bucketed all-kNN, Vaidya 1989; repository note `performance.md`). So instead of one
+//! descent per query (thesis Algorithm 9), the tree is descended once per group: a cell is
+//! visited if its tight bounding box may hold a point of some member's answer, i.e. if its
+//! squared distance to the group's bounding box does not exceed the largest current bound of
+//! the members. Each visited leaf is then scanned for every member whose own point-to-box
+//! distance admits it, with a bounded heap per member. Every member therefore sees every
+//! point that could enter its answer, with the exact squared distance the single-query search
+//! computes, so the rows are the single-query rows byte for byte.
+//!
+//! Ties in `(sq_dist, index)` order also prune: once a member holds `k` candidates whose worst
+//! is `(b, w)`, a cell at distance exactly `b` whose smallest caller index is ≥ `w` cannot
+//! improve it. This stops duplicate-heavy sets from scanning every copy of a point.
+//!
+//! Lower bounds are exact in floating point: the gaps, squares and sums are evaluated in the
+//! order of the point distance, and rounding is monotone, so a cell's bound never exceeds the
+//! computed squared distance of any of its points to any member.
+
+use std::ops::Range;
+
+use super::node::Node;
+use super::search::TreeView;
+use crate::error::Result;
+use crate::query::{Neighbor, NeighborHeap, Neighborhood};
+use crate::scalar::{Scalar, ScalarType};
+use crate::table::{rows_in_chunks, NeighborTable, RowsChunk, CHUNK};
+
+/// Most queries in one group.
+const GROUP: usize = 16;
+
+/// Tight bounding box and smallest caller index of every node.
+struct Boxes<T, const D: usize> {
+    lo: Vec<[T; D]>,
+    hi: Vec<[T; D]>,
+    min_id: Vec<u32>,
+}
+
+impl<T: Scalar, const D: usize> Boxes<T, D> {
+    /// Bottom-up over the preorder node array (children follow their parent).
+    fn new(tree: &TreeView<'_, T>) -> Self {
+        let n = tree.nodes.len();
+        let neg_inf = T::ZERO - T::INFINITY;
+        let mut lo = vec![[T::INFINITY; D]; n];
+        let mut hi = vec![[neg_inf; D]; n];
+        let mut min_id = vec![u32::MAX; n];
+        for i in (0..n).rev() {
+            let nd = &tree.nodes[i];
+            if nd.is_leaf() {
+                let (mut l, mut h, mut m) = ([T::INFINITY; D], [neg_inf; D], u32::MAX);
+                for p in nd.a as usize..nd.b as usize {
+                    for j in 0..D {
+                        let c = tree.coords[p * D + j];
+                        l[j] = l[j].min_of(c);
+                        h[j] = h[j].max_of(c);
+                    }
+                    m = m.min(tree.ids[p]);
+                }
+                (lo[i], hi[i], min_id[i]) = (l, h, m);
+            } else {
+                let (a, b) = (i + 1, nd.a as usize);
+                for j in 0..D {
+                    lo[i][j] = lo[a][j].min_of(lo[b][j]);
+                    hi[i][j] = hi[a][j].max_of(hi[b][j]);
+                }
+                min_id[i] = min_id[a].min(min_id[b]);
+            }
+        }
+        Self { lo, hi, min_id }
+    }
+}
+
+/// The groups: subtrees of at most [`GROUP`] points, and pieces of larger leaves, as ranges of
+/// tree positions in increasing order.
+fn groups<T: Scalar>(nodes: &[Node<T>]) -> Vec<Range<usize>> {
+    let mut out = Vec::new();
+    let mut stack = vec![(0usize, 0usize)];
+    while let Some((i, start)) = stack.pop() {
+        let nd = &nodes[i];
+        let end = nd.b as usize;
+        if nd.is_leaf() || end - start <= GROUP {
+            let mut s = start;
+            while s < end {
+                let e = (s + GROUP).min(end);
+                out.push(s..e);
+                s = e;
+            }
+        } else {
+            let left_end = nodes[i + 1].b as usize;
+            stack.push((nd.a as usize, left_end));
+            stack.push((i + 1, start));
+        }
+    }
+    out
+}
+
+/// Points scanned at once: a leaf's squared distances to one query are computed a block at a
+/// time, in straight-line code the compiler vectorises.
+const BLOCK: usize = 16;
+
+/// The coordinates in tree order as struct-of-arrays, dimension `j` at `v[j * stride..]`,
+/// padded by a block so that a leaf's last block can be read whole.
+struct Soa<T, const D: usize> {
+    stride: usize,
+    v: Vec<T>,
+}
+
+impl<T: Scalar, const D: usize> Soa<T, D> {
+    fn new(coords: &[T]) -> Self {
+        let n = coords.len() / D;
+        let stride = n + BLOCK;
+        let mut v = vec![T::ZERO; D * stride];
+        for (p, c) in coords.chunks_exact(D).enumerate() {
+            for j in 0..D {
+                v[j * stride + p] = c[j];
+            }
+        }
+        Self { stride, v }
+    }
+
+    /// Squared distances from `q` to the points at tree positions `start..start + BLOCK`, each
+    /// summed over the dimensions in order, `((0 + t0²) + t1²) + …`, as the single-query search
+    /// does (`0 + x` is exact): the same bits.
+    #[inline(always)]
+    fn block_sq_dists(&self, q: &[T; D], start: usize) -> [T; BLOCK] {
+        let mut d = [T::ZERO; BLOCK];
+        for (j, &qj) in q.iter().enumerate() {
+            let at = j * self.stride + start;
+            let c: &[T; BLOCK] = self.v[at..at + BLOCK].try_into().unwrap();
+            for p in 0..BLOCK {
+                let t = qj - c[p];
+                d[p] = d[p] + t * t;
+            }
+        }
+        d
+    }
+}
+
+/// Bit `p` set where `d[p] ≤ bound`: SSE compares and movemask on x86-64 (4 or 2 lanes per
+/// instruction), a plain loop elsewhere.
+#[inline(always)]
+fn below_mask<T: Scalar>(d: &[T; BLOCK], bound: T) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        match T::TYPE {
+            ScalarType::F32 => {
+                // SAFETY: `Scalar` is sealed to f32 and f64 and `T::TYPE` is F32, so `T` is
+                // f32 and `[T; BLOCK]` is `[f32; BLOCK]`.
+                let d = unsafe { &*(d as *const [T; BLOCK]).cast::<[f32; BLOCK]>() };
+                let mut mask = 0u32;
+                // SAFETY: SSE is part of the x86-64 baseline; each load reads the 4 f32 of
+                // `lanes`.
+                unsafe {
+                    let b = _mm_set1_ps(bound.to_f64() as f32);
+                    for (c, lanes) in d.chunks_exact(4).enumerate() {
+                        let v = _mm_loadu_ps(lanes.as_ptr());
+                        mask |= (_mm_movemask_ps(_mm_cmple_ps(v, b)) as u32) << (4 * c);
+                    }
+                }
+                return mask;
+            }
+            ScalarType::F64 => {
+                // SAFETY: as above, `T` is f64.
+                let d = unsafe { &*(d as *const [T; BLOCK]).cast::<[f64; BLOCK]>() };
+                let mut mask = 0u32;
+                // SAFETY: SSE2 is part of the x86-64 baseline; each load reads the 2 f64 of
+                // `lanes`.
+                unsafe {
+                    let b = _mm_set1_pd(bound.to_f64());
+                    for (c, lanes) in d.chunks_exact(2).enumerate() {
+                        let v = _mm_loadu_pd(lanes.as_ptr());
+                        mask |= (_mm_movemask_pd(_mm_cmple_pd(v, b)) as u32) << (2 * c);
+                    }
+                }
+                return mask;
+            }
+        }
+    }
+    #[allow(unreachable_code)]
+    {
+        let mut mask = 0u32;
+        for (p, &x) in d.iter().enumerate() {
+            mask |= u32::from(x <= bound) << p;
+        }
+        mask
+    }
+}
+
+/// Squared distance between the boxes `[alo, ahi]` and `[blo, bhi]` (0 where they overlap):
+/// per dimension the gap `max(blo − ahi, alo − bhi, 0)`, without branches.
+#[inline(always)]
+fn box_dist<T: Scalar, const D: usize>(
+    alo: &[T; D],
+    ahi: &[T; D],
+    blo: &[T; D],
+    bhi: &[T; D],
+) -> T {
+    let mut s = T::ZERO;
+    for j in 0..D {
+        let g = (blo[j] - ahi[j]).max_of(alo[j] - bhi[j]).max_of(T::ZERO);
+        s = s + g * g;
+    }
+    s
+}
+
+/// `true` if a cell at squared distance `lb` whose smallest caller index is `min_id` may
+/// improve a row whose worst admissible key is `(b, w)` (`w == u32::MAX` while the row is not
+/// full: caller indices are below it).
+#[inline(always)]
+fn admits<T: Scalar>(lb: T, min_id: u32, b: T, w: u32) -> bool {
+    lb < b || (lb == b && min_id < w)
+}
+
+/// The rows of one group's members, as they are being collected.
+trait Rows<T: Scalar> {
+    /// Empties the first `m` rows.
+    fn clear(&mut self, m: usize);
+    /// Offers a candidate to row `i` (which it must precede, see [`admits`]); returns the
+    /// row's new worst admissible key.
+    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32);
+    /// Whether keys change as candidates arrive (k-nearest) or stay the radius (radius).
+    const TIGHTENS: bool;
+    /// Appends the first `m` rows, in `(sq_dist, index)` order where asked, to `out`.
+    fn write(&mut self, m: usize, out: &mut RowsChunk<T>);
+}
+
+/// Small `k`: each row kept sorted by insertion in a fixed slice of a flat buffer, so a
+/// candidate costs a short shift and the row needs no final sort.
+struct SortedRows<T> {
+    k: usize,
+    sq_radius: T,
+    len: [usize; GROUP],
+    buf: Vec<Neighbor<T>>,
+}
+
+/// Rows up to this `k` are kept sorted by insertion; larger ones in a heap.
+const SORTED_MAX_K: usize = 64;
+
+impl<T: Scalar> Rows<T> for SortedRows<T> {
+    const TIGHTENS: bool = true;
+    #[inline]
+    fn clear(&mut self, m: usize) {
+        self.len[..m].fill(0);
+    }
+    #[inline(always)]
+    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
+        let k = self.k;
+        let row = &mut self.buf[i * k..i * k + k];
+        let cand = Neighbor { index, sq_dist };
+        let len = &mut self.len[i];
+        let mut j = if *len < k {
+            *len += 1;
+            *len - 1
+        } else {
+            k - 1
+        };
+        while j > 0 && cand.precedes(&row[j - 1]) {
+            row[j] = row[j - 1];
+            j -= 1;
+        }
+        row[j] = cand;
+        if *len < k {
+            (self.sq_radius, u32::MAX)
+        } else {
+            (row[k - 1].sq_dist, row[k - 1].index)
+        }
+    }
+    fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
+        for i in 0..m {
+            write_row(&self.buf[i * self.k..i * self.k + self.len[i]], out);
+        }
+    }
+}
+
+/// Appends one row to the chunk's buffers.
+#[inline]
+fn write_row<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<T>) {
+    out.0.push(row.len());
+    out.1.reserve(row.len());
+    out.2.reserve(row.len());
+    for nb in row {
+        out.1.push(nb.index);
+        out.2.push(nb.sq_dist);
+    }
+}
+
+/// Sorts a row by `(sq_dist, index)` through integer keys: squared distances are never
+/// negative (nor −0), and the bits of non-negative IEEE floats order as the values, so
+/// `(bits(f64::from(sq_dist)) << 32) | index` orders as `(sq_dist, index)`; every key is
+/// distinct, so an unstable sort gives the one order.
+fn sort_row<T: Scalar>(row: &mut [Neighbor<T>], keys: &mut Vec<u128>) {
+    keys.clear();
+    keys.extend(
+        row.iter()
+            .map(|nb| (u128::from(nb.sq_dist.to_f64().to_bits()) << 32) | u128::from(nb.index)),
+    );
+    keys.sort_unstable();
+    for (nb, &key) in row.iter_mut().zip(keys.iter()) {
+        nb.index = key as u32;
+        nb.sq_dist = T::from_f64(f64::from_bits((key >> 32) as u64));
+    }
+}
+
+/// Large `k`: a bounded heap per row ([`NeighborHeap`]), sorted at the end.
+struct HeapRows<T> {
+    k: usize,
+    sq_radius: T,
+    rows: Vec<Vec<Neighbor<T>>>,
+    keys: Vec<u128>,
+}
+
+impl<T: Scalar> Rows<T> for HeapRows<T> {
+    const TIGHTENS: bool = true;
+    #[inline]
+    fn clear(&mut self, m: usize) {
+        self.rows[..m].iter_mut().for_each(Vec::clear);
+    }
+    #[inline]
+    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
+        let mut h = NeighborHeap::resume(&mut self.rows[i], self.k, self.sq_radius);
+        h.push(index, sq_dist);
+        h.worst_key()
+    }
+    fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
+        for r in &mut self.rows[..m] {
+            sort_row(r, &mut self.keys);
+            write_row(r, out);
+        }
+    }
+}
+
+/// Radius: every candidate within the radius, sorted at the end if asked.
+struct RadiusRows<T> {
+    sq_radius: T,
+    sorted: bool,
+    rows: Vec<Vec<Neighbor<T>>>,
+    keys: Vec<u128>,
+}
+
+impl<T: Scalar> Rows<T> for RadiusRows<T> {
+    const TIGHTENS: bool = false;
+    #[inline]
+    fn clear(&mut self, m: usize) {
+        self.rows[..m].iter_mut().for_each(Vec::clear);
+    }
+    #[inline(always)]
+    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
+        self.rows[i].push(Neighbor { index, sq_dist });
+        (self.sq_radius, u32::MAX)
+    }
+    fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
+        for r in &mut self.rows[..m] {
+            if self.sorted {
+                sort_row(r, &mut self.keys);
+            }
+            write_row(r, out);
+        }
+    }
+}
+
+/// The all-point table of `tree` (dimension `D`), rows in the caller's index order.
+pub(crate) fn table<T: Scalar, const D: usize>(
+    tree: &TreeView<'_, T>,
+    source_len: usize,
+    nbhd: Neighborhood<T>,
+    exclude_self: bool,
+) -> Result<NeighborTable<T>> {
+    let (k, sq_radius) = nbhd.limits();
+    let boxes = Boxes::<T, D>::new(tree);
+    let groups = groups(tree.nodes);
+    // Chunks of whole groups, about CHUNK points each: fixed by the tree, not the threads.
+    let mut chunk_groups = vec![0usize];
+    let mut work_bounds = vec![0usize];
+    let mut acc = 0;
+    for (g, r) in groups.iter().enumerate() {
+        acc += r.len();
+        if acc >= CHUNK || g + 1 == groups.len() {
+            chunk_groups.push(g + 1);
+            work_bounds.push(r.end);
+            acc = 0;
+        }
+    }
+    let soa = Soa::<T, D>::new(tree.coords);
+    let search = Search {
+        tree,
+        boxes: &boxes,
+        soa: &soa,
+        sq_radius,
+        exclude_self,
+    };
+    let chunk_groups = &chunk_groups;
+    let groups = &groups;
+    let run = |c: usize, rows: &mut dyn FnMut(&Search<'_, T, D>, Range<usize>)| {
+        for g in &groups[chunk_groups[c]..chunk_groups[c + 1]] {
+            rows(&search, g.clone());
+        }
+    };
+    rows_in_chunks(
+        source_len,
+        &work_bounds,
+        |pos| tree.ids[pos] as usize,
+        |c, out| {
+            let mut stack = Vec::new();
+            if k == usize::MAX {
+                let mut rows = RadiusRows {
+                    sq_radius,
+                    sorted: nbhd.is_sorted(),
+                    rows: (0..GROUP).map(|_| Vec::new()).collect(),
+                    keys: Vec::new(),
+                };
+                run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
+            } else if k <= SORTED_MAX_K {
+                let mut rows = SortedRows {
+                    k,
+                    sq_radius,
+                    len: [0; GROUP],
+                    buf: vec![Neighbor::default(); GROUP * k],
+                };
+                run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
+            } else {
+                let mut rows = HeapRows {
+                    k,
+                    sq_radius,
+                    rows: (0..GROUP).map(|_| Vec::new()).collect(),
+                    keys: Vec::new(),
+                };
+                run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
+            }
+            Ok(())
+        },
+    )
+}
+
+/// What every group's search reads.
+struct Search<'a, T, const D: usize> {
+    tree: &'a TreeView<'a, T>,
+    boxes: &'a Boxes<T, D>,
+    soa: &'a Soa<T, D>,
+    sq_radius: T,
+    exclude_self: bool,
+}
+
+impl<T: Scalar, const D: usize> Search<'_, T, D> {
+    /// Answers the group of tree positions `g` and appends its rows, in position order, to
+    /// `out`.
+    fn group<R: Rows<T>>(
+        &self,
+        g: Range<usize>,
+        rows: &mut R,
+        stack: &mut Vec<(u32, T)>,
+        out: &mut RowsChunk<T>,
+    ) {
+        let (tree, boxes) = (self.tree, self.boxes);
+        let m = g.len();
+        let mut q = [[T::ZERO; D]; GROUP];
+        let mut self_id = [u32::MAX; GROUP];
+        // Worst admissible key of each row.
+        let mut bound = [self.sq_radius; GROUP];
+        let mut worst = [u32::MAX; GROUP];
+        let mut glo = [T::INFINITY; D];
+        let mut ghi = [T::ZERO - T::INFINITY; D];
+        for (i, p) in g.clone().enumerate() {
+            for j in 0..D {
+                let c = tree.coords[p * D + j];
+                q[i][j] = c;
+                glo[j] = glo[j].min_of(c);
+                ghi[j] = ghi[j].max_of(c);
+            }
+            if self.exclude_self {
+                self_id[i] = tree.ids[p];
+            }
+        }
+        rows.clear(m);
+        // The group's key: the largest worst key of its rows.
+        let (mut gb, mut gw) = (self.sq_radius, u32::MAX);
+        stack.clear();
+        stack.push((0, box_dist(&glo, &ghi, &boxes.lo[0], &boxes.hi[0])));
+        while let Some((mut node, lb)) = stack.pop() {
+            if !admits(lb, boxes.min_id[node as usize], gb, gw) {
+                continue;
+            }
+            loop {
+                let nd = &tree.nodes[node as usize];
+                if nd.is_leaf() {
+                    let (llo, lhi) = (&boxes.lo[node as usize], &boxes.hi[node as usize]);
+                    let lmin = boxes.min_id[node as usize];
+                    let (a, b) = (nd.a as usize, nd.b as usize);
+                    for i in 0..m {
+                        let qi = &q[i];
+                        if !admits(box_dist(qi, qi, llo, lhi), lmin, bound[i], worst[i]) {
+                            continue;
+                        }
+                        let mut start = a;
+                        while start < b {
+                            let d = self.soa.block_sq_dists(qi, start);
+                            let mut hits = below_mask(&d, bound[i]);
+                            if b - start < BLOCK {
+                                hits &= (1 << (b - start)) - 1;
+                            }
+                            while hits != 0 {
+                                let p = hits.trailing_zeros() as usize;
+                                hits &= hits - 1;
+                                let id = tree.ids[start + p];
+                                if admits(d[p], id, bound[i], worst[i]) && id != self_id[i] {
+                                    (bound[i], worst[i]) = rows.offer(i, id, d[p]);
+                                }
+                            }
+                            start += BLOCK;
+                        }
+                    }
+                    if R::TIGHTENS {
+                        (gb, gw) = (bound[0], worst[0]);
+                        for i in 1..m {
+                            if gb < bound[i] || (gb == bound[i] && gw < worst[i]) {
+                                (gb, gw) = (bound[i], worst[i]);
+                            }
+                        }
+                    }
+                    break;
+                }
+                let (l, r) = (node + 1, nd.a);
+                let lbl = box_dist(&glo, &ghi, &boxes.lo[l as usize], &boxes.hi[l as usize]);
+                let lbr = box_dist(&glo, &ghi, &boxes.lo[r as usize], &boxes.hi[r as usize]);
+                let left_first = lbl < lbr || (lbl == lbr && q[0][nd.dim as usize] < nd.split);
+                let (near, lbn, far, lbf) = if left_first {
+                    (l, lbl, r, lbr)
+                } else {
+                    (r, lbr, l, lbl)
+                };
+                if admits(lbf, boxes.min_id[far as usize], gb, gw) {
+                    stack.push((far, lbf));
+                }
+                if !admits(lbn, boxes.min_id[near as usize], gb, gw) {
+                    break;
+                }
+                node = near;
+            }
+        }
+        rows.write(m, out);
+    }
+}
