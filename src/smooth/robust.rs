@@ -22,7 +22,7 @@
 //! 3. **Feature-aware normals by plane selection** ('better neighbourhoods'): the covariance
 //!    normal of a point near an edge is a blend of both faces, because its neighbourhood
 //!    straddles the edge. Instead each point considers the covariance planes (eq. 2.10, through
-//!    the barycentre, eq. 2.3) of its own and of its `k` nearest neighbours' wide
+//!    the barycentre, eq. 2.3) of its own and of its `k_plane` nearest neighbours' wide
 //!    neighbourhoods, scores each plane by how many of the point's wide neighbours it explains —
 //!    a robust (Tukey biweight) count of the points within `inlier_width`·σ̂ of it — and keeps
 //!    the best. A neighbourhood shifted off the edge fits one face and explains that face's
@@ -275,7 +275,7 @@ pub fn smooth_robust_report(
         }
         prev_sigma = sigma;
         let width = options.inlier_width * sigma;
-        normals = selected_normals(&cur, &narrow, &wide, &frames, &bary, width);
+        normals = selected_normals(&cur, &wide, &frames, &bary, width);
         report(base + 0.6, Stage::Step)?;
         let next = step(&cur, &narrow, &normals, width, options);
         let rms = (next
@@ -382,10 +382,9 @@ fn noise_estimate(cur: &[DVec3], frames: &[LocalFrame], bary: &[DVec3]) -> f64 {
 }
 
 /// Step 3 of the module documentation: for each point the best-supported covariance plane among
-/// its own and its `narrow` neighbours', refitted over its inliers.
+/// its own and its wide neighbours', refitted over its inliers.
 fn selected_normals(
     cur: &[DVec3],
-    narrow: &NeighborTable<f64>,
     wide: &NeighborTable<f64>,
     frames: &[LocalFrame],
     bary: &[DVec3],
@@ -402,7 +401,7 @@ fn selected_normals(
                 buf.iter().map(|&x| biweight(n.dot(x - b), width)).sum()
             };
             let mut best = (score(i), i);
-            for &j in narrow.indices_of(i) {
+            for &j in wide.indices_of(i) {
                 let s = score(j as usize);
                 if s > best.0 {
                     best = (s, j as usize);

@@ -518,15 +518,16 @@ fn robust_degenerate_inputs_and_options() {
 
 #[test]
 fn robust_leaves_a_clean_sphere_on_the_sphere() {
-    // the mean-normal projection does not shrink: a clean sphere stays within a few
-    // hundredths of a spacing of itself
+    // the mean-normal projection neither shrinks nor inflates, and the stopping rule ends the
+    // run after one iteration (the noise estimate of a clean sphere is its curvature, which
+    // does not fall): measured RMS 0.009h, shrinkage +0.001h
     let sphere = Sphere::new(1.0);
     let s = sample(&sphere, 3000, 8);
     let h = mean_spacing(&s.points).unwrap();
     let r = smooth_robust(&s.points, &RobustOptions::default()).unwrap();
     let q = quality(&sphere, &s, h, &r);
     eprintln!("clean sphere: {q:?}");
-    assert!(q.rms < 0.03 && q.shrinkage.abs() < 0.02, "{q:?}");
+    assert!(q.rms < 0.015 && q.shrinkage.abs() < 0.005, "{q:?}");
     assert!(q.normal_error_deg.unwrap() < 1.5, "{q:?}");
 }
 
