@@ -280,11 +280,80 @@ impl<T: Scalar> Rows<T> for SortedRows<T> {
 #[inline]
 fn write_row<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<T>) {
     out.0.push(row.len());
-    out.1.reserve(row.len());
-    out.2.reserve(row.len());
-    for nb in row {
-        out.1.push(nb.index);
-        out.2.push(nb.sq_dist);
+    let at = out.1.len();
+    out.1.resize(at + row.len(), 0);
+    out.2.resize(at + row.len(), T::ZERO);
+    for ((id, d), nb) in out.1[at..].iter_mut().zip(&mut out.2[at..]).zip(row) {
+        *id = nb.index;
+        *d = nb.sq_dist;
+    }
+}
+
+/// Small `k` in f32: as [`SortedRows`], with each neighbour held as the one integer key
+/// `(bits(sq_dist) << 32) | index`, which orders as `(sq_dist, index)` (see [`sort_row`]), so
+/// the insertion compares one integer instead of two floats and an index.
+struct SortedKeys<T> {
+    k: usize,
+    sq_radius: T,
+    len: [usize; GROUP],
+    buf: Vec<u64>,
+}
+
+impl<T: Scalar> SortedKeys<T> {
+    #[inline(always)]
+    fn key(index: u32, sq_dist: T) -> u64 {
+        // Exact: `T` is f32 here, and an f32 survives the round trip through f64.
+        (u64::from((sq_dist.to_f64() as f32).to_bits()) << 32) | u64::from(index)
+    }
+    #[inline(always)]
+    fn unkey(key: u64) -> (T, u32) {
+        (
+            T::from_f64(f64::from(f32::from_bits((key >> 32) as u32))),
+            key as u32,
+        )
+    }
+}
+
+impl<T: Scalar> Rows<T> for SortedKeys<T> {
+    const TIGHTENS: bool = true;
+    #[inline]
+    fn clear(&mut self, m: usize) {
+        self.len[..m].fill(0);
+    }
+    #[inline(always)]
+    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
+        let k = self.k;
+        let row = &mut self.buf[i * k..i * k + k];
+        let cand = Self::key(index, sq_dist);
+        let len = &mut self.len[i];
+        let mut j = if *len < k {
+            *len += 1;
+            *len - 1
+        } else {
+            k - 1
+        };
+        while j > 0 && cand < row[j - 1] {
+            row[j] = row[j - 1];
+            j -= 1;
+        }
+        row[j] = cand;
+        if *len < k {
+            (self.sq_radius, u32::MAX)
+        } else {
+            Self::unkey(row[k - 1])
+        }
+    }
+    fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
+        for i in 0..m {
+            let row = &self.buf[i * self.k..i * self.k + self.len[i]];
+            out.0.push(row.len());
+            let at = out.1.len();
+            out.1.resize(at + row.len(), 0);
+            out.2.resize(at + row.len(), T::ZERO);
+            for ((id, d), &key) in out.1[at..].iter_mut().zip(&mut out.2[at..]).zip(row) {
+                (*d, *id) = Self::unkey(key);
+            }
+        }
     }
 }
 
@@ -292,17 +361,39 @@ fn write_row<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<T>) {
 /// negative (nor −0), and the bits of non-negative IEEE floats order as the values, so
 /// `(bits(f64::from(sq_dist)) << 32) | index` orders as `(sq_dist, index)`; every key is
 /// distinct, so an unstable sort gives the one order.
-fn sort_row<T: Scalar>(row: &mut [Neighbor<T>], keys: &mut Vec<u128>) {
-    keys.clear();
-    keys.extend(
-        row.iter()
-            .map(|nb| (u128::from(nb.sq_dist.to_f64().to_bits()) << 32) | u128::from(nb.index)),
-    );
-    keys.sort_unstable();
-    for (nb, &key) in row.iter_mut().zip(keys.iter()) {
-        nb.index = key as u32;
-        nb.sq_dist = T::from_f64(f64::from_bits((key >> 32) as u64));
+fn sort_row<T: Scalar>(row: &mut [Neighbor<T>], keys: &mut Keys) {
+    if T::TYPE == ScalarType::F32 {
+        // f32 bits fit in 32: one u64 key (the f64 round trip of an f32 is exact).
+        let keys = &mut keys.narrow;
+        keys.clear();
+        keys.extend(row.iter().map(|nb| {
+            (u64::from((nb.sq_dist.to_f64() as f32).to_bits()) << 32) | u64::from(nb.index)
+        }));
+        keys.sort_unstable();
+        for (nb, &key) in row.iter_mut().zip(keys.iter()) {
+            nb.index = key as u32;
+            nb.sq_dist = T::from_f64(f64::from(f32::from_bits((key >> 32) as u32)));
+        }
+    } else {
+        let keys = &mut keys.wide;
+        keys.clear();
+        keys.extend(
+            row.iter()
+                .map(|nb| (u128::from(nb.sq_dist.to_f64().to_bits()) << 32) | u128::from(nb.index)),
+        );
+        keys.sort_unstable();
+        for (nb, &key) in row.iter_mut().zip(keys.iter()) {
+            nb.index = key as u32;
+            nb.sq_dist = T::from_f64(f64::from_bits((key >> 32) as u64));
+        }
     }
+}
+
+/// Scratch keys of [`sort_row`].
+#[derive(Default)]
+struct Keys {
+    narrow: Vec<u64>,
+    wide: Vec<u128>,
 }
 
 /// Large `k`: a bounded heap per row ([`NeighborHeap`]), sorted at the end.
@@ -310,7 +401,7 @@ struct HeapRows<T> {
     k: usize,
     sq_radius: T,
     rows: Vec<Vec<Neighbor<T>>>,
-    keys: Vec<u128>,
+    keys: Keys,
 }
 
 impl<T: Scalar> Rows<T> for HeapRows<T> {
@@ -338,7 +429,7 @@ struct RadiusRows<T> {
     sq_radius: T,
     sorted: bool,
     rows: Vec<Vec<Neighbor<T>>>,
-    keys: Vec<u128>,
+    keys: Keys,
 }
 
 impl<T: Scalar> Rows<T> for RadiusRows<T> {
@@ -410,7 +501,15 @@ pub(crate) fn table<T: Scalar, const D: usize>(
                     sq_radius,
                     sorted: nbhd.is_sorted(),
                     rows: (0..GROUP).map(|_| Vec::new()).collect(),
-                    keys: Vec::new(),
+                    keys: Keys::default(),
+                };
+                run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
+            } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
+                let mut rows = SortedKeys {
+                    k,
+                    sq_radius,
+                    len: [0; GROUP],
+                    buf: vec![0; GROUP * k],
                 };
                 run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
             } else if k <= SORTED_MAX_K {
@@ -426,7 +525,7 @@ pub(crate) fn table<T: Scalar, const D: usize>(
                     k,
                     sq_radius,
                     rows: (0..GROUP).map(|_| Vec::new()).collect(),
-                    keys: Vec::new(),
+                    keys: Keys::default(),
                 };
                 run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
             }
