@@ -726,6 +726,74 @@ typedef struct {
     size_t min_neighbors;
 } nbhd_smooth_summary;
 
+/**
+ * Options of nbhd_smooth_robust. Start from nbhd_robust_options_default(); the defaults are
+ * one setting meant for every shape and noise level (all thresholds are multiples of the
+ * estimated noise or dimensionless).
+ */
+typedef struct {
+    /**
+     * Size k of the umbrella neighbourhood (>= 1). Default 24.
+     */
+    size_t k;
+    /**
+     * Size of the wider neighbourhood the candidate planes are fitted and scored on
+     * (>= k). Default 48.
+     */
+    size_t k_plane;
+    /**
+     * Influence radius ε (> 0) that cuts both neighbourhoods. Default 12 (relative: 12h).
+     */
+    double epsilon;
+    /**
+     * Units of `epsilon`. Default relative.
+     */
+    nbhd_units epsilon_units;
+    /**
+     * Upper bound on the number of iterations. Default 10.
+     */
+    size_t max_iterations;
+    /**
+     * Stopping rule: stop once an iteration lowered the noise estimate by less than this
+     * fraction (finite, >= 0; 0 runs max_iterations unless the estimate rises). Default 0.05.
+     */
+    double tolerance;
+    /**
+     * Width of the biweight of plane distances, in units of the estimated noise (> 0).
+     * Default 5.
+     */
+    double inlier_width;
+    /**
+     * Angle in degrees at which a neighbour counts as across a feature (> 0). Default 20.
+     */
+    double feature_angle;
+    /**
+     * Step size τ in (0, 1]. Default 1.
+     */
+    double tau;
+    /**
+     * Orientation of the normals written to the outputs. Default unoriented.
+     */
+    nbhd_orientation orientation;
+    /**
+     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+     */
+    double orientation_point[3];
+    /**
+     * Worker threads: 0 the shared pool, n >= 1 a pool of n threads for this call. Results are
+     * identical for every value. Default 0.
+     */
+    size_t threads;
+    /**
+     * Called with the progress of the run; NULL for none. Default NULL.
+     */
+    nbhd_progress_fn progress;
+    /**
+     * Passed to `progress` unchanged. Default NULL.
+     */
+    void *progress_user_data;
+} nbhd_robust_options;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -1139,6 +1207,36 @@ nbhd_status nbhd_estimate_curvatures(const nbhd_points *points,
                                      const nbhd_smooth_options *options,
                                      nbhd_point_geometry *out_geometry,
                                      nbhd_smooth_summary *out_summary);
+
+/**
+ * The default robust options: 24 neighbours within 12h, planes scored on 48, at most 10
+ * iterations stopped when the noise estimate falls by less than 5 %, no callback.
+ */
+nbhd_robust_options nbhd_robust_options_default(void);
+
+/**
+ * Smooths 3-D points with the robust mode and writes the smoothed coordinates to
+ * `out_coords`, laid out like the input (it may be `points->data` itself, to smooth in
+ * place). `out_geometry` (`points->count` elements, computed with the robust normals) and
+ * `out_summary` (its `lambda` is the noise-adapted threshold of the first iteration) may be
+ * NULL. `options` may be NULL for the defaults. Nothing is written unless the call succeeds;
+ * results are identical for any number of threads.
+ *
+ * Slower than nbhd_smooth (each iteration searches the wider neighbourhood and fits
+ * candidate planes) but keeps sharp edges at noise of about one spacing, where the faithful
+ * method cannot tell noise from features.
+ *
+ * Errors: as nbhd_smooth; INVALID_OPTION also for k_plane < k, a tolerance < 0, a width or
+ * angle not > 0, τ outside (0, 1].
+ *
+ * # Safety
+ * As nbhd_smooth.
+ */
+nbhd_status nbhd_smooth_robust(const nbhd_points *points,
+                               const nbhd_robust_options *options,
+                               void *out_coords,
+                               nbhd_point_geometry *out_geometry,
+                               nbhd_smooth_summary *out_summary);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -33,9 +33,12 @@ pub mod table;
 
 pub mod smooth;
 
+pub mod robust;
+
 mod args;
 
 pub use query::*;
+pub use robust::*;
 pub use smooth::*;
 pub use status::*;
 pub use table::*;

@@ -278,12 +278,7 @@ fn default_options() -> nbhd_smooth_options {
             (nbhd_feature_criterion::DirectionalCurvature, v, u)
         }
     };
-    let (orientation, orientation_point) = match d.orientation {
-        Orientation::Unoriented => (nbhd_orientation::Unoriented, [0.0; 3]),
-        Orientation::TowardViewpoint(p) => (nbhd_orientation::TowardPoint, p.to_array()),
-        Orientation::AwayFrom(p) => (nbhd_orientation::AwayFromPoint, p.to_array()),
-        Orientation::Propagate => (nbhd_orientation::Propagate, [0.0; 3]),
-    };
+    let (orientation, orientation_point) = orientation_to_c(d.orientation);
     nbhd_smooth_options {
         k: d.k,
         epsilon,
@@ -321,6 +316,42 @@ pub extern "C" fn nbhd_smooth_options_default() -> nbhd_smooth_options {
         default_options(),
         default_options,
     )
+}
+
+/// The core's orientation for a C orientation and its point (which must be finite when used).
+pub(super) fn read_orientation(
+    o: nbhd_orientation,
+    point: [f64; 3],
+) -> Result<Orientation, FfiError> {
+    Ok(match o {
+        nbhd_orientation::Unoriented => Orientation::Unoriented,
+        nbhd_orientation::Propagate => Orientation::Propagate,
+        o @ (nbhd_orientation::TowardPoint | nbhd_orientation::AwayFromPoint) => {
+            if !point.iter().all(|c| c.is_finite()) {
+                return Err(crate::NbhdError::InvalidOption {
+                    name: "orientation_point",
+                    reason: format!("{point:?} must be finite"),
+                }
+                .into());
+            }
+            let p = DVec3::from_array(point);
+            if o == nbhd_orientation::TowardPoint {
+                Orientation::TowardViewpoint(p)
+            } else {
+                Orientation::AwayFrom(p)
+            }
+        }
+    })
+}
+
+/// The C form of the core's orientation.
+pub(super) fn orientation_to_c(o: Orientation) -> (nbhd_orientation, [f64; 3]) {
+    match o {
+        Orientation::Unoriented => (nbhd_orientation::Unoriented, [0.0; 3]),
+        Orientation::TowardViewpoint(p) => (nbhd_orientation::TowardPoint, p.to_array()),
+        Orientation::AwayFrom(p) => (nbhd_orientation::AwayFromPoint, p.to_array()),
+        Orientation::Propagate => (nbhd_orientation::Propagate, [0.0; 3]),
+    }
 }
 
 /// The options of one call after reading them from C.
@@ -384,26 +415,10 @@ unsafe fn read_options(options: *const nbhd_smooth_options) -> Result<SmoothArgs
             FeatureCriterion::DirectionalCurvature(curvature(feature_units, threshold))
         }
     };
-    let point: [f64; 3] = field!(orientation_point);
-    let orientation = match enum_field!(orientation, nbhd_orientation) {
-        nbhd_orientation::Unoriented => Orientation::Unoriented,
-        nbhd_orientation::Propagate => Orientation::Propagate,
-        o @ (nbhd_orientation::TowardPoint | nbhd_orientation::AwayFromPoint) => {
-            if !point.iter().all(|c| c.is_finite()) {
-                return Err(crate::NbhdError::InvalidOption {
-                    name: "orientation_point",
-                    reason: format!("{point:?} must be finite"),
-                }
-                .into());
-            }
-            let p = DVec3::from_array(point);
-            if o == nbhd_orientation::TowardPoint {
-                Orientation::TowardViewpoint(p)
-            } else {
-                Orientation::AwayFrom(p)
-            }
-        }
-    };
+    let orientation = read_orientation(
+        enum_field!(orientation, nbhd_orientation),
+        field!(orientation_point),
+    )?;
     let constrain_interior = bool_field!(constrain_interior).then(|| field!(interior_threshold));
     let core = SmoothOptions {
         k: field!(k),
@@ -430,7 +445,9 @@ unsafe fn read_options(options: *const nbhd_smooth_options) -> Result<SmoothArgs
 ///
 /// # Safety
 /// `points` must be NULL or describe readable memory (see nbhd_points).
-unsafe fn read_points(points: *const nbhd_points) -> Result<(PointsArg, Vec<DVec3>), FfiError> {
+pub(super) unsafe fn read_points(
+    points: *const nbhd_points,
+) -> Result<(PointsArg, Vec<DVec3>), FfiError> {
     // SAFETY: forwarded from the caller.
     let arg = unsafe { PointsArg::read(points, "points") }?;
     // SAFETY: the caller's description of the point memory is true (contract above); the
@@ -453,14 +470,35 @@ unsafe fn read_points(points: *const nbhd_points) -> Result<(PointsArg, Vec<DVec
     Ok((arg, pts))
 }
 
-/// Runs the core with the options' threads and progress callback.
-fn run(points: &[DVec3], args: &SmoothArgs, analyze_only: bool) -> Result<SmoothResult, FfiError> {
+/// Runs `core` on `threads` workers, handing it a progress closure that calls the C callback
+/// (if any) with `user_data`.
+pub(super) fn run_with_progress<R: Send>(
+    threads: usize,
+    callback: nbhd_progress_fn,
+    user_data: *mut c_void,
+    core: impl FnOnce(&mut dyn FnMut(f64, Stage) -> bool) -> crate::Result<R> + Send,
+) -> Result<R, FfiError> {
     struct Callback(nbhd_progress_fn, *mut c_void);
     // SAFETY: the callback and its user data are the caller's; the header tells C that the
     // callback may run on a worker thread of the call (never on two threads at once), which
     // is all that moving them to that thread needs.
     unsafe impl Send for Callback {}
-    let cb = Callback(args.progress, args.user_data);
+    let cb = Callback(callback, user_data);
+    let result = crate::parallel::with_threads(threads, move || {
+        let cb = cb;
+        let mut progress = |fraction: f64, stage: Stage| match cb.0 {
+            // SAFETY: a C function pointer the caller gave for this purpose, called with the
+            // user data it gave and plain values.
+            Some(f) => unsafe { f(fraction, stage.into(), cb.1) },
+            None => true,
+        };
+        core(&mut progress)
+    })?;
+    Ok(result?)
+}
+
+/// Runs the faithful method (or only its analysis) with the options' threads and callback.
+fn run(points: &[DVec3], args: &SmoothArgs, analyze_only: bool) -> Result<SmoothResult, FfiError> {
     let opts = if analyze_only {
         SmoothOptions {
             steps: 0,
@@ -470,17 +508,33 @@ fn run(points: &[DVec3], args: &SmoothArgs, analyze_only: bool) -> Result<Smooth
     } else {
         args.core
     };
-    let result = crate::parallel::with_threads(args.threads, move || {
-        let cb = cb;
-        let mut progress = |fraction: f64, stage: Stage| match cb.0 {
-            // SAFETY: a C function pointer the caller gave for this purpose, called with the
-            // user data it gave and plain values.
-            Some(f) => unsafe { f(fraction, stage.into(), cb.1) },
-            None => true,
-        };
-        smooth::smooth_with_progress(points, &opts, &mut progress)
-    })?;
-    Ok(result?)
+    run_with_progress(args.threads, args.progress, args.user_data, |progress| {
+        smooth::smooth_with_progress(points, &opts, progress)
+    })
+}
+
+/// Writes the smoothed `points` to `out` with the input's layout (`arg`).
+///
+/// # Safety
+/// `out` must be non-NULL and writable for the layout `arg` describes (checked by
+/// [`read_points`]), and no Rust borrow of that memory may be live.
+pub(super) unsafe fn write_coords(arg: &PointsArg, points: &[DVec3], out: *mut c_void) {
+    let size = arg.scalar.size();
+    for (i, p) in points.iter().enumerate() {
+        for (c, v) in p.to_array().into_iter().enumerate() {
+            let offset = i * arg.stride + c * size;
+            // SAFETY: `out` is writable with the input's layout (caller), whose size
+            // `read_points` checked, and `offset` stays inside it; the writes are unaligned;
+            // no borrow of the memory is live (caller).
+            unsafe {
+                let at = out.cast::<u8>().add(offset);
+                match arg.scalar {
+                    ScalarType::F32 => at.cast::<f32>().write_unaligned(v as f32),
+                    ScalarType::F64 => at.cast::<f64>().write_unaligned(v),
+                }
+            }
+        }
+    }
 }
 
 impl From<&PointOutput> for nbhd_point_geometry {
@@ -532,7 +586,7 @@ unsafe fn write_all<T: Copy>(out: *mut T, values: &[T], arg: &str) -> Result<(),
 ///
 /// # Safety
 /// Each pointer must be NULL or writable for `result.outputs.len()` / one element.
-unsafe fn write_outputs(
+pub(super) unsafe fn write_outputs(
     result: &SmoothResult,
     geometry: *mut nbhd_point_geometry,
     summary: *mut nbhd_smooth_summary,
@@ -591,23 +645,10 @@ pub unsafe extern "C" fn nbhd_smooth(
         let mut args = unsafe { read_options(options) }?;
         args.core.outputs = !out_geometry.is_null();
         let result = run(&pts, &args, false)?;
-        let size = arg.scalar.size();
-        for (i, p) in result.points.iter().enumerate() {
-            for (c, v) in p.to_array().into_iter().enumerate() {
-                let offset = i * arg.stride + c * size;
-                // SAFETY: `out_coords` is non-NULL (checked above) and writable with the
-                // input's layout (caller), whose size `read_points` checked, and `offset` stays
-                // inside it; the writes are unaligned; the input view was dropped in
-                // `read_points`, so writing in place overlaps no live borrow.
-                unsafe {
-                    let at = out_coords.cast::<u8>().add(offset);
-                    match arg.scalar {
-                        ScalarType::F32 => at.cast::<f32>().write_unaligned(v as f32),
-                        ScalarType::F64 => at.cast::<f64>().write_unaligned(v),
-                    }
-                }
-            }
-        }
+        // SAFETY: `out_coords` is non-NULL (checked above) and writable with the input's
+        // layout (caller); the input view was dropped in `read_points`, so writing in place
+        // overlaps no live borrow.
+        unsafe { write_coords(&arg, &result.points, out_coords) };
         // SAFETY: forwarded from the caller.
         unsafe { write_outputs(&result, out_geometry, out_summary) }
     })

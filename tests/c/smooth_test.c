@@ -2,7 +2,8 @@
  * Normals, curvatures and smoothing through the C ABI, checked against the analytic truth of a
  * sphere: normals parallel to the radius, mean curvature 1/R, smoothing that brings noisy
  * points back toward the sphere. Also: in-place smoothing of a PCL-like strided float cloud,
- * progress and cancellation, identical results for 1 and 2 threads, and every error path.
+ * progress and cancellation, identical results for 1 and 2 threads, the robust mode, and every
+ * error path.
  * Run by tests/c_abi.rs (also under valgrind, with fewer points: argv[1]).
  */
 #include "nbhd.h"
@@ -246,6 +247,43 @@ static void test_threads_agree(size_t n) {
     free(gb);
 }
 
+/* The robust mode on the noisy sphere: noise removed, and (unlike isotropic fairing) almost no
+ * shrinkage; bad options named. */
+static void test_robust(size_t n) {
+    double *p = malloc(3 * n * sizeof *p);
+    double *out = malloc(3 * n * sizeof *out);
+    nbhd_robust_options o = nbhd_robust_options_default();
+    nbhd_smooth_summary summary;
+    nbhd_points pts;
+    double before, after, r_before, r_after;
+
+    CHECK(o.k == 24 && o.k_plane == 48 && o.epsilon == 12.0 && o.epsilon_units == NBHD_UNITS_RELATIVE);
+    CHECK(o.max_iterations == 10 && o.tau == 1.0 && o.progress == NULL && o.threads == 0);
+
+    sphere(p, n, 0.5 * spacing(n));
+    pts = describe(p, n, 0, NBHD_SCALAR_TYPE_F64);
+    before = radial_spread(p, n, &r_before);
+    CHECK_STATUS(nbhd_smooth_robust(&pts, NULL, out, NULL, &summary), NBHD_STATUS_OK);
+    after = radial_spread(out, n, &r_after);
+    CHECK(after < 0.5 * before);
+    CHECK(fabs(r_after - r_before) < 0.1 * spacing(n));
+    if (!(after < 0.5 * before) || !(fabs(r_after - r_before) < 0.1 * spacing(n)))
+        fprintf(stderr, "robust: radial spread %g -> %g, mean radius %g -> %g (h = %g)\n", before, after,
+                r_before, r_after, spacing(n));
+    CHECK(summary.spacing > 0.0 && summary.lambda > 0.0);
+
+    o.k_plane = 10;
+    CHECK_STATUS(nbhd_smooth_robust(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("k_plane");
+    o = nbhd_robust_options_default();
+    o.tau = 1.5;
+    CHECK_STATUS(nbhd_smooth_robust(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("tau");
+    CHECK_STATUS(nbhd_smooth_robust(&pts, NULL, NULL, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    free(p);
+    free(out);
+}
+
 static void test_errors(void) {
     double p[3 * 40], out[3 * 40];
     double flat2[2 * 40];
@@ -346,6 +384,7 @@ int main(int argc, char **argv) {
     test_normals_and_curvatures(n);
     test_smooth_in_place(n);
     test_threads_agree(n / 2);
+    test_robust(n);
     test_errors();
     printf("smooth_test: %d checks, %d failed\n", checks, failures);
     return failures == 0 ? 0 : 1;
