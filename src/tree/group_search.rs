@@ -583,7 +583,20 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
                 continue;
             }
             loop {
-                let nd = &tree.nodes[node as usize];
+                let ni = node as usize;
+                // A cell of copies of one point (duplicate-heavy sets): its distance to each
+                // member is exact, so test the members one by one; near a cluster of copies
+                // the group's box would admit every cell of it for members that only need
+                // smaller indices at a tie.
+                if boxes.lo[ni] == boxes.hi[ni]
+                    && !(0..m).any(|i| {
+                        let lb = box_dist(&q[i], &q[i], &boxes.lo[ni], &boxes.hi[ni]);
+                        admits(lb, boxes.min_id[ni], bound[i], worst[i])
+                    })
+                {
+                    break;
+                }
+                let nd = &tree.nodes[ni];
                 if nd.is_leaf() {
                     let (llo, lhi) = (&boxes.lo[node as usize], &boxes.hi[node as usize]);
                     let lmin = boxes.min_id[node as usize];
@@ -624,7 +637,20 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
                 let (l, r) = (node + 1, nd.a);
                 let lbl = box_dist(&glo, &ghi, &boxes.lo[l as usize], &boxes.hi[l as usize]);
                 let lbr = box_dist(&glo, &ghi, &boxes.lo[r as usize], &boxes.hi[r as usize]);
-                let left_first = lbl < lbr || (lbl == lbr && q[0][nd.dim as usize] < nd.split);
+                // Nearer cell first; between equally near cells, the one holding the group
+                // (the side of the split its first point is on) — unless they can only offer
+                // ties at the bound (e.g. copies of the members' point once every row holds k
+                // of them): then only smaller indices help, so the cell holding the smallest
+                // first, which soon leaves every other cell pruned by its smallest index.
+                let left_first = if lbl == lbr {
+                    if R::TIGHTENS && lbl == gb {
+                        boxes.min_id[l as usize] < boxes.min_id[r as usize]
+                    } else {
+                        q[0][nd.dim as usize] < nd.split
+                    }
+                } else {
+                    lbl < lbr
+                };
                 let (near, lbn, far, lbf) = if left_first {
                     (l, lbl, r, lbr)
                 } else {
