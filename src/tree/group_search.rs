@@ -226,6 +226,11 @@ trait Rows<T: Scalar> {
     const TIGHTENS: bool;
     /// Appends the first `m` rows, in `(sq_dist, index)` order where asked, to `out`.
     fn write(&mut self, m: usize, out: &mut RowsChunk<T>);
+    /// Appends, for every id of `self_ids`, row 0 without that id: the rows of a group of
+    /// copies of one point, searched once (radius rows only; see [`Search::group`]).
+    fn write_copies(&mut self, _self_ids: &[u32], _out: &mut RowsChunk<T>) {
+        unreachable!("only radius rows are shared by copies")
+    }
 }
 
 /// Small `k`: each row kept sorted by insertion in a fixed slice of a flat buffer, so a
@@ -451,6 +456,20 @@ impl<T: Scalar> Rows<T> for RadiusRows<T> {
             write_row(r, out);
         }
     }
+    fn write_copies(&mut self, self_ids: &[u32], out: &mut RowsChunk<T>) {
+        let r = &mut self.rows[0];
+        if self.sorted {
+            sort_row(r, &mut self.keys);
+        }
+        for &own in self_ids {
+            let len = r.iter().filter(|nb| nb.index != own).count();
+            out.0.push(len);
+            for nb in r.iter().filter(|nb| nb.index != own) {
+                out.1.push(nb.index);
+                out.2.push(nb.sq_dist);
+            }
+        }
+    }
 }
 
 /// The all-point table of `tree` (dimension `D`), rows in the caller's index order.
@@ -573,6 +592,16 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
                 self_id[i] = tree.ids[p];
             }
         }
+        // Radius rows of a group of copies of one point (duplicate-heavy sets) are one row,
+        // less each member itself: searched and sorted once. (`u32::MAX` excludes nothing.)
+        let copies = !R::TIGHTENS && m > 1 && glo == ghi;
+        let self_ids = self_id;
+        let m = if copies {
+            self_id[0] = u32::MAX;
+            1
+        } else {
+            m
+        };
         rows.clear(m);
         // The group's key: the largest worst key of its rows.
         let (mut gb, mut gw) = (self.sq_radius, u32::MAX);
@@ -665,6 +694,10 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
                 node = near;
             }
         }
-        rows.write(m, out);
+        if copies {
+            rows.write_copies(&self_ids[..g.len()], out);
+        } else {
+            rows.write(m, out);
+        }
     }
 }
