@@ -307,6 +307,39 @@ struct Resolved {
     feature: FeatureCriterion,
 }
 
+/// Refuses an empty set ([`NbhdError::EmptyInput`]) and names the first point with a NaN or
+/// infinite coordinate ([`NbhdError::NonFinite`]).
+pub(crate) fn check_points(points: &[DVec3]) -> Result<()> {
+    if points.is_empty() {
+        return Err(NbhdError::EmptyInput);
+    }
+    match points.iter().enumerate().find_map(|(i, p)| {
+        p.to_array()
+            .iter()
+            .position(|c| !c.is_finite())
+            .map(|c| (i, c))
+    }) {
+        Some((index, coordinate)) => Err(NbhdError::NonFinite { index, coordinate }),
+        None => Ok(()),
+    }
+}
+
+/// A reporter of progress counted in units out of `total` (steps or iterations, plus one for
+/// the rest): it hands `progress` the fraction done, clamped to `[0, 1]`, and turns a `false`
+/// into [`NbhdError::Cancelled`].
+pub(crate) fn progress_in_units<'a>(
+    total: f64,
+    progress: &'a mut dyn FnMut(f64, Stage) -> bool,
+) -> impl FnMut(f64, Stage) -> Result<()> + 'a {
+    move |f, s| {
+        if progress((f / total).clamp(0.0, 1.0), s) {
+            Ok(())
+        } else {
+            Err(NbhdError::Cancelled)
+        }
+    }
+}
+
 /// Smooths `points` with `options` (see the module documentation).
 pub fn smooth(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult> {
     smooth_with_progress(points, options, &mut |_, _| true)
@@ -320,25 +353,9 @@ pub fn smooth_with_progress(
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<SmoothResult> {
     options.validate()?;
-    if points.is_empty() {
-        return Err(NbhdError::EmptyInput);
-    }
-    if let Some((index, coordinate)) = points.iter().enumerate().find_map(|(i, p)| {
-        p.to_array()
-            .iter()
-            .position(|c| !c.is_finite())
-            .map(|c| (i, c))
-    }) {
-        return Err(NbhdError::NonFinite { index, coordinate });
-    }
+    check_points(points)?;
     let total = options.steps as f64 + 1.0;
-    let mut report = |f: f64, s: Stage| {
-        if progress((f / total).clamp(0.0, 1.0), s) {
-            Ok(())
-        } else {
-            Err(NbhdError::Cancelled)
-        }
-    };
+    let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
     let knn = neighbor_table(points, Neighborhood::Knn { k: options.k }, true)?;
     let h = mean_spacing_of(&knn);

@@ -61,8 +61,9 @@
 //! order; medians are taken over vectors collected in point order. The result is bit-identical
 //! for any number of rayon threads.
 
-use super::{point_outputs_with, within, Length, Resolved, SmoothOptions, SmoothResult, Stage};
+use super::{check_points, point_outputs_with, progress_in_units, within, Length, Resolved};
 use super::{FeatureCriterion, Weighting};
+use super::{SmoothOptions, SmoothResult, Stage};
 use crate::error::{NbhdError, Result};
 use crate::geometry::neighbors::{mean_spacing_of, neighbor_table};
 use crate::geometry::normals::{local_frames, LocalFrame, Orientation};
@@ -213,25 +214,9 @@ pub fn smooth_robust_report(
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<RobustReport> {
     options.validate()?;
-    if points.is_empty() {
-        return Err(NbhdError::EmptyInput);
-    }
-    if let Some((index, coordinate)) = points.iter().enumerate().find_map(|(i, p)| {
-        p.to_array()
-            .iter()
-            .position(|c| !c.is_finite())
-            .map(|c| (i, c))
-    }) {
-        return Err(NbhdError::NonFinite { index, coordinate });
-    }
+    check_points(points)?;
     let total = options.max_iterations as f64 + 1.0;
-    let mut report = |f: f64, s: Stage| {
-        if progress((f / total).clamp(0.0, 1.0), s) {
-            Ok(())
-        } else {
-            Err(NbhdError::Cancelled)
-        }
-    };
+    let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
     let wide_of = |pts: &[DVec3]| -> Result<NeighborTable<f64>> {
         neighbor_table(pts, Neighborhood::Knn { k: options.k_plane }, true)
