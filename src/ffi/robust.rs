@@ -11,7 +11,7 @@ use super::smooth::{
     write_outputs,
 };
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::types::{invalid_enum, nbhd_points, read_enum};
+use super::types::{c_enum_field, c_field, nbhd_points};
 use crate::smooth::{self, Length, RobustOptions};
 
 /// Options of nbhd_smooth_robust. Start from nbhd_robust_options_default(); the defaults are
@@ -104,45 +104,31 @@ unsafe fn read_options(
         check_ptr(options, "options")?;
         options
     };
-    macro_rules! field {
-        ($f:ident) => {
-            // SAFETY: `o` is non-NULL, aligned and readable (checked above / the caller); the
-            // field is read through a raw place.
-            unsafe { std::ptr::addr_of!((*o).$f).read() }
-        };
-    }
-    macro_rules! enum_field {
-        ($f:ident, $ty:ty) => {
-            // SAFETY: as for `field!`; the enum is read as `int` and checked.
-            unsafe { read_enum(std::ptr::addr_of!((*o).$f)) }
-                .map_err(|v| invalid_enum::<$ty>("options", stringify!($f), v))?
-        };
-    }
-    let epsilon = match enum_field!(epsilon_units, nbhd_units) {
-        nbhd_units::Relative => Length::Relative(field!(epsilon)),
-        nbhd_units::Absolute => Length::Absolute(field!(epsilon)),
+    let epsilon = match c_enum_field!(o, epsilon_units, nbhd_units) {
+        nbhd_units::Relative => Length::Relative(c_field!(o, epsilon)),
+        nbhd_units::Absolute => Length::Absolute(c_field!(o, epsilon)),
     };
     let orientation = read_orientation(
-        enum_field!(orientation, nbhd_orientation),
-        field!(orientation_point),
+        c_enum_field!(o, orientation, nbhd_orientation),
+        c_field!(o, orientation_point),
     )?;
     let core = RobustOptions {
-        k: field!(k),
-        k_plane: field!(k_plane),
+        k: c_field!(o, k),
+        k_plane: c_field!(o, k_plane),
         epsilon,
-        max_iterations: field!(max_iterations),
-        tolerance: field!(tolerance),
-        inlier_width: field!(inlier_width),
-        feature_angle: field!(feature_angle),
-        tau: field!(tau),
+        max_iterations: c_field!(o, max_iterations),
+        tolerance: c_field!(o, tolerance),
+        inlier_width: c_field!(o, inlier_width),
+        feature_angle: c_field!(o, feature_angle),
+        tau: c_field!(o, tau),
         orientation,
         ..RobustOptions::default()
     };
     Ok((
         core,
-        field!(threads),
-        field!(progress),
-        field!(progress_user_data),
+        c_field!(o, threads),
+        c_field!(o, progress),
+        c_field!(o, progress_user_data),
     ))
 }
 

@@ -10,7 +10,7 @@ use glam::DVec3;
 use super::args::{check_aligned, check_optional, check_ptr};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::nbhd_points;
-use super::types::{c_enum, invalid_enum, read_enum, CEnum, PointsArg};
+use super::types::{c_bool_field, c_enum, c_enum_field, c_field, CEnum, PointsArg};
 use crate::geometry::Orientation;
 use crate::points::PointsView;
 use crate::scalar::ScalarType;
@@ -375,37 +375,16 @@ unsafe fn read_options(options: *const nbhd_smooth_options) -> Result<SmoothArgs
         check_ptr(options, "options")?;
         options
     };
-    macro_rules! field {
-        ($f:ident) => {
-            // SAFETY: `o` is non-NULL, aligned and readable (checked above / the caller); the
-            // field is read through a raw place.
-            unsafe { std::ptr::addr_of!((*o).$f).read() }
-        };
-    }
-    macro_rules! enum_field {
-        ($f:ident, $ty:ty) => {
-            // SAFETY: as for `field!`; the enum is read as `int` and checked.
-            unsafe { read_enum(std::ptr::addr_of!((*o).$f)) }
-                .map_err(|v| invalid_enum::<$ty>("options", stringify!($f), v))?
-        };
-    }
-    macro_rules! bool_field {
-        ($f:ident) => {
-            // SAFETY: as for `field!`; the bool is read as a byte, so any value C stored is
-            // sound (non-zero is true).
-            unsafe { std::ptr::addr_of!((*o).$f).cast::<u8>().read() != 0 }
-        };
-    }
-    let epsilon_units = enum_field!(epsilon_units, nbhd_units);
-    let lambda_units = enum_field!(lambda_units, nbhd_units);
-    let feature_units = enum_field!(feature_units, nbhd_units);
-    let weighting = match enum_field!(weighting, nbhd_weighting) {
+    let epsilon_units = c_enum_field!(o, epsilon_units, nbhd_units);
+    let lambda_units = c_enum_field!(o, lambda_units, nbhd_units);
+    let feature_units = c_enum_field!(o, feature_units, nbhd_units);
+    let weighting = match c_enum_field!(o, weighting, nbhd_weighting) {
         nbhd_weighting::Isotropic => Weighting::Isotropic,
         nbhd_weighting::Sharp => Weighting::Sharp,
         nbhd_weighting::Continuous => Weighting::Continuous,
     };
-    let threshold: f64 = field!(feature_threshold);
-    let feature = match enum_field!(feature, nbhd_feature_criterion) {
+    let threshold: f64 = c_field!(o, feature_threshold);
+    let feature = match c_enum_field!(o, feature, nbhd_feature_criterion) {
         nbhd_feature_criterion::AllPoints => FeatureCriterion::AllPoints,
         nbhd_feature_criterion::EdgeQuotient => FeatureCriterion::EdgeQuotient(threshold),
         nbhd_feature_criterion::PrincipalCurvature => {
@@ -416,28 +395,29 @@ unsafe fn read_options(options: *const nbhd_smooth_options) -> Result<SmoothArgs
         }
     };
     let orientation = read_orientation(
-        enum_field!(orientation, nbhd_orientation),
-        field!(orientation_point),
+        c_enum_field!(o, orientation, nbhd_orientation),
+        c_field!(o, orientation_point),
     )?;
-    let constrain_interior = bool_field!(constrain_interior).then(|| field!(interior_threshold));
+    let constrain_interior =
+        c_bool_field!(o, constrain_interior).then(|| c_field!(o, interior_threshold));
     let core = SmoothOptions {
-        k: field!(k),
-        epsilon: units(epsilon_units)(field!(epsilon)),
-        steps: field!(steps),
-        tau: field!(tau),
+        k: c_field!(o, k),
+        epsilon: units(epsilon_units)(c_field!(o, epsilon)),
+        steps: c_field!(o, steps),
+        tau: c_field!(o, tau),
         weighting,
-        lambda: curvature(lambda_units, field!(lambda)),
+        lambda: curvature(lambda_units, c_field!(o, lambda)),
         feature,
         constrain_interior,
-        update_neighbors: bool_field!(update_neighbors),
+        update_neighbors: c_bool_field!(o, update_neighbors),
         orientation,
         ..SmoothOptions::default()
     };
     Ok(SmoothArgs {
         core,
-        threads: field!(threads),
-        progress: field!(progress),
-        user_data: field!(progress_user_data),
+        threads: c_field!(o, threads),
+        progress: c_field!(o, progress),
+        user_data: c_field!(o, progress_user_data),
     })
 }
 

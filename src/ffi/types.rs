@@ -45,6 +45,40 @@ macro_rules! c_enum {
 }
 pub(crate) use c_enum;
 
+/// Reads field `$f` of the C struct behind the raw pointer `$o` through a raw place (never the
+/// struct as a Rust value). `$o` must have been checked to be non-NULL and aligned, and must be
+/// readable (the export's contract).
+macro_rules! c_field {
+    ($o:expr, $f:ident) => {
+        // SAFETY: `$o` is non-NULL, aligned (checked by the caller) and readable (the
+        // export's contract); the field is read through a raw place.
+        unsafe { std::ptr::addr_of!((*$o).$f).read() }
+    };
+}
+pub(crate) use c_field;
+
+/// Reads the enum field `$f` of the options struct behind `$o` as the `int` C stored there and
+/// checks it is a value of `$ty`; otherwise returns an INVALID_ARGUMENT error naming the field.
+/// Same contract as [`c_field`].
+macro_rules! c_enum_field {
+    ($o:expr, $f:ident, $ty:ty) => {
+        // SAFETY: as for `c_field!`; the enum is read as `int` and checked.
+        unsafe { $crate::ffi::types::read_enum(std::ptr::addr_of!((*$o).$f)) }
+            .map_err(|v| $crate::ffi::types::invalid_enum::<$ty>("options", stringify!($f), v))?
+    };
+}
+pub(crate) use c_enum_field;
+
+/// Reads the `bool` field `$f` of the struct behind `$o` as a byte, so any value C stored is
+/// sound (non-zero is true). Same contract as [`c_field`].
+macro_rules! c_bool_field {
+    ($o:expr, $f:ident) => {
+        // SAFETY: as for `c_field!`; the bool is read as a byte.
+        unsafe { std::ptr::addr_of!((*$o).$f).cast::<u8>().read() != 0 }
+    };
+}
+pub(crate) use c_bool_field;
+
 /// Reads the enum field at `field` as the `int` C stored there: the variant of `E` it
 /// names, or the raw value if it names none.
 ///
