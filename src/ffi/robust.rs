@@ -6,13 +6,13 @@ use std::ffi::c_void;
 
 use super::args::{check_aligned, check_optional, check_ptr};
 use super::smooth::{
-    nbhd_orientation, nbhd_point_geometry, nbhd_progress_fn, nbhd_smooth_summary, nbhd_units,
-    orientation_to_c, read_orientation, read_points, run_with_progress, write_coords,
-    write_outputs,
+    length, nbhd_orientation, nbhd_point_geometry, nbhd_progress_fn, nbhd_smooth_summary,
+    nbhd_units, orientation_to_c, read_orientation, read_points, run_with_progress,
+    units_of_length, write_coords, write_outputs,
 };
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::{c_enum_field, c_field, nbhd_points};
-use crate::smooth::{self, Length, RobustOptions};
+use crate::smooth::{self, RobustOptions};
 
 /// Options of nbhd_smooth_robust. Start from nbhd_robust_options_default(); the defaults are
 /// one setting meant for every shape and noise level (all thresholds are multiples of the
@@ -56,10 +56,7 @@ pub struct nbhd_robust_options {
 
 fn default_options() -> nbhd_robust_options {
     let d = RobustOptions::default();
-    let (epsilon_units, epsilon) = match d.epsilon {
-        Length::Relative(v) => (nbhd_units::Relative, v),
-        Length::Absolute(v) => (nbhd_units::Absolute, v),
-    };
+    let (epsilon_units, epsilon) = units_of_length(d.epsilon);
     let (orientation, orientation_point) = orientation_to_c(d.orientation);
     nbhd_robust_options {
         k: d.k,
@@ -104,10 +101,10 @@ unsafe fn read_options(
         check_ptr(options, "options")?;
         options
     };
-    let epsilon = match c_enum_field!(o, epsilon_units, nbhd_units) {
-        nbhd_units::Relative => Length::Relative(c_field!(o, epsilon)),
-        nbhd_units::Absolute => Length::Absolute(c_field!(o, epsilon)),
-    };
+    let epsilon = length(
+        c_enum_field!(o, epsilon_units, nbhd_units),
+        c_field!(o, epsilon),
+    );
     let orientation = read_orientation(
         c_enum_field!(o, orientation, nbhd_orientation),
         c_field!(o, orientation_point),

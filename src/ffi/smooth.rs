@@ -231,10 +231,19 @@ pub struct nbhd_smooth_summary {
     pub min_neighbors: usize,
 }
 
-fn units(u: nbhd_units) -> fn(f64) -> Length {
+/// The core's length for a C value and its units.
+pub(super) fn length(u: nbhd_units, v: f64) -> Length {
     match u {
-        nbhd_units::Relative => Length::Relative,
-        nbhd_units::Absolute => Length::Absolute,
+        nbhd_units::Relative => Length::Relative(v),
+        nbhd_units::Absolute => Length::Absolute(v),
+    }
+}
+
+/// The C units and value of the core's length.
+pub(super) fn units_of_length(l: Length) -> (nbhd_units, f64) {
+    match l {
+        Length::Relative(v) => (nbhd_units::Relative, v),
+        Length::Absolute(v) => (nbhd_units::Absolute, v),
     }
 }
 
@@ -255,10 +264,7 @@ fn units_of_curvature(c: Curvature) -> (nbhd_units, f64) {
 /// The C defaults: the core's [`SmoothOptions::default`].
 fn default_options() -> nbhd_smooth_options {
     let d = SmoothOptions::default();
-    let (epsilon_units, epsilon) = match d.epsilon {
-        Length::Relative(v) => (nbhd_units::Relative, v),
-        Length::Absolute(v) => (nbhd_units::Absolute, v),
-    };
+    let (epsilon_units, epsilon) = units_of_length(d.epsilon);
     let (lambda_units, lambda) = units_of_curvature(d.lambda);
     let (feature, feature_threshold, feature_units) = match d.feature {
         FeatureCriterion::AllPoints => {
@@ -402,7 +408,7 @@ unsafe fn read_options(options: *const nbhd_smooth_options) -> Result<SmoothArgs
         c_bool_field!(o, constrain_interior).then(|| c_field!(o, interior_threshold));
     let core = SmoothOptions {
         k: c_field!(o, k),
-        epsilon: units(epsilon_units)(c_field!(o, epsilon)),
+        epsilon: length(epsilon_units, c_field!(o, epsilon)),
         steps: c_field!(o, steps),
         tau: c_field!(o, tau),
         weighting,
