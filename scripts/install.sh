@@ -2,7 +2,11 @@
 # Builds the nbhd library in release and installs it into PREFIX for C and C++ users:
 #
 #   PREFIX/include/nbhd.h
-#   PREFIX/lib/libnbhd.so, PREFIX/lib/libnbhd.a
+#   PREFIX/lib/libnbhd.so.X.Y.Z   the shared library, version X.Y.Z of Cargo.toml
+#   PREFIX/lib/libnbhd.so.0.Y     -> libnbhd.so.X.Y.Z: the SONAME, the name programs record
+#                                    (libnbhd.so.X from version 1.0 on; see below)
+#   PREFIX/lib/libnbhd.so         -> the SONAME link: the name the linker finds for -lnbhd
+#   PREFIX/lib/libnbhd.a
 #   PREFIX/lib/cmake/nbhd/nbhdConfig.cmake, nbhdConfigVersion.cmake
 #       find_package(nbhd CONFIG REQUIRED) gives nbhd::nbhd (shared library) and
 #       nbhd::nbhd_static (static library plus the system libraries Rust's std needs)
@@ -11,6 +15,11 @@
 #       pkg-config --static --cflags --libs nbhd   (shared, plus the static library's needs)
 #   PREFIX/lib/pkgconfig/nbhd-static.pc
 #       pkg-config --cflags --libs nbhd-static     (libnbhd.a by path, and the system libraries)
+#
+# The SONAME (set by build.rs when cargo links the library, checked here) follows the ABI
+# rule: libnbhd.so.MAJOR from version 1.0 on, and libnbhd.so.0.MINOR for 0.x, whose minor
+# releases may break the ABI as Cargo's semver rules allow. A patch release keeps the SONAME, so
+# programs linked against an older patch release load the newer one.
 #
 # The installed files are relocatable: the CMake config and the .pc file locate the prefix from
 # their own place, so the prefix directory may be moved after installation.
@@ -40,6 +49,14 @@ if ! grep -q "^#define NBHD_VERSION_MAJOR ${version%%.*}\$" include/nbhd.h; then
     echo "install.sh: include/nbhd.h does not match version $version of Cargo.toml" >&2
     exit 1
 fi
+IFS=. read -r v_major v_minor v_patch <<<"${version%%[-+]*}"
+# The rule of build.rs (see the top of this file).
+if [ "$v_major" = 0 ]; then
+    soname="libnbhd.so.0.$v_minor"
+else
+    soname="libnbhd.so.$v_major"
+fi
+real_name="libnbhd.so.$v_major.$v_minor.$v_patch"
 
 echo "== building nbhd $version (cargo build --release --lib)"
 cargo build --release --lib -p nbhd
@@ -49,6 +66,16 @@ release="$target_dir/release"
 for f in libnbhd.so libnbhd.a; do
     [ -f "$release/$f" ] || { echo "install.sh: $release/$f was not built" >&2; exit 1; }
 done
+# The links below are only right if the library carries exactly this SONAME.
+if command -v readelf >/dev/null 2>&1; then
+    built_soname="$(readelf -d "$release/libnbhd.so" | sed -n 's/.*(SONAME).*\[\(.*\)\].*/\1/p')"
+    if [ "$built_soname" != "$soname" ]; then
+        echo "install.sh: $release/libnbhd.so has SONAME '$built_soname', expected '$soname' (build.rs)" >&2
+        exit 1
+    fi
+else
+    echo "install.sh: readelf not found (binutils); not checking that the SONAME is $soname" >&2
+fi
 
 # System libraries the static library needs on Linux: those Rust's std links
 # (`cargo rustc --release -- --print native-static-libs` lists them; computing them here would
@@ -60,7 +87,9 @@ static_deps_pc="-lgcc_s -lutil -lrt -lpthread -lm -ldl -lc"
 echo "== installing into $prefix"
 install -d "$prefix/include" "$prefix/lib/cmake/nbhd" "$prefix/lib/pkgconfig"
 install -m 644 include/nbhd.h "$prefix/include/nbhd.h"
-install -m 755 "$release/libnbhd.so" "$prefix/lib/libnbhd.so"
+install -m 755 "$release/libnbhd.so" "$prefix/lib/$real_name"
+ln -sfn "$real_name" "$prefix/lib/$soname"
+ln -sfn "$soname" "$prefix/lib/libnbhd.so"
 install -m 644 "$release/libnbhd.a" "$prefix/lib/libnbhd.a"
 
 cat >"$prefix/lib/cmake/nbhd/nbhdConfig.cmake" <<EOF
@@ -78,7 +107,8 @@ get_filename_component(_nbhd_prefix "\${CMAKE_CURRENT_LIST_DIR}/../../.." ABSOLU
 set(nbhd_INCLUDE_DIR "\${_nbhd_prefix}/include")
 set(nbhd_LIBRARY "\${_nbhd_prefix}/lib/libnbhd.so")
 set(nbhd_STATIC_LIBRARY "\${_nbhd_prefix}/lib/libnbhd.a")
-foreach(_nbhd_file IN ITEMS "\${nbhd_INCLUDE_DIR}/nbhd.h" "\${nbhd_LIBRARY}" "\${nbhd_STATIC_LIBRARY}")
+foreach(_nbhd_file IN ITEMS "\${nbhd_INCLUDE_DIR}/nbhd.h" "\${_nbhd_prefix}/lib/$real_name"
+        "\${_nbhd_prefix}/lib/$soname" "\${nbhd_LIBRARY}" "\${nbhd_STATIC_LIBRARY}")
   if(NOT EXISTS "\${_nbhd_file}")
     set(nbhd_FOUND FALSE)
     set(nbhd_NOT_FOUND_MESSAGE "nbhd: \${_nbhd_file} is missing; reinstall with scripts/install.sh")
@@ -87,12 +117,14 @@ foreach(_nbhd_file IN ITEMS "\${nbhd_INCLUDE_DIR}/nbhd.h" "\${nbhd_LIBRARY}" "\$
 endforeach()
 
 if(NOT TARGET nbhd::nbhd)
-  # The library is built by cargo and has no SONAME: IMPORTED_NO_SONAME makes CMake link it
-  # as -lnbhd (with its directory in the search path and the build RPATH) instead of by path.
+  # lib/$real_name is the library, with the SONAME $soname (lib/$soname links to it);
+  # as in CMake's own exported targets, the imported location is the real file and
+  # IMPORTED_SONAME names the SONAME. Programs are linked by path, record NEEDED $soname, and
+  # get lib/ in their build RPATH.
   add_library(nbhd::nbhd SHARED IMPORTED)
   set_target_properties(nbhd::nbhd PROPERTIES
-    IMPORTED_LOCATION "\${nbhd_LIBRARY}"
-    IMPORTED_NO_SONAME TRUE
+    IMPORTED_LOCATION "\${_nbhd_prefix}/lib/$real_name"
+    IMPORTED_SONAME "$soname"
     INTERFACE_INCLUDE_DIRECTORIES "\${nbhd_INCLUDE_DIR}")
 endif()
 if(NOT TARGET nbhd::nbhd_static)
@@ -107,7 +139,6 @@ unset(_nbhd_file)
 unset(_nbhd_prefix)
 EOF
 
-IFS=. read -r v_major v_minor v_patch <<<"${version%%[-+]*}"
 cat >"$prefix/lib/cmake/nbhd/nbhdConfigVersion.cmake" <<EOF
 # Version of the nbhd package, written by scripts/install.sh. Compatible with a requested
 # version that is not newer and has the same major version (for 0.x: the same minor version,
@@ -133,8 +164,8 @@ if(DEFINED CMAKE_SIZEOF_VOID_P AND NOT CMAKE_SIZEOF_VOID_P EQUAL 8)
   set(PACKAGE_VERSION_UNSUITABLE TRUE)
 endif()
 EOF
-: "$v_patch"
 
+# -lnbhd finds the link lib/libnbhd.so; the program records the SONAME, $soname.
 cat >"$prefix/lib/pkgconfig/nbhd.pc" <<EOF
 prefix=\${pcfiledir}/../..
 libdir=\${prefix}/lib
@@ -162,4 +193,8 @@ Cflags: -I\${includedir}
 EOF
 
 echo "== installed nbhd $version:"
-(cd "$prefix" && find include/nbhd.h lib/libnbhd.so lib/libnbhd.a lib/cmake/nbhd lib/pkgconfig/nbhd.pc lib/pkgconfig/nbhd-static.pc -type f | sort | sed 's/^/   /')
+(cd "$prefix" && find include/nbhd.h "lib/$real_name" "lib/$soname" lib/libnbhd.so lib/libnbhd.a \
+    lib/cmake/nbhd lib/pkgconfig/nbhd.pc lib/pkgconfig/nbhd-static.pc \( -type f -o -type l \) \
+    -printf '%p\n' | sort | while read -r f; do
+        if [ -L "$f" ]; then echo "   $f -> $(readlink "$f")"; else echo "   $f"; fi
+    done)

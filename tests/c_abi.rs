@@ -4,6 +4,13 @@
 //! (skipped with a note when valgrind is absent, unless `NBHD_REQUIRE_VALGRIND` is set), and
 //! with several threads on one tree. Also checks that the C test calls every export of the
 //! header and that the header compiles and links as C++.
+//!
+//! On Linux the cdylib carries a SONAME (`libnbhd.so.0.<MINOR>` for 0.x, `libnbhd.so.<MAJOR>`
+//! from 1.0; set by `build.rs`), and programs linked against it ask the loader for that name. The
+//! programs are therefore linked and run through a directory this test owns
+//! (`<target tmp>/c_abi/<profile>/lib`) that holds `libnbhd.so` and the SONAME as symbolic links
+//! to the built library, as an installation would; nothing of the system is used. The SONAME
+//! itself, and that the programs record it, are checked by reading the ELF dynamic sections.
 #![cfg(unix)]
 
 use std::io::Write;
@@ -15,8 +22,137 @@ const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
 /// Where the cdylib is and where compiled C programs go.
 struct Built {
+    /// The cdylib cargo built, `<target>/<profile>/libnbhd.so`.
+    lib: PathBuf,
+    /// The directory the programs are linked and run with: `libnbhd.so` and the SONAME, both
+    /// symbolic links to `lib`.
     lib_dir: PathBuf,
     out_dir: PathBuf,
+}
+
+/// The SONAME `build.rs` must give the cdylib, from this package's version (the rule is stated
+/// there): `None` where the target has no SONAMEs.
+fn expected_soname() -> Option<String> {
+    if !cfg!(target_os = "linux") {
+        return None;
+    }
+    let major = env!("CARGO_PKG_VERSION_MAJOR");
+    let minor = env!("CARGO_PKG_VERSION_MINOR");
+    Some(if major == "0" {
+        format!("libnbhd.so.0.{minor}")
+    } else {
+        format!("libnbhd.so.{major}")
+    })
+}
+
+/// The names an ELF file's dynamic section gives: its own SONAME and the libraries it needs.
+#[derive(Debug, Default)]
+struct Dynamic {
+    soname: Option<String>,
+    needed: Vec<String>,
+}
+
+/// Reads the dynamic section of an ELF file (32 or 64 bit, either byte order) through the
+/// section headers: the `SHT_DYNAMIC` section's `DT_SONAME` and `DT_NEEDED` entries are offsets
+/// into the string table its `sh_link` names.
+fn elf_dynamic(path: &Path) -> Result<Dynamic, String> {
+    let data = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let bad = |what: &str| format!("{}: not a valid ELF file ({what})", path.display());
+    if data.len() < 64 || data[..4] != *b"\x7fELF" {
+        return Err(bad("no ELF header"));
+    }
+    let wide = match data[4] {
+        1 => false,
+        2 => true,
+        _ => return Err(bad("unknown class")),
+    };
+    let little = match data[5] {
+        1 => true,
+        2 => false,
+        _ => return Err(bad("unknown byte order")),
+    };
+    let uint = |at: usize, len: usize| -> Result<u64, String> {
+        let bytes = data.get(at..at + len).ok_or_else(|| bad("truncated"))?;
+        let fold = |v: u64, b: &u8| (v << 8) | u64::from(*b);
+        Ok(if little {
+            bytes.iter().rev().fold(0, fold)
+        } else {
+            bytes.iter().fold(0, fold)
+        })
+    };
+    let word = if wide { 8 } else { 4 };
+    let at = |v: u64| usize::try_from(v).map_err(|_| bad("offset out of range"));
+    // e_shoff, e_shentsize, e_shnum.
+    let (sh_off, sh_size, sh_num) = if wide {
+        (uint(0x28, 8)?, uint(0x3a, 2)?, uint(0x3c, 2)?)
+    } else {
+        (uint(0x20, 4)?, uint(0x2e, 2)?, uint(0x30, 2)?)
+    };
+    if sh_num == 0 {
+        return Err(bad("no section headers"));
+    }
+    // (sh_type, sh_offset, sh_size, sh_link) of section i.
+    let section = |i: u64| -> Result<(u64, u64, u64, u64), String> {
+        let base = at(sh_off + i * sh_size)?;
+        Ok((
+            uint(base + 4, 4)?,
+            uint(base + 8 + 2 * word, word)?,
+            uint(base + 8 + 3 * word, word)?,
+            uint(base + 8 + 4 * word, 4)?,
+        ))
+    };
+    let mut dynamic = Dynamic::default();
+    for i in 0..sh_num {
+        let (kind, offset, size, link) = section(i)?;
+        const SHT_DYNAMIC: u64 = 6;
+        if kind != SHT_DYNAMIC {
+            continue;
+        }
+        let (_, str_offset, str_size, _) = section(link)?;
+        let strings = data
+            .get(at(str_offset)?..at(str_offset + str_size)?)
+            .ok_or_else(|| bad("string table out of the file"))?;
+        let string = |v: u64| -> Result<String, String> {
+            let s = strings
+                .get(at(v)?..)
+                .ok_or_else(|| bad("string out of its table"))?;
+            let end = s
+                .iter()
+                .position(|&b| b == 0)
+                .ok_or_else(|| bad("unterminated string"))?;
+            Ok(String::from_utf8_lossy(&s[..end]).into_owned())
+        };
+        for entry in (offset..offset + size).step_by(2 * word) {
+            let (tag, value) = (uint(at(entry)?, word)?, uint(at(entry)? + word, word)?);
+            const DT_NULL: u64 = 0;
+            const DT_NEEDED: u64 = 1;
+            const DT_SONAME: u64 = 14;
+            match tag {
+                DT_NULL => break,
+                DT_NEEDED => dynamic.needed.push(string(value)?),
+                DT_SONAME => dynamic.soname = Some(string(value)?),
+                _ => {}
+            }
+        }
+        return Ok(dynamic);
+    }
+    Err(bad("no dynamic section"))
+}
+
+/// Makes `dir/name` a symbolic link to `target`, replacing whatever is there atomically (test
+/// processes of the same profile may do this at the same time).
+fn symlink_into(dir: &Path, name: &str, target: &Path) -> Result<(), String> {
+    let tmp = dir.join(format!(".{name}.{}", std::process::id()));
+    let _ = std::fs::remove_file(&tmp);
+    std::os::unix::fs::symlink(target, &tmp)
+        .and_then(|()| std::fs::rename(&tmp, dir.join(name)))
+        .map_err(|e| {
+            format!(
+                "cannot link {} to {}: {e}",
+                dir.join(name).display(),
+                target.display()
+            )
+        })
 }
 
 /// Prints a note that shows even when the test harness captures output.
@@ -92,9 +228,23 @@ fn built() -> &'static Built {
         let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
             .join("c_abi")
             .join(&profile);
-        std::fs::create_dir_all(&out_dir).map_err(|e| e.to_string())?;
+        // The link name and, where the library has one, its SONAME (the name the loader looks
+        // for), both pointing at the library cargo just built.
+        let lib_dir = out_dir.join("lib");
+        std::fs::create_dir_all(&lib_dir).map_err(|e| e.to_string())?;
+        let file_name = lib
+            .file_name()
+            .and_then(|n| n.to_str())
+            .ok_or("bad library name")?;
+        symlink_into(&lib_dir, file_name, &lib)?;
+        if cfg!(target_os = "linux") {
+            if let Some(soname) = elf_dynamic(&lib)?.soname {
+                symlink_into(&lib_dir, &soname, &lib)?;
+            }
+        }
         Ok(Built {
-            lib_dir: profile_dir,
+            lib,
+            lib_dir,
             out_dir,
         })
     });
@@ -302,4 +452,63 @@ fn header_compiles_and_links_as_cpp() {
         describe("compiling nbhd.h as C++", &out)
     );
     run(Command::new(exe), "the C++ check");
+}
+
+/// `readelf -d` output for `path`, or `None` (with a note) when readelf is not installed.
+fn readelf_dynamic(path: &Path) -> Option<String> {
+    match Command::new("readelf").arg("-d").arg(path).output() {
+        Ok(out) if out.status.success() => Some(String::from_utf8_lossy(&out.stdout).into_owned()),
+        Ok(out) => panic!("{}", describe("readelf -d", &out)),
+        Err(_) => {
+            note("readelf is not installed: the SONAME is checked by this test's ELF reader only");
+            None
+        }
+    }
+}
+
+#[test]
+fn cdylib_has_the_versioned_soname() {
+    let Some(expected) = expected_soname() else {
+        note("not Linux: the cdylib has no SONAME to check; the SONAME test is SKIPPED");
+        return;
+    };
+    let lib = &built().lib;
+    let dynamic = elf_dynamic(lib).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        dynamic.soname.as_deref(),
+        Some(expected.as_str()),
+        "{} has the wrong SONAME (build.rs should set it from the version {})",
+        lib.display(),
+        env!("CARGO_PKG_VERSION")
+    );
+    // readelf, where present, must agree with the reader above.
+    if let Some(text) = readelf_dynamic(lib) {
+        assert!(
+            text.contains(&format!("Library soname: [{expected}]")),
+            "readelf -d {} shows no SONAME {expected}:\n{text}",
+            lib.display()
+        );
+    }
+}
+
+#[test]
+fn c_programs_record_the_soname() {
+    let Some(expected) = expected_soname() else {
+        note("not Linux: no SONAME for the C programs to record; the check is SKIPPED");
+        return;
+    };
+    let exe = compiled("abi_test");
+    let dynamic = elf_dynamic(&exe).unwrap_or_else(|e| panic!("{e}"));
+    let ours: Vec<_> = dynamic
+        .needed
+        .iter()
+        .filter(|n| n.starts_with("libnbhd"))
+        .collect();
+    assert_eq!(
+        ours,
+        [&expected],
+        "{} should need nbhd by its SONAME; it needs {:?}",
+        exe.display(),
+        dynamic.needed
+    );
 }
