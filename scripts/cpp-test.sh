@@ -62,6 +62,22 @@ if readelf -d "$pc_out-static" | grep -q 'libnbhd'; then
 fi
 "$pc_out-static"
 
+# The shared library carries a SONAME (build.rs); programs linked against it, through the CMake
+# package or pkg-config, must record that name and not a bare libnbhd.so.
+soname="$(readelf -d "$prefix/lib/libnbhd.so" | sed -n 's/.*(SONAME).*\[\(.*\)\].*/\1/p')"
+echo "== checking that programs record the SONAME ${soname:-(none)}"
+case "$soname" in
+    libnbhd.so.?*) ;;
+    *) echo "cpp-test.sh: $prefix/lib/libnbhd.so has no versioned SONAME ('$soname')" >&2; exit 1 ;;
+esac
+for exe in "$build/link_shared" "$build/compare_neighbors" "$pc_out"; do
+    needed="$(readelf -d "$exe" | sed -n 's/.*(NEEDED).*\[\(libnbhd[^]]*\)\].*/\1/p')"
+    if [ "$needed" != "$soname" ]; then
+        echo "cpp-test.sh: $exe needs '$needed', expected the SONAME '$soname'" >&2
+        exit 1
+    fi
+done
+
 echo "== ctest"
 cd "$build"
 ctest --output-on-failure -j "${CTEST_PARALLEL:-$jobs}" "$@"
