@@ -169,6 +169,17 @@ impl<'a> PointsView<'a> {
         }
     }
 
+    /// Point `i` as `D` values of type `S`, which must be the view's own scalar type, with one
+    /// bounds check for the point (the bulk read of the build). Panics if out of range.
+    #[inline]
+    pub(crate) fn row<S: Scalar, const D: usize>(&self, i: usize) -> [S; D] {
+        debug_assert!(S::TYPE == self.scalar && D == self.dim);
+        let size = std::mem::size_of::<S>();
+        let at = i * self.stride;
+        let b = &self.bytes[at..at + D * size];
+        std::array::from_fn(|j| S::read_ne(&b[j * size..(j + 1) * size]))
+    }
+
     /// Copies point `i` into `out` (length `dim`), converted to `T`.
     #[inline]
     pub fn read_point<T: Scalar>(&self, i: usize, out: &mut [T]) {

@@ -13,12 +13,12 @@ mod split;
 
 use std::sync::OnceLock;
 
-use crate::cloud::{resolve_query, Cloud};
-use crate::error::Result;
+use crate::cloud::{resolve_query, Cloud, NonFinitePolicy};
+use crate::error::{NbhdError, Result};
 use crate::parallel::with_threads;
 use crate::points::PointsView;
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
-use crate::scalar::Scalar;
+use crate::scalar::{Scalar, ScalarType};
 use crate::table::{rows_in_work_order, NeighborTable, TableOptions};
 use build::{build_parallel, build_serial, BuildInput, Subtree};
 use layout::{BySlot, Inline, Layout, Record};
@@ -72,14 +72,14 @@ impl<T: Scalar> KdTree<T> {
     /// [`NbhdError::ThreadPool`] if a requested pool cannot be created.
     pub fn build(view: &PointsView<'_>, options: &BuildOptions) -> Result<Self> {
         options.validate()?;
-        let cloud = Cloud::<T>::from_view(view, options.non_finite)?;
-        let n = cloud.len();
-        let dim = cloud.dim;
-        let (subtree, coords, order) = match dim {
-            1 => build_inline::<T, 1>(&cloud, options)?,
-            2 => build_inline::<T, 2>(&cloud, options)?,
-            3 => build_inline::<T, 3>(&cloud, options)?,
+        let dim = view.dim();
+        let (subtree, coords, ids) = match dim {
+            1 => build_inline::<T, 1>(view, options)?,
+            2 => build_inline::<T, 2>(view, options)?,
+            3 => build_inline::<T, 3>(view, options)?,
             _ => {
+                let cloud = Cloud::<T>::from_view(view, options.non_finite)?;
+                let n = cloud.len();
                 let layout = BySlot {
                     coords: &cloud.coords,
                     dim,
@@ -90,17 +90,17 @@ impl<T: Scalar> KdTree<T> {
                     .iter()
                     .flat_map(|&s| cloud.point(s as usize).iter().copied())
                     .collect();
-                (subtree, coords, slots)
+                let ids = slots.iter().map(|&s| cloud.ids[s as usize]).collect();
+                (subtree, coords, ids)
             }
         };
-        let ids = order.iter().map(|&s| cloud.ids[s as usize]).collect();
         Ok(Self {
             dim,
             coords,
             ids,
             nodes: subtree.nodes,
             depth: subtree.depth,
-            source_len: cloud.source_len,
+            source_len: view.len(),
             options: *options,
             position_of: OnceLock::new(),
         })
@@ -223,21 +223,48 @@ impl<T: Scalar> KdTree<T> {
     }
 }
 
-/// Builds with compact records of dimension `D`; returns the nodes, the coordinates and the
-/// slots in tree order.
+/// Builds with compact records of dimension `D`, read straight from the caller's buffer;
+/// returns the nodes, the coordinates and the caller indices in tree order. A record's slot is
+/// the caller's index itself: it orders ties exactly as the packed slots of a [`Cloud`] would
+/// (both increase with the caller's index), and needs no map back.
 fn build_inline<T: Scalar, const D: usize>(
-    cloud: &Cloud<T>,
+    view: &PointsView<'_>,
     options: &BuildOptions,
 ) -> Result<(Subtree<T>, Vec<T>, Vec<u32>)> {
-    let mut records: Vec<Record<T, D>> = (0..cloud.len())
-        .map(|s| Record {
-            p: std::array::from_fn(|j| cloud.coords[s * D + j]),
-            slot: s as u32,
-        })
-        .collect();
+    let mut records = match view.scalar_type() {
+        ScalarType::F32 => read_records::<T, f32, D>(view, options.non_finite)?,
+        ScalarType::F64 => read_records::<T, f64, D>(view, options.non_finite)?,
+    };
     let subtree = run_build(Inline::<D>, options, &mut records)?;
     let coords = records.iter().flat_map(|r| r.p).collect();
     Ok((subtree, coords, records.iter().map(|r| r.slot).collect()))
+}
+
+/// The finite points of `view` (stored as `S`) as records of `T` coordinates, applying
+/// `policy` to the others (a value finite in `S` that overflows `T` counts as non-finite, as
+/// in [`Cloud::from_view`]).
+fn read_records<T: Scalar, S: Scalar, const D: usize>(
+    view: &PointsView<'_>,
+    policy: NonFinitePolicy,
+) -> Result<Vec<Record<T, D>>> {
+    let n = view.len();
+    let mut records = Vec::with_capacity(n);
+    for i in 0..n {
+        let p = view.row::<S, D>(i).map(|c| T::from_f64(c.to_f64()));
+        if p.iter().all(|c| c.is_finite()) {
+            records.push(Record { p, slot: i as u32 });
+        } else if policy == NonFinitePolicy::Reject {
+            let coordinate = p.iter().position(|c| !c.is_finite()).unwrap_or(0);
+            return Err(NbhdError::NonFinite {
+                index: i,
+                coordinate,
+            });
+        }
+    }
+    if records.is_empty() {
+        return Err(NbhdError::EmptyInput);
+    }
+    Ok(records)
 }
 
 /// Runs the build the options ask for over `items` (given in slot order, left in tree order).
