@@ -34,7 +34,13 @@ use rayon::prelude::*;
 /// Directional curvature of eq. 2.20 from `p` with normal `n` toward `x`; 0 when `x == p`.
 #[inline]
 pub fn directional_curvature(p: DVec3, n: DVec3, x: DVec3) -> f64 {
-    let d = x - p;
+    offset_curvature(n, x - p)
+}
+
+/// Directional curvature of eq. 2.20 toward the neighbour at offset `d = x_j − p_i`; 0 for
+/// `d = 0`. The same arithmetic as [`directional_curvature`].
+#[inline]
+pub(crate) fn offset_curvature(n: DVec3, d: DVec3) -> f64 {
     let d2 = d.length_squared();
     if d2 > 0.0 {
         2.0 * n.dot(d) / d2
@@ -122,6 +128,17 @@ pub fn principal_curvatures(
     form: DensityForm,
     formula: PrincipalFormula,
 ) -> PrincipalCurvatures {
+    offsets_principal_curvatures(frame, neighbors.iter().map(|&x| x - p), form, formula)
+}
+
+/// [`principal_curvatures`] from the neighbours' offsets `x_j − p_i` (eq. 2.26–2.29, 2.25),
+/// with the same arithmetic (the sign of `p_i − x_j` cancels in every product).
+pub(crate) fn offsets_principal_curvatures(
+    frame: &LocalFrame,
+    offsets: impl Iterator<Item = DVec3>,
+    form: DensityForm,
+    formula: PrincipalFormula,
+) -> PrincipalCurvatures {
     let (n, e1, e2) = (frame.normal, frame.major, frame.minor);
     let (m1, m2) = (frame.eigenvalues.z, frame.eigenvalues.y);
     let floor = 0.01 * (m1 + m2);
@@ -133,8 +150,8 @@ pub fn principal_curvatures(
     let (mut wsum, mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0, 0.0);
     let mut m = [0.0f64; 5]; // Σ w t1^(4−q) t2^q
 
-    for &x in neighbors {
-        let c = p - x;
+    for d in offsets {
+        let c = -d;
         let dist = c.length();
         let (t1, t2) = (c.dot(e1), c.dot(e2));
         let tl = (t1 * t1 + t2 * t2).sqrt();
@@ -147,7 +164,7 @@ pub fn principal_curvatures(
             DensityForm::Quadratic => d1 * t1 * t1 + d2 * t2 * t2,
         };
         let w = 1.0 / (delta * dist);
-        let kappa = directional_curvature(p, n, x);
+        let kappa = offset_curvature(n, d);
         wsum += w;
         a11 += w * kappa * t1 * t1;
         a12 += w * kappa * t1 * t2;

@@ -16,19 +16,35 @@ pub fn neighbor_table(
     nbhd: Neighborhood<f64>,
     exclude_self: bool,
 ) -> Result<NeighborTable<f64>> {
+    Ok(neighbor_table_and_order(points, nbhd, exclude_self)?.0)
+}
+
+/// [`neighbor_table`] and the order of its k-d tree: every index once, the points of a leaf
+/// adjacent. Stored in this order, a point's neighbours lie close in memory.
+pub(crate) fn neighbor_table_and_order(
+    points: &[DVec3],
+    nbhd: Neighborhood<f64>,
+    exclude_self: bool,
+) -> Result<(NeighborTable<f64>, Vec<u32>)> {
     if points.is_empty() {
         return Err(NbhdError::EmptyInput);
     }
     let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
     let view = PointsView::from_flat(&flat, 3)?;
     let tree = KdTree::<f64>::build(&view, &BuildOptions::default())?;
-    tree.neighborhoods(
+    let table = tree.neighborhoods(
         nbhd,
         &TableOptions {
             exclude_self,
             threads: 0,
         },
-    )
+    )?;
+    let order = if tree.tree_order().len() == points.len() {
+        tree.tree_order().to_vec()
+    } else {
+        (0..points.len() as u32).collect()
+    };
+    Ok((table, order))
 }
 
 /// Mean distance of a point to its nearest other point — the spacing `h` that relative

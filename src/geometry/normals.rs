@@ -52,22 +52,78 @@ impl LocalFrame {
 
 /// The covariance frame of `p` and its `neighbors` (eq. 2.8–2.10).
 pub fn local_frame(p: DVec3, neighbors: &[DVec3]) -> LocalFrame {
-    let count = neighbors.len() + 1;
-    // barycentre of N ∪ {p}, computed relative to p for accuracy far from the origin
-    let sum = neighbors.iter().fold(DVec3::ZERO, |s, &x| s + (x - p));
+    frame_of(neighbors.iter().map(|&x| x - p), neighbors.len() + 1)
+}
+
+/// [`local_frame`] from the neighbours' offsets `x_j − p_i`, with the same arithmetic.
+pub(crate) fn offsets_frame(offsets: &[DVec3]) -> LocalFrame {
+    frame_of(offsets.iter().copied(), offsets.len() + 1)
+}
+
+fn frame_of(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> LocalFrame {
+    let m = covariance(offsets, count);
+    let (values, vectors) = super::eigen::sym_eigen3_fast(m);
+    let (values, flags) = checked_eigenvalues(values, count);
+    LocalFrame {
+        normal: vectors[0],
+        minor: vectors[1],
+        major: vectors[2],
+        eigenvalues: values,
+        count: count as u32,
+        flags,
+    }
+}
+
+/// The normal (eq. 2.10), the eigenvalues and the `FLAG_*` bits of the covariance of
+/// `N_i ∪ {p_i}` given the neighbours' offsets `x_j − p_i` (eq. 2.8): what the smoothing needs
+/// unless it reads principal curvatures. The smallest eigenvector comes in closed form, and from
+/// the Jacobi iteration of [`local_frame`] whenever the closed form declines (close eigenvalues,
+/// which include every flagged case), so degenerate neighbourhoods get the same finite normal and
+/// the same flags as there. Allocation-free.
+pub(crate) fn offsets_normal(offsets: &[DVec3]) -> (DVec3, DVec3, u8) {
+    let count = offsets.len() + 1;
+    let m = covariance(offsets.iter().copied(), count);
+    let (values, normal) = super::eigen::sym_eigen3_smallest(m).unwrap_or_else(|| {
+        let (values, vectors) = super::eigen::sym_eigen3_fast(m);
+        (values, vectors[0])
+    });
+    let (values, flags) = checked_eigenvalues(values, count);
+    (normal, values, flags)
+}
+
+/// The covariance matrix `M_i` of eq. 2.8 (a sum over `N_i ∪ {p_i}`, not divided by the count)
+/// from the offsets `x_j − p_i` of the neighbours: about the barycentre, computed relative to
+/// `p_i` for accuracy far from the origin.
+#[inline]
+fn covariance(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> DMat3 {
+    let sum = offsets.clone().fold(DVec3::ZERO, |s, d| s + d);
     let bary = sum / count as f64;
-    let mut m = DMat3::ZERO;
+    // the upper triangle only; every entry is the same sum of the same products as in the
+    // full matrix
+    let [mut xx, mut xy, mut xz, mut yy, mut yz, mut zz] = [0.0f64; 6];
     let mut add = |d: DVec3| {
-        m.x_axis += d * d.x;
-        m.y_axis += d * d.y;
-        m.z_axis += d * d.z;
+        xx += d.x * d.x;
+        xy += d.x * d.y;
+        xz += d.x * d.z;
+        yy += d.y * d.y;
+        yz += d.y * d.z;
+        zz += d.z * d.z;
     };
     add(-bary);
-    for &x in neighbors {
-        add(x - p - bary);
+    for d in offsets {
+        add(d - bary);
     }
-    let (values, vectors) = super::eigen::sym_eigen3_fast(m);
-    let values = values.max(DVec3::ZERO); // round-off can leave tiny negatives
+    DMat3::from_cols(
+        DVec3::new(xx, xy, xz),
+        DVec3::new(xy, yy, yz),
+        DVec3::new(xz, yz, zz),
+    )
+}
+
+/// Eigenvalues clamped at 0 (round-off can leave tiny negatives) and the degeneracy flags.
+#[inline]
+fn checked_eigenvalues(values: DVec3, count: usize) -> (DVec3, u8) {
+    let values = values.max(DVec3::ZERO);
     let scale = values.z;
     let mut flags = 0;
     if count < 3 {
@@ -78,14 +134,7 @@ pub fn local_frame(p: DVec3, neighbors: &[DVec3]) -> LocalFrame {
     } else if values.y - values.x <= DEGENERATE_TOL * scale {
         flags |= FLAG_AMBIGUOUS;
     }
-    LocalFrame {
-        normal: vectors[0],
-        minor: vectors[1],
-        major: vectors[2],
-        eigenvalues: values,
-        count: count as u32,
-        flags,
-    }
+    (values, flags)
 }
 
 /// The frame of every point over its row of `table` (neighbours without the point itself),

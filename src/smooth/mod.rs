@@ -19,11 +19,13 @@
 
 use crate::error::{NbhdError, Result};
 use crate::geometry::curvature::{
-    all_principal_curvatures, directional_curvature, DensityForm, PrincipalCurvatures,
-    PrincipalFormula,
+    all_principal_curvatures, directional_curvature, offset_curvature,
+    offsets_principal_curvatures, DensityForm, PrincipalCurvatures, PrincipalFormula,
 };
-use crate::geometry::neighbors::{mean_spacing_of, neighbor_table};
-use crate::geometry::normals::{local_frames, orient, LocalFrame, Orientation};
+use crate::geometry::neighbors::{mean_spacing_of, neighbor_table, neighbor_table_and_order};
+use crate::geometry::normals::{
+    local_frames, offsets_frame, offsets_normal, orient, LocalFrame, Orientation,
+};
 use crate::query::Neighborhood;
 use crate::table::NeighborTable;
 use glam::DVec3;
@@ -357,7 +359,7 @@ pub fn smooth_with_progress(
     let total = options.steps as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
-    let knn = neighbor_table(points, Neighborhood::Knn { k: options.k }, true)?;
+    let (knn, order) = neighbor_table_and_order(points, Neighborhood::Knn { k: options.k }, true)?;
     let h = mean_spacing_of(&knn);
     if options.needs_relative() && !(h > 0.0 && h.is_finite()) {
         return Err(NbhdError::InvalidOption {
@@ -379,53 +381,38 @@ pub fn smooth_with_progress(
             f => f,
         },
     };
-    let mut table = within(&knn, eps);
+    let mut table = cut_to(knn, eps);
     let min_neighbors = table.min_row_len();
     let mut cur = points.to_vec();
-    for step in 0..options.steps {
-        let base = step as f64 + 0.2;
-        if step > 0 && options.update_neighbors {
-            report(base, Stage::Neighbors)?;
-            table = within(
-                &neighbor_table(&cur, Neighborhood::Knn { k: options.k }, true)?,
-                eps,
-            );
+    if options.steps > 0 {
+        // the steps run on the points stored in tree order, so that a point's neighbours lie
+        // close in memory; each point's arithmetic is unchanged (rows keep their order)
+        let mut rows = Rows::permuted(&table, &order);
+        let mut stored: Vec<DVec3> = order.iter().map(|&o| points[o as usize]).collect();
+        let mut next = vec![DVec3::ZERO; stored.len()];
+        for step in 0..options.steps {
+            let base = step as f64 + 0.2;
+            if step > 0 && options.update_neighbors {
+                report(base, Stage::Neighbors)?;
+                unpermute(&stored, &order, &mut cur);
+                table = cut_to(
+                    neighbor_table(&cur, Neighborhood::Knn { k: options.k }, true)?,
+                    eps,
+                );
+                rows = Rows::permuted(&table, &order);
+            }
+            report(base + 0.1, Stage::Geometry)?;
+            report(base + 0.5, Stage::Step)?;
+            step_into(&stored, &rows, options, &res, &mut next);
+            std::mem::swap(&mut stored, &mut next);
         }
-        report(base + 0.1, Stage::Geometry)?;
-        let geo = Geometry::compute(&cur, &table, options, &res)?;
-        report(base + 0.5, Stage::Step)?;
-        cur = (0..cur.len())
-            .into_par_iter()
-            .map(|i| {
-                let p = cur[i];
-                let row = table.indices_of(i);
-                if row.is_empty() || geo.interior(i, options) {
-                    return p;
-                }
-                let aniso =
-                    options.weighting != Weighting::Isotropic && geo.feature(i, &cur, &table, &res);
-                let n = geo.frames.as_ref().map_or(DVec3::ZERO, |f| f[i].normal);
-                let mut acc = DVec3::ZERO;
-                for &j in row {
-                    let x = cur[j as usize];
-                    let g = if aniso {
-                        options
-                            .weighting
-                            .weight(directional_curvature(p, n, x).abs(), res.lambda)
-                    } else {
-                        1.0
-                    };
-                    acc += g * (x - p);
-                }
-                p + options.tau * acc / row.len() as f64
-            })
-            .collect();
+        unpermute(&stored, &order, &mut cur);
     }
     let outputs = if options.outputs {
         report(options.steps as f64 + 0.2, Stage::Outputs)?;
         if options.update_neighbors && options.steps > 0 {
-            table = within(
-                &neighbor_table(&cur, Neighborhood::Knn { k: options.k }, true)?,
+            table = cut_to(
+                neighbor_table(&cur, Neighborhood::Knn { k: options.k }, true)?,
                 eps,
             );
         }
@@ -477,44 +464,173 @@ fn within(knn: &NeighborTable<f64>, eps: f64) -> NeighborTable<f64> {
     NeighborTable::from_parts(offsets, idx, d2).unwrap_or_default()
 }
 
+/// [`within`] taking the table: rows are sorted by distance, so when every row's farthest
+/// neighbour is within ε (the usual case for the defaults) the table is returned as it is,
+/// without a copy.
+fn cut_to(knn: NeighborTable<f64>, eps: f64) -> NeighborTable<f64> {
+    let e2 = eps * eps;
+    let inside = |i: usize| knn.sq_dists_of(i).last().is_none_or(|&d| d <= e2);
+    if (0..knn.len()).all(inside) {
+        knn
+    } else {
+        within(&knn, eps)
+    }
+}
+
+/// The index rows of a neighbour table with the points stored in another order: row `s` holds
+/// the stored positions of the neighbours of the point stored at `s`, in the table's row order.
+struct Rows {
+    offsets: Vec<usize>,
+    indices: Vec<u32>,
+}
+
+impl Rows {
+    /// `table` for the points stored as `order` says (`order[s]` is the index of the point
+    /// stored at `s`; a permutation).
+    fn permuted(table: &NeighborTable<f64>, order: &[u32]) -> Self {
+        let mut position = vec![0u32; order.len()];
+        for (s, &o) in order.iter().enumerate() {
+            position[o as usize] = s as u32;
+        }
+        let mut offsets = Vec::with_capacity(order.len() + 1);
+        let mut indices = Vec::with_capacity(table.total());
+        offsets.push(0);
+        for &o in order {
+            indices.extend(
+                table
+                    .indices_of(o as usize)
+                    .iter()
+                    .map(|&j| position[j as usize]),
+            );
+            offsets.push(indices.len());
+        }
+        Self { offsets, indices }
+    }
+
+    #[inline]
+    fn row(&self, s: usize) -> &[u32] {
+        &self.indices[self.offsets[s]..self.offsets[s + 1]]
+    }
+}
+
+/// Writes the points stored as `order` says back in index order.
+fn unpermute(stored: &[DVec3], order: &[u32], out: &mut [DVec3]) {
+    for (&p, &o) in stored.iter().zip(order) {
+        out[o as usize] = p;
+    }
+}
+
 /// Normals and principal curvatures of one state, computed only when needed.
 struct Geometry {
     frames: Option<Vec<LocalFrame>>,
     principal: Option<Vec<PrincipalCurvatures>>,
 }
 
-impl Geometry {
-    fn compute(
-        points: &[DVec3],
-        table: &NeighborTable<f64>,
-        options: &SmoothOptions,
-        res: &Resolved,
-    ) -> Result<Self> {
-        let aniso = options.weighting != Weighting::Isotropic;
-        let needs_frames = aniso || options.constrain_interior.is_some();
-        let needs_principal = aniso
-            && matches!(
-                res.feature,
-                FeatureCriterion::EdgeQuotient(_) | FeatureCriterion::PrincipalCurvature(_)
-            );
-        let frames = if needs_frames {
-            Some(local_frames(points, table)?)
-        } else {
-            None
-        };
-        let principal = match (&frames, needs_principal) {
-            (Some(f), true) => Some(all_principal_curvatures(
-                points,
-                table,
-                f,
-                options.density,
-                options.formula,
-            )?),
-            _ => None,
-        };
-        Ok(Self { frames, principal })
-    }
+/// One explicit Euler step `p_i ← p_i + τ Δ_i` (eq. 2.18) of every point of `cur` into `next`,
+/// with the uniform-umbrella Laplacian `Δ_i = (1/|N_i|) Σ_j g_ij (x_j − p_i)` (eq. 2.16, and
+/// eq. 2.30 with `g_ij` of eq. 2.31/2.32 in `|κ_ij|` of eq. 2.20 for feature points).
+///
+/// Each point's normal (eq. 2.8–2.10), its features (2.33–2.35) and its move are computed in
+/// one pass over the offsets `x_j − p_i`, gathered once per point into a buffer of the worker
+/// (no allocation per point). Only the point's own normal enters its move, so nothing else is
+/// stored; principal curvatures (eq. 2.25–2.29) only for the criteria (2.33)/(2.34) that read
+/// them. Every point reads `cur` only and sums in row order: bit-identical for any number of
+/// threads.
+fn step_into(
+    cur: &[DVec3],
+    rows: &Rows,
+    options: &SmoothOptions,
+    res: &Resolved,
+    next: &mut [DVec3],
+) {
+    let aniso = options.weighting != Weighting::Isotropic;
+    let needs_normal = aniso || options.constrain_interior.is_some();
+    let needs_principal = aniso
+        && matches!(
+            res.feature,
+            FeatureCriterion::EdgeQuotient(_) | FeatureCriterion::PrincipalCurvature(_)
+        );
+    let interior = |values: DVec3| {
+        options
+            .constrain_interior
+            .is_some_and(|t| quotient_of(values) < t)
+    };
+    next.par_iter_mut()
+        .enumerate()
+        .for_each_init(Vec::new, |buf: &mut Vec<DVec3>, (i, out)| {
+            let p = cur[i];
+            let row = rows.row(i);
+            *out = p;
+            if row.is_empty() {
+                return;
+            }
+            if !needs_normal {
+                let acc = row
+                    .iter()
+                    .fold(DVec3::ZERO, |acc, &j| acc + (cur[j as usize] - p));
+                *out = p + options.tau * acc / row.len() as f64;
+                return;
+            }
+            // rows never hold the point itself (`exclude_self`), so no filter is needed
+            debug_assert!(row.iter().all(|&j| j as usize != i));
+            buf.resize(row.len(), DVec3::ZERO);
+            for (d, &j) in buf.iter_mut().zip(row) {
+                *d = cur[j as usize] - p;
+            }
+            let (mut n, mut feature) = (DVec3::ZERO, aniso);
+            if needs_principal {
+                let frame = offsets_frame(buf);
+                if interior(frame.eigenvalues) {
+                    return;
+                }
+                let pc = offsets_principal_curvatures(
+                    &frame,
+                    buf.iter().copied(),
+                    options.density,
+                    options.formula,
+                );
+                feature = match res.feature {
+                    FeatureCriterion::EdgeQuotient(q) => pc.quotient() < q,
+                    FeatureCriterion::PrincipalCurvature(k) => pc.max_abs() > k.resolve(1.0),
+                    _ => true,
+                };
+                n = frame.normal;
+            } else if needs_normal {
+                let (normal, values, _) = offsets_normal(buf);
+                if interior(values) {
+                    return;
+                }
+                n = normal;
+                if let (true, FeatureCriterion::DirectionalCurvature(d)) = (aniso, res.feature) {
+                    let d = d.resolve(1.0);
+                    feature = buf.iter().any(|&x| offset_curvature(n, x).abs() > d);
+                }
+            }
+            let mut acc = DVec3::ZERO;
+            if feature && options.weighting == Weighting::Sharp {
+                // g_sharp (2.31) keeps a neighbour iff |κ_ij| < λ, i.e. 2|⟨n, d⟩| < λ‖d‖²
+                // (eq. 2.20 without its division; d = 0 adds nothing either way)
+                for &d in buf.iter() {
+                    let keep = 2.0 * n.dot(d).abs() < res.lambda * d.length_squared();
+                    acc += if keep { d } else { DVec3::ZERO };
+                }
+            } else if feature {
+                for &d in buf.iter() {
+                    let g = options
+                        .weighting
+                        .weight(offset_curvature(n, d).abs(), res.lambda);
+                    acc += g * d;
+                }
+            } else {
+                for &d in buf.iter() {
+                    acc += d;
+                }
+            }
+            *out = p + options.tau * acc / row.len() as f64;
+        });
+}
 
+impl Geometry {
     fn interior(&self, i: usize, options: &SmoothOptions) -> bool {
         match (&self.frames, options.constrain_interior) {
             (Some(f), Some(t)) => covariance_quotient(&f[i]) < t,
@@ -548,9 +664,14 @@ impl Geometry {
 }
 
 fn covariance_quotient(f: &LocalFrame) -> f64 {
-    let s = f.eigenvalues.x + f.eigenvalues.y + f.eigenvalues.z;
+    quotient_of(f.eigenvalues)
+}
+
+/// `λ0/(λ0 + λ1 + λ2)` of ascending eigenvalues, 0 when they all vanish.
+fn quotient_of(values: DVec3) -> f64 {
+    let s = values.x + values.y + values.z;
     if s > 0.0 {
-        f.eigenvalues.x / s
+        values.x / s
     } else {
         0.0
     }
