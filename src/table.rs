@@ -103,6 +103,10 @@ impl<T: Copy> NeighborTable<T> {
 /// balance two to dozens of threads.
 pub(crate) const CHUNK: usize = 1024;
 
+/// Rows of the output written by one worker at a time when the chunks are gathered into the
+/// table.
+const ROW_BLOCK: usize = 4096;
+
 /// Row lengths, neighbour indices and squared distances of one chunk of queries.
 pub(crate) type RowsChunk<T> = (Vec<usize>, Vec<u32>, Vec<T>);
 
@@ -235,26 +239,49 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
         })
         .collect();
     let chunks: Vec<RowsChunk<T>> = chunks.into_iter().collect::<Result<_>>()?;
+    // Where each row is: its length and its chunk and start in that chunk's buffers.
     let mut offsets = vec![0usize; rows + 1];
+    let mut source = vec![(0u32, 0usize); rows];
     for (c, (lens, _, _)) in chunks.iter().enumerate() {
+        let mut at = 0;
         for (j, &len) in lens.iter().enumerate() {
-            offsets[row_of(bounds[c] + j) + 1] = len;
+            let r = row_of(bounds[c] + j);
+            offsets[r + 1] = len;
+            source[r] = (c as u32, at);
+            at += len;
         }
     }
     for r in 0..rows {
         offsets[r + 1] += offsets[r];
     }
     let total = offsets[rows];
+    // Filled in parallel, by blocks of consecutive rows: each block is one contiguous piece of
+    // the output, gathered from the chunks. (The zeroed buffers come from the allocator as
+    // untouched pages, so they are first written here, by the workers, too.)
     let (mut indices, mut sq_dists) = (vec![0u32; total], vec![T::ZERO; total]);
-    for (c, (lens, ids, dists)) in chunks.iter().enumerate() {
-        let mut at = 0;
-        for (j, &len) in lens.iter().enumerate() {
-            let to = offsets[row_of(bounds[c] + j)];
-            indices[to..to + len].copy_from_slice(&ids[at..at + len]);
-            sq_dists[to..to + len].copy_from_slice(&dists[at..at + len]);
-            at += len;
-        }
+    let mut blocks = Vec::with_capacity(rows.div_ceil(ROW_BLOCK));
+    let (mut ids_rest, mut dists_rest) = (&mut indices[..], &mut sq_dists[..]);
+    for first in (0..rows).step_by(ROW_BLOCK) {
+        let end = (first + ROW_BLOCK).min(rows);
+        let len = offsets[end] - offsets[first];
+        let (ids, ir) = std::mem::take(&mut ids_rest).split_at_mut(len);
+        let (dists, dr) = std::mem::take(&mut dists_rest).split_at_mut(len);
+        (ids_rest, dists_rest) = (ir, dr);
+        blocks.push((first..end, ids, dists));
     }
+    blocks.into_par_iter().for_each(|(block, ids, dists)| {
+        let base = offsets[block.start];
+        for r in block {
+            let (from, to) = (offsets[r] - base, offsets[r + 1] - base);
+            if from == to {
+                continue;
+            }
+            let (c, at) = source[r];
+            let (_, chunk_ids, chunk_dists) = &chunks[c as usize];
+            ids[from..to].copy_from_slice(&chunk_ids[at..at + to - from]);
+            dists[from..to].copy_from_slice(&chunk_dists[at..at + to - from]);
+        }
+    });
     Ok(NeighborTable {
         offsets,
         indices,
