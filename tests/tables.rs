@@ -68,3 +68,53 @@ fn batch_queries_equal_single_queries() {
         .neighborhoods_of(&bad, nbhd, &TableOptions::default())
         .is_err());
 }
+
+/// Batch queries are answered in leaf order and written back in query order: the rows equal
+/// brute force's for every neighbourhood kind, in 1, 2, 3 and 7 dimensions, with queries on
+/// stored points (exact ties) and elsewhere, on 1, 2 and 3 threads.
+#[test]
+fn batch_tables_equal_brute_force_in_any_dimension_and_thread_count() {
+    for d in [1, 2, 3, 7] {
+        for kind in [Kind::Grid, Kind::DuplicateHeavy, Kind::Random] {
+            let c = points(kind, 1500, d, 11);
+            // Queries: every third stored point, then random points.
+            let mut q: Vec<f64> = c.chunks(d).step_by(3).flatten().copied().collect();
+            q.extend(points(Kind::Random, 400, d, 12));
+            let view = PointsView::from_flat(&c, d).unwrap();
+            let qv = PointsView::from_flat(&q, d).unwrap();
+            let tree = KdTree::<f64>::build(&view, &BuildOptions::default()).unwrap();
+            let brute = BruteForce::<f64>::new(&view, NonFinitePolicy::Reject).unwrap();
+            for nbhd in [
+                Neighborhood::Knn { k: 9 },
+                Neighborhood::Radius {
+                    radius: 1.5,
+                    sorted: true,
+                },
+                Neighborhood::KnnRadius { k: 12, radius: 1.5 },
+            ] {
+                let want = nbhd::table::neighborhoods_of_points(&brute, &qv, nbhd).unwrap();
+                for threads in [1, 2, 3] {
+                    let opts = TableOptions {
+                        threads,
+                        ..TableOptions::default()
+                    };
+                    let got = tree.neighborhoods_of(&qv, nbhd, &opts).unwrap();
+                    assert_eq!(got, want, "d={d} {kind:?} {nbhd:?} threads={threads}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn batch_with_a_non_finite_query_is_refused() {
+    let c = points(Kind::Random, 200, 3, 1);
+    let tree = KdTree::<f64>::from_flat(&c, 3, &BuildOptions::default()).unwrap();
+    let mut q = points(Kind::Random, 50, 3, 2);
+    q[3 * 17 + 1] = f64::NAN;
+    let qv = PointsView::from_flat(&q, 3).unwrap();
+    let err = tree
+        .neighborhoods_of(&qv, Neighborhood::Knn { k: 3 }, &TableOptions::default())
+        .unwrap_err();
+    assert!(matches!(err, nbhd::NbhdError::NonFiniteQuery { .. }), "{err}");
+}

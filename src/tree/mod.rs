@@ -327,15 +327,81 @@ impl<T: Scalar> KdTree<T> {
 
     /// The neighbourhoods of a batch of query points (row `i` for query `i`), computed in
     /// parallel. `options.exclude_self` does not apply (the queries are not stored points).
+    ///
+    /// The queries are answered in the order of the leaves they fall into, so that consecutive
+    /// queries walk the same nodes and leaves (a scan's points arrive in no useful order, and a
+    /// query in random order misses the cache at almost every leaf); the rows come back in the
+    /// queries' order, identical for any number of threads.
     pub fn neighborhoods_of(
         &self,
         queries: &PointsView<'_>,
         nbhd: Neighborhood<T>,
         options: &TableOptions,
     ) -> Result<NeighborTable<T>> {
+        nbhd.validate()?;
+        if queries.dim() != self.dim {
+            return Err(NbhdError::DimensionMismatch {
+                expected: self.dim,
+                got: queries.dim(),
+            });
+        }
         with_threads(options.threads, || {
-            crate::table::neighborhoods_of_points(self, queries, nbhd)
+            let order = self.leaf_order(queries);
+            rows_in_work_order(
+                queries.len(),
+                queries.len(),
+                |w| order[w] as usize,
+                |w, row, q| {
+                    q.resize(self.dim, T::ZERO);
+                    queries.read_point(order[w] as usize, q);
+                    self.search(Query::point(q), nbhd, row)
+                },
+            )
         })?
+    }
+
+    /// The query indices of `queries` ordered by the first tree position of the leaf each falls
+    /// into, ties by index (a counting sort: two passes over the queries).
+    fn leaf_order(&self, queries: &PointsView<'_>) -> Vec<u32> {
+        use rayon::prelude::*;
+        let leaf_of: Vec<u32> = (0..queries.len())
+            .into_par_iter()
+            .map_init(Vec::new, |q, i| {
+                q.resize(self.dim, T::ZERO);
+                queries.read_point(i, q);
+                self.leaf_start(q)
+            })
+            .collect();
+        let mut starts = vec![0u32; self.len() + 1];
+        for &l in &leaf_of {
+            starts[l as usize + 1] += 1;
+        }
+        for p in 0..self.len() {
+            starts[p + 1] += starts[p];
+        }
+        let mut order = vec![0u32; queries.len()];
+        for (i, &l) in leaf_of.iter().enumerate() {
+            order[starts[l as usize] as usize] = i as u32;
+            starts[l as usize] += 1;
+        }
+        order
+    }
+
+    /// The first tree position of the leaf `q` descends to (a non-finite coordinate takes
+    /// some path; such a query is refused when it is answered).
+    fn leaf_start(&self, q: &[T]) -> u32 {
+        let mut node = 0;
+        loop {
+            let n = &self.nodes[node];
+            if n.is_leaf() {
+                return n.a;
+            }
+            node = if q[n.dim as usize] < n.split {
+                node + 1
+            } else {
+                n.a as usize
+            };
+        }
     }
 }
 
