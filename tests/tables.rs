@@ -116,5 +116,8 @@ fn batch_with_a_non_finite_query_is_refused() {
     let err = tree
         .neighborhoods_of(&qv, Neighborhood::Knn { k: 3 }, &TableOptions::default())
         .unwrap_err();
-    assert!(matches!(err, nbhd::NbhdError::NonFiniteQuery { .. }), "{err}");
+    assert!(
+        matches!(err, nbhd::NbhdError::NonFiniteQuery { .. }),
+        "{err}"
+    );
 }
