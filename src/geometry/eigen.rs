@@ -91,7 +91,8 @@ pub(crate) fn sym_eigen3_smallest(a: DMat3) -> Option<(DVec3, DVec3)> {
     // the eigenvalues μ of b = a − qI are the roots of f(μ) = μ³ − 3p²μ − det b, all in
     // [−2p, 2p]; f is concave and f(−2p) ≤ 0 left of 0, so Newton's method from −2p rises
     // monotonically to the smallest root μ0 (no arc cosine, no cosine): stop when it no longer
-    // rises
+    // rises, or after a step below 1e-9 p (the error left is about step²·3|μ0|/(gap·spread),
+    // below 3e-16 p for the gaps accepted here)
     let j2 = 3.0 * p2;
     let mut m0 = -2.0 * p;
     for _ in 0..100 {
@@ -101,7 +102,11 @@ pub(crate) fn sym_eigen3_smallest(a: DMat3) -> Option<(DVec3, DVec3)> {
         if !rises {
             break;
         }
+        let converged = next - m0 <= 1e-9 * p;
         m0 = next;
+        if converged {
+            break;
+        }
     }
     // the other two roots: f(μ) = (μ − μ0)(μ² + μ0 μ + μ0² − 3p²)
     let root = (4.0 * j2 - 3.0 * m0 * m0).max(0.0).sqrt();

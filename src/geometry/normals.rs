@@ -75,14 +75,15 @@ fn frame_of(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> Local
 }
 
 /// The normal (eq. 2.10), the eigenvalues and the `FLAG_*` bits of the covariance of
-/// `N_i ∪ {p_i}` given the neighbours' offsets `x_j − p_i` (eq. 2.8): what the smoothing needs
+/// `N_i ∪ {p_i}` given the neighbours' offsets `x_j − p_i` and their sum, added in order
+/// (eq. 2.8): what the smoothing needs
 /// unless it reads principal curvatures. The smallest eigenvector comes in closed form, and from
 /// the Jacobi iteration of [`local_frame`] whenever the closed form declines (close eigenvalues,
 /// which include every flagged case), so degenerate neighbourhoods get the same finite normal and
 /// the same flags as there. Allocation-free.
-pub(crate) fn offsets_normal(offsets: &[DVec3]) -> (DVec3, DVec3, u8) {
+pub(crate) fn offsets_normal(offsets: &[DVec3], sum: DVec3) -> (DVec3, DVec3, u8) {
     let count = offsets.len() + 1;
-    let m = covariance(offsets.iter().copied(), count);
+    let m = covariance_about(offsets.iter().copied(), sum / count as f64);
     let (values, normal) = super::eigen::sym_eigen3_smallest(m).unwrap_or_else(|| {
         let (values, vectors) = super::eigen::sym_eigen3_fast(m);
         (values, vectors[0])
@@ -97,7 +98,12 @@ pub(crate) fn offsets_normal(offsets: &[DVec3]) -> (DVec3, DVec3, u8) {
 #[inline]
 fn covariance(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> DMat3 {
     let sum = offsets.clone().fold(DVec3::ZERO, |s, d| s + d);
-    let bary = sum / count as f64;
+    covariance_about(offsets, sum / count as f64)
+}
+
+/// The covariance of eq. 2.8 about the barycentre offset `bary`.
+#[inline]
+fn covariance_about(offsets: impl Iterator<Item = DVec3>, bary: DVec3) -> DMat3 {
     // the upper triangle only; every entry is the same sum of the same products as in the
     // full matrix
     let [mut xx, mut xy, mut xz, mut yy, mut yz, mut zz] = [0.0f64; 6];

@@ -574,8 +574,10 @@ fn step_into(
             // rows never hold the point itself (`exclude_self`), so no filter is needed
             debug_assert!(row.iter().all(|&j| j as usize != i));
             buf.resize(row.len(), DVec3::ZERO);
+            let mut sum = DVec3::ZERO;
             for (d, &j) in buf.iter_mut().zip(row) {
                 *d = cur[j as usize] - p;
+                sum += *d;
             }
             let (mut n, mut feature) = (DVec3::ZERO, aniso);
             if needs_principal {
@@ -596,7 +598,7 @@ fn step_into(
                 };
                 n = frame.normal;
             } else if needs_normal {
-                let (normal, values, _) = offsets_normal(buf);
+                let (normal, values, _) = offsets_normal(buf, sum);
                 if interior(values) {
                     return;
                 }
