@@ -33,6 +33,7 @@ pub struct Args {
 #[derive(clap::Subcommand, Debug)]
 pub enum Which {
     Thesis(ThesisArgs),
+    Speed(crate::commands::bench_speed::SpeedArgs),
 }
 
 /// Reproduce Chapter 8 of the thesis: build times and depths of every tree variant, k-d tree
@@ -58,6 +59,7 @@ pub struct ThesisArgs {
 pub fn run(a: Args, out: &Output) -> Result<(), String> {
     match a.which {
         Which::Thesis(t) => thesis(t, out),
+        Which::Speed(s) => crate::commands::bench_speed::run(s, out),
     }
 }
 

@@ -1,6 +1,7 @@
 //! One module per subcommand: each has `Args` (clap) and `run(args, &Output)`.
 
 pub mod bench;
+pub mod bench_speed;
 pub mod convert;
 pub mod demo;
 pub mod geometry;

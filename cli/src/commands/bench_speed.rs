@@ -1,0 +1,624 @@
+//! `nbhd bench speed`: nbhd's all-point tables side by side with the Rust peers in one run
+//! (issue 3): kiddo's immutable tree (f32 and f64) and brute force, on generated sets and on
+//! point-cloud files, for the build, kNN (k = 10, 30), radius (about 20 neighbours) and ε-k
+//! (k = 16 within that radius), on each requested number of threads.
+//!
+//! Every point queries the tree built on the same set, itself included (as the peers do), and
+//! both sides write the whole table (rows in caller order, indices and squared distances).
+//! Each figure is the median of `--reps` runs; ratios are peer / nbhd, so > 1 means nbhd is
+//! faster. Neighbour counts are checked against kiddo's and any difference is reported.
+
+use crate::commands::{finite_points, read_cloud};
+use crate::output::{num, Output};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use nbhd::shapes::datasets::Dataset;
+use nbhd::table::neighborhoods_of_all;
+use nbhd::{
+    BruteForce, BuildOptions, KdTree, Neighborhood, NonFinitePolicy, PointsView, Query, Scalar,
+    TableOptions,
+};
+use rayon::prelude::*;
+use serde_json::json;
+use std::fmt::Write as _;
+use std::num::NonZero;
+use std::path::Path;
+use std::time::Instant;
+
+/// Brute force is quadratic: by default it runs only on sets of at most this many points (and
+/// knn10 only), once per thread count.
+pub const BRUTE_MAX_POINTS: usize = 150_000;
+
+/// The brute-force limit of `--quick` (77,616² distances take half a minute).
+pub const QUICK_BRUTE_MAX_POINTS: usize = 20_000;
+
+/// Sets of at most this many points are "small" (the only ones `--quick` runs).
+pub const QUICK_MAX_POINTS: usize = 150_000;
+
+/// Side-by-side speed of nbhd, kiddo's immutable tree and brute force (issue 3)
+///
+/// For each set, operation, thread count and scalar type: nbhd's median time, kiddo's
+/// (ImmutableKdTree, queries in chunks on a pool of that many threads, the table written like
+/// nbhd's), brute force (knn10 on sets of at most 150,000 points only, one run: it is quadratic), the
+/// ratios peer / nbhd (> 1 means nbhd is faster), nbhd's speed-up over its own 1-thread time,
+/// and a check that the neighbour counts agree with kiddo's. Per set: tree bytes per point.
+#[derive(clap::Args, Debug)]
+pub struct SpeedArgs {
+    /// Sets, comma-separated: generated sets (torus-77k, torus-100k, half-duplicates-100k,
+    /// cylinder-plane-123k, torus-1M, cube-1M, or `all`) and PCD/PLY/OBJ/XYZ files (points
+    /// with NaN coordinates are skipped)
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "torus-77k,cylinder-plane-123k,half-duplicates-100k"
+    )]
+    pub sets: Vec<String>,
+
+    /// Operations, comma-separated
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "build,knn10,knn30,radius,epsk"
+    )]
+    pub ops: Vec<Op>,
+
+    /// Thread counts, comma-separated (each operation runs on each)
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub thread_counts: Vec<usize>,
+
+    /// Runs per figure (the median is reported)
+    #[arg(long, default_value_t = 5)]
+    pub reps: usize,
+
+    /// Coordinate type of the trees
+    #[arg(long, value_enum, default_value = "f32")]
+    pub scalar: ScalarArg,
+
+    /// Brute force (knn10 only, one run: it is quadratic) on sets of at most this many points
+    /// [default: 150000; 20000 with --quick]
+    #[arg(long)]
+    pub brute_max_points: Option<usize>,
+
+    /// Small sets only (at most 150,000 points), one run per figure: a smoke test
+    #[arg(long)]
+    pub quick: bool,
+}
+
+/// An operation of the benchmark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Op {
+    /// Building the tree (kiddo's build is single-threaded)
+    Build,
+    /// The 10 nearest points of every point
+    Knn10,
+    /// The 30 nearest points of every point
+    Knn30,
+    /// All points within the radius giving about 20 neighbours on average
+    Radius,
+    /// The 16 nearest within that radius (ε-k)
+    Epsk,
+}
+
+impl Op {
+    fn name(self) -> &'static str {
+        match self {
+            Op::Build => "build",
+            Op::Knn10 => "knn10",
+            Op::Knn30 => "knn30",
+            Op::Radius => "radius",
+            Op::Epsk => "epsk",
+        }
+    }
+
+    /// Whether the neighbour counts must equal kiddo's exactly (kNN), or may differ by points
+    /// exactly on the radius.
+    fn counts_exact(self) -> bool {
+        matches!(self, Op::Knn10 | Op::Knn30)
+    }
+}
+
+/// Scalar types to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ScalarArg {
+    F32,
+    F64,
+    Both,
+}
+
+/// A set of points to run on.
+struct BenchSet {
+    name: String,
+    /// Finite points only.
+    points: Vec<[f64; 3]>,
+}
+
+/// One measured line of the table.
+struct Row {
+    set: String,
+    scalar: &'static str,
+    op: Op,
+    threads: usize,
+    nbhd_s: f64,
+    kiddo_s: f64,
+    brute_s: Option<f64>,
+    /// nbhd's 1-thread time over this one (when 1 thread was run).
+    speedup: Option<f64>,
+    /// Neighbour totals of nbhd and kiddo (tables only).
+    totals: Option<(usize, usize)>,
+}
+
+impl Row {
+    /// "ok", or what differs.
+    fn check(&self) -> String {
+        match self.totals {
+            None => "–".into(),
+            Some((a, b)) if a == b => "ok".into(),
+            Some((a, b)) => format!("differs: nbhd {a}, kiddo {b}"),
+        }
+    }
+
+    fn agrees(&self) -> bool {
+        self.totals.is_none_or(|(a, b)| a == b)
+    }
+}
+
+/// Per set and scalar: tree memory and the radius used.
+struct SetInfo {
+    set: String,
+    points: usize,
+    scalar: &'static str,
+    bytes_per_point: f64,
+    radius: f64,
+}
+
+/// Options resolved from the command line.
+struct Plan {
+    ops: Vec<Op>,
+    threads: Vec<usize>,
+    reps: usize,
+    brute_max_points: usize,
+}
+
+pub fn run(a: SpeedArgs, out: &Output) -> Result<(), String> {
+    let plan = plan(&a)?;
+    let sets = load_sets(&a.sets, a.quick)?;
+    let (mut rows, mut infos) = (Vec::new(), Vec::new());
+    for set in &sets {
+        out.note(format!("{}: {} points", set.name, set.points.len()));
+        let radius = radius_for_20(&set.points)?;
+        if matches!(a.scalar, ScalarArg::F32 | ScalarArg::Both) {
+            infos.push(bench_set::<f32>(set, radius, &plan, &mut rows)?);
+        }
+        if matches!(a.scalar, ScalarArg::F64 | ScalarArg::Both) {
+            infos.push(bench_set::<f64>(set, radius, &plan, &mut rows)?);
+        }
+    }
+    fill_speedups(&mut rows);
+    out.text(markdown(&rows, &infos, &plan));
+    out.json(&to_json(&rows, &infos, &plan));
+    Ok(())
+}
+
+/// Checks the options; `--quick` means one run per figure.
+fn plan(a: &SpeedArgs) -> Result<Plan, String> {
+    if a.reps == 0 {
+        return Err("--reps must be at least 1".into());
+    }
+    if a.thread_counts.contains(&0) {
+        return Err("--thread-counts must be at least 1 each".into());
+    }
+    let mut ops = a.ops.clone();
+    ops.dedup();
+    let mut threads = a.thread_counts.clone();
+    threads.dedup();
+    Ok(Plan {
+        ops,
+        threads,
+        reps: if a.quick { 1 } else { a.reps },
+        brute_max_points: a.brute_max_points.unwrap_or(if a.quick {
+            QUICK_BRUTE_MAX_POINTS
+        } else {
+            BRUTE_MAX_POINTS
+        }),
+    })
+}
+
+/// Generated sets by name (`all` for every one) and files by path, finite points only.
+fn load_sets(names: &[String], quick: bool) -> Result<Vec<BenchSet>, String> {
+    let mut sets = Vec::new();
+    for name in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
+        if name == "all" {
+            for d in Dataset::ALL {
+                if !quick || d.len_hint() <= QUICK_MAX_POINTS {
+                    sets.push(generated(d));
+                }
+            }
+        } else if let Some(d) = Dataset::ALL.into_iter().find(|d| d.name() == name) {
+            if quick && d.len_hint() > QUICK_MAX_POINTS {
+                return Err(format!(
+                    "--quick runs small sets only (at most {QUICK_MAX_POINTS} points); {name} is not"
+                ));
+            }
+            sets.push(generated(d));
+        } else if Path::new(name).exists() {
+            sets.push(from_file(name, quick)?);
+        } else {
+            let known: Vec<&str> = Dataset::ALL.iter().map(|d| d.name()).collect();
+            return Err(format!(
+                "'{name}' is neither a generated set ({}, all) nor an existing file",
+                known.join(", ")
+            ));
+        }
+    }
+    if sets.is_empty() {
+        return Err("no sets to run (--sets is empty)".into());
+    }
+    Ok(sets)
+}
+
+/// Point counts of the generated sets, known without generating them.
+trait LenHint {
+    fn len_hint(self) -> usize;
+}
+
+impl LenHint for Dataset {
+    fn len_hint(self) -> usize {
+        match self {
+            Dataset::Torus77k => 77_616,
+            Dataset::Torus100k | Dataset::HalfDuplicates100k => 100_000,
+            Dataset::CylinderPlane123k => 123_393,
+            Dataset::Torus1M | Dataset::Cube1M => 1_000_000,
+        }
+    }
+}
+
+fn generated(d: Dataset) -> BenchSet {
+    BenchSet {
+        name: d.name().into(),
+        points: d.points(),
+    }
+}
+
+/// A point-cloud file (format from the extension); points with NaN coordinates are skipped.
+fn from_file(path: &str, quick: bool) -> Result<BenchSet, String> {
+    let cloud = read_cloud(Path::new(path), None).map_err(|e| format!("{path}: {e}"))?;
+    let points: Vec<[f64; 3]> = finite_points(&cloud)
+        .0
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    if points.len() < 31 {
+        return Err(format!(
+            "{path}: {} finite points; the benchmark needs at least 31",
+            points.len()
+        ));
+    }
+    if quick && points.len() > QUICK_MAX_POINTS {
+        return Err(format!(
+            "--quick runs small sets only (at most {QUICK_MAX_POINTS} points); {path} has {}",
+            points.len()
+        ));
+    }
+    let name = Path::new(path)
+        .file_name()
+        .map_or(path.into(), |f| f.to_string_lossy().into_owned());
+    Ok(BenchSet { name, points })
+}
+
+/// The radius giving about 20 neighbours (self included, so the 21st nearest) on average: the
+/// median distance to the 21st nearest point over a sample of about 2,000 points, computed in
+/// f64 so that f32 and f64 runs use the same radius.
+fn radius_for_20(points: &[[f64; 3]]) -> Result<f64, String> {
+    let view = PointsView::from_rows(points).map_err(|e| e.to_string())?;
+    let tree = KdTree::<f64>::build(&view, &BuildOptions::default()).map_err(|e| e.to_string())?;
+    let mut out = Vec::new();
+    let mut d: Vec<f64> = Vec::new();
+    for i in (0..points.len()).step_by((points.len() / 2000).max(1)) {
+        tree.knn(Query::stored(i as u32), 21, &mut out)
+            .map_err(|e| e.to_string())?;
+        d.push(out.last().map_or(0.0, |n| n.sq_dist.sqrt()));
+    }
+    d.sort_by(f64::total_cmp);
+    Ok(d[d.len() / 2])
+}
+
+/// The median wall time of `reps` runs of `f`, in seconds.
+fn median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..reps)
+        .map(|_| {
+            let s = Instant::now();
+            f();
+            s.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[reps / 2]
+}
+
+fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| format!("could not create {threads} threads: {e}"))
+}
+
+/// A coordinate type run by both nbhd and kiddo.
+trait Float: Scalar {
+    const NAME: &'static str;
+    /// kiddo's immutable tree over this type.
+    type Peer: Sync;
+    fn peer_build(points: &[[Self; 3]]) -> Self::Peer;
+    /// kiddo's all-point table in the current pool; returns the neighbour total.
+    fn peer_table(tree: &Self::Peer, points: &[[Self; 3]], op: Op, sq_radius: Self) -> usize;
+}
+
+/// kiddo's all-point table: rows in caller order, written like nbhd's (row lengths, indices,
+/// squared distances), queries in chunks of 1,024 on the current rayon pool.
+macro_rules! kiddo_float {
+    ($t:ty, $name:literal) => {
+        impl Float for $t {
+            const NAME: &'static str = $name;
+            type Peer = ImmutableKdTree<$t, 3>;
+
+            fn peer_build(points: &[[$t; 3]]) -> Self::Peer {
+                ImmutableKdTree::new_from_slice(points).expect("kiddo builds any finite set")
+            }
+
+            fn peer_table(tree: &Self::Peer, points: &[[$t; 3]], op: Op, r2: $t) -> usize {
+                let chunks: Vec<(Vec<usize>, Vec<u32>, Vec<$t>)> = points
+                    .par_chunks(1024)
+                    .map(|chunk| {
+                        let (mut lens, mut ids, mut dists) = (Vec::new(), Vec::new(), Vec::new());
+                        for p in chunk {
+                            let q = tree.query(p);
+                            let nearest =
+                                |k: usize| NonZero::new(k).expect("k of the benchmark is > 0");
+                            let res = match op {
+                                Op::Knn10 | Op::Build => {
+                                    q.nearest_n::<SquaredEuclidean<$t>>(nearest(10)).execute()
+                                }
+                                Op::Knn30 => {
+                                    q.nearest_n::<SquaredEuclidean<$t>>(nearest(30)).execute()
+                                }
+                                Op::Radius => q.within::<SquaredEuclidean<$t>>(r2).execute(),
+                                Op::Epsk => q
+                                    .nearest_n::<SquaredEuclidean<$t>>(nearest(16))
+                                    .within(r2)
+                                    .execute(),
+                            };
+                            lens.push(res.len());
+                            for item in res {
+                                ids.push(item.item);
+                                dists.push(item.distance);
+                            }
+                        }
+                        (lens, ids, dists)
+                    })
+                    .collect();
+                chunks.iter().map(|c| c.1.len()).sum()
+            }
+        }
+    };
+}
+
+kiddo_float!(f32, "f32");
+kiddo_float!(f64, "f64");
+
+/// nbhd's neighbourhood for an operation (tables only).
+fn neighborhood<T: Scalar>(op: Op, radius: T) -> Neighborhood<T> {
+    match op {
+        Op::Build | Op::Knn10 => Neighborhood::Knn { k: 10 },
+        Op::Knn30 => Neighborhood::Knn { k: 30 },
+        Op::Radius => Neighborhood::Radius {
+            radius,
+            sorted: true,
+        },
+        Op::Epsk => Neighborhood::KnnRadius { k: 16, radius },
+    }
+}
+
+/// Every operation and thread count on one set in one scalar type; returns the tree memory.
+fn bench_set<T: Float>(
+    set: &BenchSet,
+    radius: f64,
+    plan: &Plan,
+    rows: &mut Vec<Row>,
+) -> Result<SetInfo, String> {
+    let pts: Vec<[T; 3]> = set
+        .points
+        .iter()
+        .map(|p| p.map(|c| T::from_f64(c)))
+        .collect();
+    let view = PointsView::from_rows(&pts).map_err(|e| e.to_string())?;
+    let options = BuildOptions {
+        non_finite: NonFinitePolicy::Reject,
+        ..BuildOptions::default()
+    };
+    let tree = KdTree::<T>::build(&view, &options).map_err(|e| e.to_string())?;
+    let peer = T::peer_build(&pts);
+    let brute = (set.points.len() <= plan.brute_max_points && plan.ops.contains(&Op::Knn10))
+        .then(|| BruteForce::<T>::new(&view, NonFinitePolicy::Reject))
+        .transpose()
+        .map_err(|e| e.to_string())?;
+    let r = T::from_f64(radius);
+    for &op in &plan.ops {
+        for &threads in &plan.threads {
+            let p = pool(threads)?;
+            let mut row = Row {
+                set: set.name.clone(),
+                scalar: T::NAME,
+                op,
+                threads,
+                nbhd_s: 0.0,
+                kiddo_s: 0.0,
+                brute_s: None,
+                speedup: None,
+                totals: None,
+            };
+            if op == Op::Build {
+                let opts = BuildOptions { threads, ..options };
+                row.nbhd_s = median_secs(plan.reps, || {
+                    KdTree::<T>::build(&view, &opts).expect("built once already");
+                });
+                row.kiddo_s = median_secs(plan.reps, || {
+                    T::peer_build(&pts);
+                });
+            } else {
+                let nbhd = neighborhood(op, r);
+                let opts = TableOptions {
+                    exclude_self: false,
+                    threads,
+                };
+                let (mut ours, mut theirs) = (0, 0);
+                row.nbhd_s = median_secs(plan.reps, || {
+                    ours = tree
+                        .neighborhoods(nbhd, &opts)
+                        .expect("valid options")
+                        .total();
+                });
+                row.kiddo_s = median_secs(plan.reps, || {
+                    theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r));
+                });
+                row.totals = Some((ours, theirs));
+                if let (Some(b), Op::Knn10) = (&brute, op) {
+                    row.brute_s = Some(median_secs(1, || {
+                        p.install(|| neighborhoods_of_all(b, nbhd, false))
+                            .expect("valid options");
+                    }));
+                }
+            }
+            rows.push(row);
+        }
+    }
+    let s = tree.stats();
+    Ok(SetInfo {
+        set: set.name.clone(),
+        points: set.points.len(),
+        scalar: T::NAME,
+        bytes_per_point: s.bytes as f64 / s.points as f64,
+        radius,
+    })
+}
+
+/// nbhd's speed-up over its own 1-thread time, for every row whose 1-thread twin was run.
+fn fill_speedups(rows: &mut [Row]) {
+    let ones: Vec<(String, &'static str, Op, f64)> = rows
+        .iter()
+        .filter(|r| r.threads == 1)
+        .map(|r| (r.set.clone(), r.scalar, r.op, r.nbhd_s))
+        .collect();
+    for r in rows.iter_mut() {
+        if let Some(one) = ones
+            .iter()
+            .find(|o| o.0 == r.set && o.1 == r.scalar && o.2 == r.op)
+        {
+            r.speedup = Some(one.3 / r.nbhd_s);
+        }
+    }
+}
+
+fn ms(s: Option<f64>) -> String {
+    s.map_or("–".into(), |s| format!("{:.1}", s * 1e3))
+}
+
+fn ratio(peer: Option<f64>, ours: f64) -> String {
+    peer.map_or("–".into(), |p| format!("{:.2}", p / ours))
+}
+
+/// The Markdown report: one table of times and ratios, one of memory and radii, and notes.
+fn markdown(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| set | scalar | operation | threads | nbhd [ms] | kiddo [ms] | kiddo / nbhd | brute [ms] | brute / nbhd | nbhd speed-up vs 1 thread | counts vs kiddo |"
+    );
+    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|");
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.set,
+            r.scalar,
+            r.op.name(),
+            r.threads,
+            ms(Some(r.nbhd_s)),
+            ms(Some(r.kiddo_s)),
+            ratio(Some(r.kiddo_s), r.nbhd_s),
+            ms(r.brute_s),
+            ratio(r.brute_s, r.nbhd_s),
+            r.speedup.map_or("–".into(), |x| format!("{x:.2}")),
+            r.check(),
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n| set | points | scalar | tree bytes/point | radius (~20 neighbours) |"
+    );
+    let _ = writeln!(s, "|---|---:|---|---:|---:|");
+    for i in infos {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.1} | {:.6} |",
+            i.set, i.points, i.scalar, i.bytes_per_point, i.radius
+        );
+    }
+    let bad = rows.iter().filter(|r| !r.agrees()).count();
+    let _ = write!(
+        s,
+        "\nMedian of {} run(s) per figure; ratios are peer / nbhd (> 1: nbhd is faster). Every \
+         point queries its own set, itself included; both write the whole table. Brute force: \
+         knn10 on sets of at most {} points only, one run (it is quadratic). kiddo's \
+         build is single-threaded. Count check: {}.",
+        plan.reps,
+        plan.brute_max_points,
+        if bad == 0 {
+            "all agree with kiddo".to_string()
+        } else {
+            format!("{bad} row(s) differ from kiddo")
+        }
+    );
+    s
+}
+
+fn to_json(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> serde_json::Value {
+    let rows: Vec<_> = rows
+        .iter()
+        .map(|r| {
+            json!({
+                "set": r.set,
+                "scalar": r.scalar,
+                "op": r.op.name(),
+                "threads": r.threads,
+                "nbhd_ms": num(r.nbhd_s * 1e3),
+                "kiddo_ms": num(r.kiddo_s * 1e3),
+                "kiddo_ratio": num(r.kiddo_s / r.nbhd_s),
+                "brute_ms": r.brute_s.map(|b| num(b * 1e3)),
+                "brute_ratio": r.brute_s.map(|b| num(b / r.nbhd_s)),
+                "speedup_vs_1_thread": r.speedup.map(num),
+                "nbhd_total": r.totals.map(|t| t.0),
+                "kiddo_total": r.totals.map(|t| t.1),
+                "counts_agree": r.agrees(),
+                "counts_must_be_equal": r.op.counts_exact(),
+            })
+        })
+        .collect();
+    let sets: Vec<_> = infos
+        .iter()
+        .map(|i| {
+            json!({
+                "set": i.set,
+                "points": i.points,
+                "scalar": i.scalar,
+                "tree_bytes_per_point": num(i.bytes_per_point),
+                "radius": num(i.radius),
+            })
+        })
+        .collect();
+    json!({
+        "reps": plan.reps,
+        "brute_max_points": plan.brute_max_points,
+        "counts_agree": rows.iter().all(|r| r["counts_agree"] == true),
+        "sets": sets,
+        "rows": rows,
+    })
+}
