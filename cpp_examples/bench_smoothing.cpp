@@ -20,9 +20,10 @@
 //                      call includes nbhd's neighbourhood search (and its spacing estimate).
 //   nbhd robust        nbhd_smooth_robust, nbhd_robust_options_default() with threads = 1.
 //   nbhd isotropic     as anisotropic with weighting = NBHD_WEIGHTING_ISOTROPIC (reference).
-//   PCL MLS            pcl::MovingLeastSquares<PointXYZ, PointNormal> (the class without OpenMP
-//                      threads, setNumberOfThreads(1)), search radius 5h, polynomial order 2,
-//                      a pcl::search::KdTree, no upsampling, setComputeNormals(false): the
+//   PCL MLS            pcl::MovingLeastSquares<PointXYZ, PointNormal> with setNumberOfThreads(1)
+//                      (its OpenMP loop on one thread; PCL 1.13 has no separate OMP class),
+//                      search radius 5h, polynomial order 2, a pcl::search::KdTree, no
+//                      upsampling, setComputeNormals(false): the
 //                      settings of ../shared/notes/smoothing.md, which compare positions only
 //                      (MLS fits the local plane and polynomial either way; the flag only copies
 //                      the normal into the output). The call (process) includes PCL's tree build
