@@ -500,6 +500,15 @@ fn bench_set<T: Float>(
     })
 }
 
+/// Mean row length of the radius table (self included), if it was run: about 20 unless the
+/// set has many copies of a point (then no radius gives 20).
+fn mean_in_radius(rows: &[Row], i: &SetInfo) -> Option<f64> {
+    rows.iter()
+        .find(|r| r.set == i.set && r.scalar == i.scalar && r.op == Op::Radius)
+        .and_then(|r| r.totals)
+        .map(|t| t.0 as f64 / i.points as f64)
+}
+
 /// nbhd's speed-up over its own 1-thread time, for every row whose 1-thread twin was run.
 fn fill_speedups(rows: &mut [Row]) {
     let ones: Vec<(String, &'static str, Op, f64)> = rows
@@ -552,14 +561,19 @@ fn markdown(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> String {
     }
     let _ = writeln!(
         s,
-        "\n| set | points | scalar | tree bytes/point | radius (~20 neighbours) |"
+        "\n| set | points | scalar | tree bytes/point | radius (~20 neighbours) | mean neighbours within it |"
     );
-    let _ = writeln!(s, "|---|---:|---|---:|---:|");
+    let _ = writeln!(s, "|---|---:|---|---:|---:|---:|");
     for i in infos {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.1} | {:.6} |",
-            i.set, i.points, i.scalar, i.bytes_per_point, i.radius
+            "| {} | {} | {} | {:.1} | {:.6} | {} |",
+            i.set,
+            i.points,
+            i.scalar,
+            i.bytes_per_point,
+            i.radius,
+            mean_in_radius(rows, i).map_or("–".into(), |m| format!("{m:.1}"))
         );
     }
     let bad = rows.iter().filter(|r| !r.agrees()).count();
@@ -580,8 +594,8 @@ fn markdown(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> String {
     s
 }
 
-fn to_json(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> serde_json::Value {
-    let rows: Vec<_> = rows
+fn to_json(measured: &[Row], infos: &[SetInfo], plan: &Plan) -> serde_json::Value {
+    let rows: Vec<_> = measured
         .iter()
         .map(|r| {
             json!({
@@ -611,6 +625,7 @@ fn to_json(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> serde_json::Value {
                 "scalar": i.scalar,
                 "tree_bytes_per_point": num(i.bytes_per_point),
                 "radius": num(i.radius),
+                "mean_in_radius": mean_in_radius(measured, i).map(num),
             })
         })
         .collect();
