@@ -113,27 +113,49 @@ impl<L: Layout<T>, T: Scalar> NodeFacts<T> for ScanFacts<'_, L, T> {
 }
 
 /// Splits the node holding `items`: decides the split and moves the items so that the first
-/// `rank` are the left child. Returns the split and its coordinate value.
+/// `rank` are the left child. Returns the split, its coordinate value and whether the node held
+/// copies of one point (then its items are left sorted by slot; see [`split_copies`]).
 fn split_node<T: Scalar, L: Layout<T>>(
     input: &BuildInput<L>,
     items: &mut [L::Item],
     depth: usize,
-) -> (Split, T) {
+) -> (Split, T, bool) {
     let layout = &input.layout;
     let facts = ScanFacts { layout, items };
     let plan = choose_split(input.options.pivot, depth, layout.dim(), &facts);
     let (dim, rank) = match plan {
         Plan::Rank(split) => (split.dim, split.rank),
+        Plan::Coincident(split) => {
+            // Copies of one point (duplicate-heavy scans): sorted by index once, after which
+            // every descendant is sorted too and splits without a selection or a scan.
+            items.sort_unstable_by_key(|it| layout.slot(it));
+            return (split, layout.coord(&items[split.rank], split.dim), true);
+        }
         Plan::Below { dim, value } => {
             let below = partition_below(layout, items, dim, value);
             match resolve_below(below, items.len()) {
-                Ok(rank) => return (Split { dim, rank }, value),
+                Ok(rank) => return (Split { dim, rank }, value, false),
                 Err(rank) => (dim, rank),
             }
         }
     };
     select(layout, items, rank, dim, input.options.median);
-    (Split { dim, rank }, layout.coord(&items[rank], dim))
+    (Split { dim, rank }, layout.coord(&items[rank], dim), false)
+}
+
+/// The split of a node of copies of one point whose items are sorted by slot (a descendant of
+/// a node [`split_node`] found coincident): what [`split_node`] would decide — halve by index
+/// in dimension `depth mod d` — without scanning the items again.
+fn split_copies<T: Scalar, L: Layout<T>>(
+    layout: &L,
+    items: &[L::Item],
+    depth: usize,
+) -> (Split, T) {
+    let split = Split {
+        dim: depth % layout.dim(),
+        rank: items.len() / 2,
+    };
+    (split, layout.coord(&items[split.rank], split.dim))
 }
 
 /// Moves the items with coordinate `< value` in `dim` to the front; returns their count.
@@ -191,6 +213,8 @@ pub(crate) fn build_serial<T: Scalar, L: Layout<T>>(
         end: usize,
         depth: usize,
         parent: Option<usize>,
+        /// Copies of one point, sorted by slot.
+        copies: bool,
     }
     let leaf_size = input.options.leaf_size;
     let mut nodes: Vec<Node<T>> = Vec::with_capacity(2 * items.len() / leaf_size + 1);
@@ -200,6 +224,7 @@ pub(crate) fn build_serial<T: Scalar, L: Layout<T>>(
         end: items.len(),
         depth,
         parent: None,
+        copies: false,
     }];
     while let Some(t) = stack.pop() {
         let idx = nodes.len();
@@ -213,7 +238,12 @@ pub(crate) fn build_serial<T: Scalar, L: Layout<T>>(
             nodes.push(Node::leaf(offset + t.start, offset + t.end));
             continue;
         }
-        let (split, value) = split_node(input, node_items, t.depth);
+        let (split, value, copies) = if t.copies {
+            let (split, value) = split_copies(&input.layout, node_items, t.depth);
+            (split, value, true)
+        } else {
+            split_node(input, node_items, t.depth)
+        };
         let mid = t.start + split.rank;
         nodes.push(Node::internal(split.dim, value, 0, offset + t.end));
         stack.push(Task {
@@ -221,12 +251,14 @@ pub(crate) fn build_serial<T: Scalar, L: Layout<T>>(
             end: t.end,
             depth: t.depth + 1,
             parent: Some(idx),
+            copies,
         });
         stack.push(Task {
             start: t.start,
             end: mid,
             depth: t.depth + 1,
             parent: None,
+            copies,
         });
     }
     Subtree {
@@ -247,7 +279,7 @@ pub(crate) fn build_parallel<T: Scalar, L: Layout<T>>(
     if n < 2 * PARALLEL_MIN || n <= input.options.leaf_size {
         return build_serial(input, items, offset, depth);
     }
-    let (split, value) = split_node(input, items, depth);
+    let (split, value, _) = split_node(input, items, depth);
     let rank = split.rank;
     let (left, right) = items.split_at_mut(rank);
     let (l, r) = if rank >= PARALLEL_MIN && n - rank >= PARALLEL_MIN {

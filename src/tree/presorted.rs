@@ -108,7 +108,7 @@ pub(crate) fn build_presorted<T: Scalar, L: Layout<T>>(
             end,
         };
         let (j, rank, value) = match choose_split(input.options.pivot, depth, d, &facts) {
-            Plan::Rank(split) => (split.dim, split.rank, None),
+            Plan::Rank(split) | Plan::Coincident(split) => (split.dim, split.rank, None),
             Plan::Below { dim, value } => {
                 match resolve_below(facts.count_below(dim, value), end - start) {
                     Ok(rank) => (dim, rank, Some(value)),

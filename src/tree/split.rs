@@ -34,6 +34,10 @@ pub(crate) enum Plan<T> {
     /// Split at this rank of the composite order of `dim` (the median policies, and the
     /// fallback when all points coincide).
     Rank(Split),
+    /// As [`Plan::Rank`], for a node whose points all coincide: the composite order is the
+    /// index order, so a node sorted by index splits at the rank with no selection (and its
+    /// children stay sorted).
+    Coincident(Split),
     /// Points with coordinate `< value` in `dim` go left, the rest right, and the split
     /// value is `value` (sliding midpoint, closest to middle). If that would leave a side
     /// empty, the rank is clamped to `1` or `n − 1` and the plan becomes a [`Plan::Rank`].
@@ -72,7 +76,7 @@ pub(crate) fn choose_split<T: Scalar>(
     let (dim, lo, hi) = facts.widest(d);
     if hi - lo <= T::ZERO {
         // All points coincide: only the index order tells them apart; halve by it.
-        return Plan::Rank(Split {
+        return Plan::Coincident(Split {
             dim: depth % d,
             rank: median,
         });
