@@ -192,3 +192,45 @@ fn radius_is_inclusive_and_plain() {
         .unwrap();
     assert_eq!(out.iter().map(|n| n.index).collect::<Vec<_>>(), vec![1]);
 }
+
+/// Large clouds on several threads are read in parallel: a NaN or an f64 beyond the f32 range
+/// is still named by its index (the first one), or skipped with the others keeping their
+/// indices, exactly as on one thread.
+#[test]
+fn non_finite_points_of_large_clouds_on_several_threads() {
+    let n = 300_000;
+    let mut c: Vec<f64> = (0..3 * n)
+        .map(|i| ((i * 7919) % 10007) as f64 * 0.01)
+        .collect();
+    c[3 * 123_456 + 2] = f64::NAN;
+    c[3 * 200_000] = 1e300; // finite in f64, not in f32
+    let view = PointsView::from_flat(&c, 3).unwrap();
+    for threads in [1, 2, 3] {
+        let reject = BuildOptions {
+            threads,
+            ..BuildOptions::default()
+        };
+        let err = KdTree::<f32>::build(&view, &reject).unwrap_err();
+        assert_eq!(
+            err,
+            NbhdError::NonFinite {
+                index: 123_456,
+                coordinate: 2
+            },
+            "threads={threads}"
+        );
+        let skip = BuildOptions {
+            non_finite: NonFinitePolicy::Skip,
+            ..reject
+        };
+        let t = KdTree::<f32>::build(&view, &skip).unwrap();
+        assert_eq!(t.len(), n - 2);
+        assert!(t.point(123_456).is_none() && t.point(200_000).is_none());
+        assert_eq!(
+            t.point(7).unwrap(),
+            &c[21..24].iter().map(|&v| v as f32).collect::<Vec<_>>()[..]
+        );
+        let serial = KdTree::<f32>::build(&view, &BuildOptions { threads: 1, ..skip }).unwrap();
+        assert!(t.same_structure(&serial), "threads={threads}");
+    }
+}

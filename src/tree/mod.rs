@@ -13,6 +13,8 @@ mod split;
 
 use std::sync::OnceLock;
 
+use rayon::prelude::*;
+
 use crate::cloud::{resolve_query, Cloud, NonFinitePolicy};
 use crate::error::{NbhdError, Result};
 use crate::parallel::with_threads;
@@ -231,6 +233,30 @@ fn build_inline<T: Scalar, const D: usize>(
     view: &PointsView<'_>,
     options: &BuildOptions,
 ) -> Result<(Subtree<T>, Vec<T>, Vec<u32>)> {
+    if options.threads != 1 && view.len() >= PARALLEL_COPY_MIN {
+        // Reading the points and copying the result out are a fifth of a fast build: on more
+        // than one thread they would cap its speed-up, so they run in parallel too.
+        return with_threads(options.threads, || {
+            let mut records = match view.scalar_type() {
+                ScalarType::F32 => read_records_parallel::<T, f32, D>(view, options.non_finite)?,
+                ScalarType::F64 => read_records_parallel::<T, f64, D>(view, options.non_finite)?,
+            };
+            let subtree = run_build(Inline::<D>, options, &mut records)?;
+            let mut coords = vec![T::ZERO; records.len() * D];
+            coords
+                .par_chunks_mut(D)
+                .zip(records.par_iter())
+                .with_min_len(4096)
+                .for_each(|(c, r)| c.copy_from_slice(&r.p));
+            let mut ids = Vec::new();
+            records
+                .par_iter()
+                .with_min_len(4096)
+                .map(|r| r.slot)
+                .collect_into_vec(&mut ids);
+            Ok((subtree, coords, ids))
+        })?;
+    }
     let mut records = match view.scalar_type() {
         ScalarType::F32 => read_records::<T, f32, D>(view, options.non_finite)?,
         ScalarType::F64 => read_records::<T, f64, D>(view, options.non_finite)?,
@@ -238,6 +264,34 @@ fn build_inline<T: Scalar, const D: usize>(
     let subtree = run_build(Inline::<D>, options, &mut records)?;
     let coords = records.iter().flat_map(|r| r.p).collect();
     Ok((subtree, coords, records.iter().map(|r| r.slot).collect()))
+}
+
+/// Points from which a build on more than one thread reads and writes its copies in parallel.
+const PARALLEL_COPY_MIN: usize = 256 * 1024;
+
+/// [`read_records`] on the current rayon pool: every point converted in parallel, in order;
+/// if any is not finite, the serial reader decides (the error names the first such point, or
+/// the skipped points are left out).
+fn read_records_parallel<T: Scalar, S: Scalar, const D: usize>(
+    view: &PointsView<'_>,
+    policy: NonFinitePolicy,
+) -> Result<Vec<Record<T, D>>> {
+    let mut records = Vec::new();
+    (0..view.len())
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| Record {
+            p: view.row::<S, D>(i).map(|c| T::from_f64(c.to_f64())),
+            slot: i as u32,
+        })
+        .collect_into_vec(&mut records);
+    if records
+        .par_iter()
+        .any(|r| r.p.iter().any(|c| !c.is_finite()))
+    {
+        return read_records::<T, S, D>(view, policy);
+    }
+    Ok(records)
 }
 
 /// The finite points of `view` (stored as `S`) as records of `T` coordinates, applying
@@ -363,7 +417,6 @@ impl<T: Scalar> KdTree<T> {
     /// The query indices of `queries` ordered by the first tree position of the leaf each falls
     /// into, ties by index (a counting sort: two passes over the queries).
     fn leaf_order(&self, queries: &PointsView<'_>) -> Vec<u32> {
-        use rayon::prelude::*;
         let leaf_of: Vec<u32> = (0..queries.len())
             .into_par_iter()
             .map_init(Vec::new, |q, i| {
