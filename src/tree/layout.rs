@@ -16,18 +16,6 @@ pub(crate) trait Layout<T: Scalar>: Sync {
     /// Slot (position in the caller-ordered cloud; increases with the caller's index).
     fn slot(&self, item: &Self::Item) -> u32;
 
-    /// Grows the box `lo`, `hi` (at least `dim` values each) to hold every item.
-    #[inline]
-    fn extend_bounds(&self, items: &[Self::Item], lo: &mut [T], hi: &mut [T]) {
-        for it in items {
-            for j in 0..self.dim() {
-                let c = self.coord(it, j);
-                lo[j] = lo[j].min_of(c);
-                hi[j] = hi[j].max_of(c);
-            }
-        }
-    }
-
     /// `true` if `a` precedes `b` in the composite coordinate order starting at dimension
     /// `start` (thesis Definition 4, Algorithm 5), with the slot as the final tie-break
     /// instead of a hash code.
@@ -97,21 +85,5 @@ impl<T: Scalar, const D: usize> Layout<T> for Inline<D> {
     #[inline]
     fn slot(&self, item: &Record<T, D>) -> u32 {
         item.slot
-    }
-
-    /// The box in local arrays of the record's own width, so that the loop keeps it in
-    /// registers and the compiler can process a record's coordinates together.
-    #[inline]
-    fn extend_bounds(&self, items: &[Record<T, D>], lo: &mut [T], hi: &mut [T]) {
-        let mut l: [T; D] = std::array::from_fn(|j| lo[j]);
-        let mut h: [T; D] = std::array::from_fn(|j| hi[j]);
-        for r in items {
-            for j in 0..D {
-                l[j] = l[j].min_of(r.p[j]);
-                h[j] = h[j].max_of(r.p[j]);
-            }
-        }
-        lo[..D].copy_from_slice(&l);
-        hi[..D].copy_from_slice(&h);
     }
 }

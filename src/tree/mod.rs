@@ -233,37 +233,44 @@ fn build_inline<T: Scalar, const D: usize>(
     view: &PointsView<'_>,
     options: &BuildOptions,
 ) -> Result<(Subtree<T>, Vec<T>, Vec<u32>)> {
-    if options.threads != 1 && view.len() >= PARALLEL_COPY_MIN {
-        // Reading the points and copying the result out are a fifth of a fast build: on more
-        // than one thread they would cap its speed-up, so they run in parallel too.
-        return with_threads(options.threads, || {
-            let mut records = match view.scalar_type() {
-                ScalarType::F32 => read_records_parallel::<T, f32, D>(view, options.non_finite)?,
-                ScalarType::F64 => read_records_parallel::<T, f64, D>(view, options.non_finite)?,
-            };
-            let subtree = run_build(Inline::<D>, options, &mut records)?;
-            let mut coords = vec![T::ZERO; records.len() * D];
+    // Reading the points and copying the result out are a fifth of a fast build: on more than
+    // one thread they would cap its speed-up, so for large clouds they run in parallel too.
+    let parallel = options.threads != 1 && view.len() >= PARALLEL_COPY_MIN;
+    let work = || {
+        let policy = options.non_finite;
+        let mut records = match (view.scalar_type(), parallel) {
+            (ScalarType::F32, false) => read_records::<T, f32, D>(view, policy)?,
+            (ScalarType::F64, false) => read_records::<T, f64, D>(view, policy)?,
+            (ScalarType::F32, true) => read_records_parallel::<T, f32, D>(view, policy)?,
+            (ScalarType::F64, true) => read_records_parallel::<T, f64, D>(view, policy)?,
+        };
+        let subtree = run_build(Inline::<D>, options, &mut records)?;
+        let mut coords = vec![T::ZERO; records.len() * D];
+        let mut ids = Vec::new();
+        if parallel {
             coords
                 .par_chunks_mut(D)
                 .zip(records.par_iter())
                 .with_min_len(4096)
                 .for_each(|(c, r)| c.copy_from_slice(&r.p));
-            let mut ids = Vec::new();
             records
                 .par_iter()
                 .with_min_len(4096)
                 .map(|r| r.slot)
                 .collect_into_vec(&mut ids);
-            Ok((subtree, coords, ids))
-        })?;
-    }
-    let mut records = match view.scalar_type() {
-        ScalarType::F32 => read_records::<T, f32, D>(view, options.non_finite)?,
-        ScalarType::F64 => read_records::<T, f64, D>(view, options.non_finite)?,
+        } else {
+            for (c, r) in coords.chunks_exact_mut(D).zip(&records) {
+                c.copy_from_slice(&r.p);
+            }
+            ids.extend(records.iter().map(|r| r.slot));
+        }
+        Ok((subtree, coords, ids))
     };
-    let subtree = run_build(Inline::<D>, options, &mut records)?;
-    let coords = records.iter().flat_map(|r| r.p).collect();
-    Ok((subtree, coords, records.iter().map(|r| r.slot).collect()))
+    if parallel {
+        with_threads(options.threads, work)?
+    } else {
+        work()
+    }
 }
 
 /// Points from which a build on more than one thread reads and writes its copies in parallel.
