@@ -1,0 +1,186 @@
+//! Steps 2 and 3 of the robust smoothing (see the parent module): the covariance plane of every
+//! point's wide neighbourhood, the noise estimate σ̂, and the feature-aware normal chosen among
+//! candidate planes by a robust count of the points each explains.
+
+use super::rows::Rows;
+use crate::geometry::normals::offsets_normal;
+use crate::geometry::robust_plane::{biweight, weighted_plane_normal};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// The covariance plane of `N_i ∪ {p_i}` (eq. 2.8–2.10): unit normal (eq. 2.10) and the
+/// barycentre it passes through (eq. 2.3).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Plane {
+    pub(super) normal: DVec3,
+    pub(super) barycentre: DVec3,
+}
+
+/// The covariance plane of every stored point over its wide neighbourhood, in parallel.
+pub(super) fn covariance_planes(points: &[DVec3], rows: &Rows) -> Vec<Plane> {
+    (0..points.len())
+        .into_par_iter()
+        .map_init(Vec::new, |offsets: &mut Vec<DVec3>, s| {
+            let p = points[s];
+            offsets.clear();
+            offsets.extend(rows.wide(s).iter().map(|&j| points[j as usize] - p));
+            let sum = offsets.iter().fold(DVec3::ZERO, |a, &d| a + d);
+            let (normal, _, _) = offsets_normal(offsets, sum);
+            Plane {
+                normal,
+                barycentre: p + sum / (offsets.len() + 1) as f64,
+            }
+        })
+        .collect()
+}
+
+/// σ̂: 1.4826 × the median distance of a point to its own covariance plane (the median absolute
+/// deviation of a normal distribution). The median ignores the minority of points at edges.
+pub(super) fn noise_estimate(points: &[DVec3], planes: &[Plane]) -> f64 {
+    let mut r: Vec<f64> = points
+        .par_iter()
+        .zip(planes)
+        .map(|(&p, c)| c.normal.dot(p - c.barycentre).abs())
+        .collect();
+    let m = r.len() / 2;
+    r.select_nth_unstable_by(m, f64::total_cmp);
+    1.4826 * r[m]
+}
+
+/// Lanes of the scoring loop: the points of a neighbourhood are scored eight at a time.
+const LANES: usize = 8;
+
+/// A point and its wide neighbours relative to the point. The scoring reads them coordinate by
+/// coordinate in `f32` (relative coordinates of a few spacings: the rounding, 6e-8 of that, is
+/// far below the inlier width), padded to a multiple of [`LANES`] with NaN, whose biweight is 0;
+/// the refit reads them in `f64`.
+#[derive(Default)]
+struct Local {
+    /// The points relative to the point, unpadded, for the refit.
+    points: Vec<DVec3>,
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+}
+
+impl Local {
+    fn gather(&mut self, points: &[DVec3], s: usize, row: &[u32]) {
+        let p = points[s];
+        self.points.clear();
+        self.points.push(DVec3::ZERO);
+        self.points
+            .extend(row.iter().map(|&j| points[j as usize] - p));
+        let padded = self.points.len().div_ceil(LANES) * LANES;
+        for v in [&mut self.x, &mut self.y, &mut self.z] {
+            v.clear();
+            v.resize(padded, f32::NAN);
+        }
+        for (k, d) in self.points.iter().enumerate() {
+            self.x[k] = d.x as f32;
+            self.y[k] = d.y as f32;
+            self.z[k] = d.z as f32;
+        }
+    }
+
+    /// `Σ biweight(⟨n, q⟩ − offset, width)` over the local points `q`: how many of them the
+    /// plane `⟨n, q⟩ = offset` explains. Summed in eight lanes and then lane by lane, the same
+    /// order on every machine and thread.
+    fn score(&self, n: DVec3, offset: f64, width: f64) -> f32 {
+        let (nx, ny, nz) = (n.x as f32, n.y as f32, n.z as f32);
+        let (offset, inv) = (offset as f32, (1.0 / width) as f32);
+        let mut acc = [0.0f32; LANES];
+        let chunks = self
+            .x
+            .chunks_exact(LANES)
+            .zip(self.y.chunks_exact(LANES))
+            .zip(self.z.chunks_exact(LANES));
+        for ((x, y), z) in chunks {
+            for l in 0..LANES {
+                let u = (nx * x[l] + ny * y[l] + nz * z[l] - offset) * inv;
+                let v = 1.0 - u * u;
+                acc[l] += if v > 0.0 { v * v } else { 0.0 };
+            }
+        }
+        acc.iter().sum()
+    }
+
+    /// The normal of the covariance of the local points weighted by their biweight to the plane
+    /// `⟨n, q⟩ = offset` (eq. 2.8–2.10 with a weight per point), or `None` if no point has
+    /// weight.
+    fn refit(&self, n: DVec3, offset: f64, width: f64) -> Option<DVec3> {
+        weighted_plane_normal(&self.points, |q| biweight(n.dot(q) - offset, width))
+    }
+}
+
+/// Step 3 of the parent module: for each point the best-supported plane among its own
+/// covariance plane and those of the farthest quarter of its wide neighbours, refitted over its
+/// inliers. The candidates are the farthest neighbours because their neighbourhoods are shifted
+/// the most: near an edge they are the ones that lie on one face; the nearer neighbours'
+/// neighbourhoods overlap the point's own almost entirely and repeat its plane (measured: the
+/// quality of docs/smoothing-results.md holds or improves with a quarter of the candidates, at a
+/// quarter of the cost of scoring all).
+pub(super) fn selected_normals(
+    points: &[DVec3],
+    rows: &Rows,
+    planes: &[Plane],
+    width: f64,
+) -> Vec<DVec3> {
+    (0..points.len())
+        .into_par_iter()
+        .map_init(Local::default, |local, s| {
+            let row = rows.wide(s);
+            local.gather(points, s, row);
+            let p = points[s];
+            // the plane of stored point c in coordinates relative to p: ⟨n, q⟩ = ⟨n, b − p⟩
+            let plane_of = |c: usize| {
+                let pl = planes[c];
+                (pl.normal, pl.normal.dot(pl.barycentre - p))
+            };
+            let own = plane_of(s);
+            let mut best = (local.score(own.0, own.1, width), own);
+            for &j in &row[row.len() - row.len().div_ceil(4)..] {
+                let candidate = plane_of(j as usize);
+                let score = local.score(candidate.0, candidate.1, width);
+                if score > best.0 {
+                    best = (score, candidate);
+                }
+            }
+            let (n, offset) = best.1;
+            local.refit(n, offset, width).unwrap_or(n)
+        })
+        .collect()
+}
+
+/// The biweight itself is defined once, in `geometry::robust_plane`; the scoring loop above
+/// inlines its arithmetic (multiplying by the inverse width) so that it vectorises. This
+/// checks that both agree.
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lane_scores_match_the_biweight_sum() {
+        let pts: Vec<DVec3> = (0..11)
+            .map(|i| DVec3::new(i as f64 * 0.3, (i * i) as f64 * 0.05, (i % 3) as f64 * 0.1))
+            .collect();
+        let row: Vec<u32> = (1..11).collect();
+        let mut local = Local::default();
+        local.gather(&pts, 0, &row);
+        assert_eq!(local.x.len(), 16);
+        let n = DVec3::new(0.1, 0.2, 1.0).normalize();
+        let expect: f64 = pts
+            .iter()
+            .map(|&q| biweight(n.dot(q - pts[0]) - 0.05, 0.2))
+            .sum();
+        assert!((f64::from(local.score(n, 0.05, 0.2)) - expect).abs() < 1e-5);
+        // points on the plane z = 0 only: the refit finds it
+        let flat: Vec<DVec3> = (0..9)
+            .map(|i| DVec3::new((i % 3) as f64, (i / 3) as f64, 0.0))
+            .chain([DVec3::new(0.5, 0.5, 3.0)])
+            .collect();
+        local.gather(&flat, 0, &(1..10).collect::<Vec<u32>>());
+        let r = local.refit(DVec3::Z, 0.0, 0.5).unwrap();
+        assert!((r.z.abs() - 1.0).abs() < 1e-12);
+        assert_eq!(local.refit(DVec3::Z, 100.0, 0.5), None);
+    }
+}
