@@ -641,6 +641,8 @@ fn smooth_matches_the_library_and_brings_points_closer_to_the_surface() {
         ),
         (
             vec![
+                "--method",
+                "anisotropic",
                 "--lambda",
                 "0.3/h",
                 "--weighting",
@@ -674,6 +676,8 @@ fn smooth_matches_the_library_and_brings_points_closer_to_the_surface() {
         ),
         (
             vec![
+                "-m",
+                "anisotropic",
                 "--criterion",
                 "q",
                 "--quotient",
@@ -701,6 +705,88 @@ fn smooth_matches_the_library_and_brings_points_closer_to_the_surface() {
         let after = rms(&cloud.positions);
         assert!(after < 0.8 * before, "{args:?}: RMS {after} vs {before}");
         assert!(read_png(std::path::Path::new(&png)).0 == 800);
+    }
+}
+
+#[test]
+fn robust_smoothing_is_the_default_and_matches_the_library() {
+    use nbhd::smooth::robust::{smooth_robust, RobustOptions};
+    let (file, pts) = noisy_sphere_file("nsphere-r.ply");
+    let dist = |p: &[f64; 3]| (DVec3::from_array(*p).length() - 1.0).powi(2);
+    let rms = |c: &[[f64; 3]]| (c.iter().map(dist).sum::<f64>() / c.len() as f64).sqrt();
+    let before = rms(&pts.iter().map(|p| p.to_array()).collect::<Vec<_>>());
+    for (args, opts) in [
+        (
+            vec![],
+            RobustOptions {
+                orientation: nbhd::geometry::Orientation::Propagate,
+                ..RobustOptions::default()
+            },
+        ),
+        (
+            vec![
+                "--method",
+                "robust",
+                "-k",
+                "16",
+                "--k-plane",
+                "32",
+                "--radius",
+                "10h",
+                "--iterations",
+                "3",
+                "--tolerance",
+                "0",
+                "--inlier-width",
+                "4",
+                "--feature-angle",
+                "30",
+                "--tau",
+                "0.8",
+                "--orient",
+                "none",
+            ],
+            RobustOptions {
+                k: 16,
+                k_plane: 32,
+                epsilon: Length::Relative(10.0),
+                max_iterations: 3,
+                tolerance: 0.0,
+                inlier_width: 4.0,
+                feature_angle: 30.0,
+                tau: 0.8,
+                ..RobustOptions::default()
+            },
+        ),
+    ] {
+        let out = tmp("nsphere-robust.ply");
+        let mut a = vec!["--json", "smooth", &file, &out];
+        a.extend(&args);
+        let v = json_of(&nbhd(&a));
+        assert_eq!(v["method"], "robust");
+        let lib = smooth_robust(&pts, &opts).unwrap();
+        let cloud = nbhd::io::read(&out).unwrap();
+        let want: Vec<[f64; 3]> = lib.points.iter().map(|p| p.to_array()).collect();
+        assert_eq!(cloud.positions, want, "{args:?}");
+        assert_eq!(v["k"], opts.k as u64);
+        assert_eq!(v["k_plane"], opts.k_plane as u64);
+        assert!(v["iterations"].as_u64().unwrap() <= opts.max_iterations as u64);
+        let after = rms(&cloud.positions);
+        assert!(after < 0.5 * before, "{args:?}: RMS {after} vs {before}");
+    }
+    // options of the other method are refused, naming the option
+    let out = tmp("nsphere-robust-bad.ply");
+    for (args, name) in [
+        (vec!["--lambda", "0.2/h"], "--lambda"),
+        (vec!["--steps", "3"], "--steps"),
+        (vec!["-m", "anisotropic", "--k-plane", "30"], "--k-plane"),
+        (vec!["-m", "isotropic", "--weighting", "cont"], "--weighting"),
+    ] {
+        let mut a = vec!["smooth", &file, &out];
+        a.extend(&args);
+        let o = nbhd(&a);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(stderr(&o).contains(name), "{args:?}: {}", stderr(&o));
     }
 }
 
