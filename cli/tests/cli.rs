@@ -231,6 +231,14 @@ fn demo_writes_files_pictures_and_a_summary_where_smoothing_reduces_the_error() 
         assert!((rms(0) - 0.5).abs() < 0.05, "{name}: noisy RMS {}", rms(0));
         assert!(rms(1) < 0.7 * rms(0), "{name}: isotropic RMS {}", rms(1));
         assert!(rms(2) < 0.8 * rms(0), "{name}: anisotropic RMS {}", rms(2));
+        assert_eq!(s["runs"][3]["stage"], "robust", "{name}");
+        assert!(
+            rms(3) < rms(1).min(rms(2)),
+            "{name}: robust RMS {} vs {} / {}",
+            rms(3),
+            rms(1),
+            rms(2)
+        );
         if name == "cube" {
             // The anisotropic flow keeps the edges better than the isotropic one.
             let edge = |i: usize| s["runs"][i]["quality"]["edge_rms_h"].as_f64().unwrap();
@@ -257,7 +265,7 @@ fn demo_writes_files_pictures_and_a_summary_where_smoothing_reduces_the_error() 
         }
     }
     let (w, h, _) = read_png(&dir.join("overview.png"));
-    assert_eq!((w, h), (3 * 640, 3 * 480));
+    assert_eq!((w, h), (4 * 640, 3 * 480));
     let md = std::fs::read_to_string(dir.join("summary.md")).unwrap();
     assert!(md.contains("| cube "), "{md}");
 }
@@ -283,13 +291,21 @@ fn nbhd_without_a_command_runs_the_demo_and_prints_the_summary() {
     ] {
         assert!(s.contains(want), "no '{want}' in:\n{s}");
     }
-    // The summary row of the cube: noisy RMS first, then isotropic and anisotropic, smaller.
-    let row = s.lines().find(|l| l.starts_with("| cube")).unwrap();
-    let cells: Vec<f64> = row
-        .split('|')
-        .filter_map(|c| c.trim().parse::<f64>().ok())
+    // The summary rows of the cube: noisy, isotropic, anisotropic, robust; the RMS (first
+    // number of a row) smaller after each smoothing, smallest after the robust one.
+    let rms: Vec<f64> = s
+        .lines()
+        .filter(|l| l.starts_with("| cube"))
+        .map(|row| {
+            row.split('|')
+                .filter_map(|c| c.trim().parse::<f64>().ok())
+                .next()
+                .unwrap()
+        })
         .collect();
-    assert!(cells[1] < cells[0] && cells[2] < cells[0], "{row}");
+    assert_eq!(rms.len(), 4, "{s}");
+    assert!(rms[1..].iter().all(|&r| r < rms[0]), "{rms:?}");
+    assert!(rms[3] < rms[1].min(rms[2]), "{rms:?}");
     assert!(std::path::Path::new(&dir)
         .join("cube-anisotropic.png")
         .is_file());
@@ -780,7 +796,10 @@ fn robust_smoothing_is_the_default_and_matches_the_library() {
         (vec!["--lambda", "0.2/h"], "--lambda"),
         (vec!["--steps", "3"], "--steps"),
         (vec!["-m", "anisotropic", "--k-plane", "30"], "--k-plane"),
-        (vec!["-m", "isotropic", "--weighting", "cont"], "--weighting"),
+        (
+            vec!["-m", "isotropic", "--weighting", "cont"],
+            "--weighting",
+        ),
     ] {
         let mut a = vec!["smooth", &file, &out];
         a.extend(&args);

@@ -3,7 +3,7 @@
 //! For each of the thesis' test shapes — cube, torus, cylinder ∪ plane segment — a seeded
 //! sample with seeded Gaussian noise in units of the mean spacing h; a k-d tree with every pivot
 //! policy (statistics and build times); the ε-k neighbourhood table from each tree (checked to
-//! be identical); isotropic and anisotropic smoothing; before/after PLY files with normals and
+//! be identical); isotropic, anisotropic and robust smoothing; before/after PLY files with normals and
 //! curvatures and PNG pictures coloured by curvature; and the quality against the analytic
 //! surface (RMS distance, edge RMS, normal error) in a summary table.
 
@@ -17,6 +17,7 @@ use nbhd::geometry::Orientation;
 use nbhd::io::{self, PointCloud, Precision, WriteOptions};
 use nbhd::shapes::metrics::{evaluate, Quality};
 use nbhd::shapes::{noisy_sample, Cube, CylinderPlane, NoiseKind, Shape, Torus};
+use nbhd::smooth::robust::{smooth_robust_with_progress, RobustOptions};
 use nbhd::smooth::{smooth_with_progress, SmoothOptions, SmoothResult};
 use nbhd::{
     BuildOptions, KdTree, NeighborTable, Neighborhood, PivotPolicy, PointsView, TableOptions,
@@ -207,7 +208,7 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
          Build times are the median of three builds (leaf size {}, median policies with \
          Floyd-Rivest); the ε-k table is every point's k nearest other points within ε.\n\
          Pictures: {}/*.png, all of them in overview.png (rows: {}; columns: noisy, \
-         isotropic, anisotropic); colour = curvature as the surface variation \
+         isotropic, anisotropic, robust); colour = curvature as the surface variation \
          λ0/(λ0+λ1+λ2) of the neighbourhood (the thesis' CovQuotient), pale where flat, red at \
          edges and noise; light from the estimated normals.\n\
          Point files with normals and curvature properties: {}/*.ply\n\
@@ -316,18 +317,34 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
         ("anisotropic", base),
     ];
     let mut results: Vec<(&'static str, SmoothResult, f64)> = Vec::new();
-    for (i, (label, o)) in runs_opts.iter().enumerate() {
-        let t = Instant::now();
-        let start = bar_pos(i);
-        let len = bar_pos(i + 1) - start;
-        let r = smooth_with_progress(&ns.points, o, &mut |f, _| {
+    let progress_of = |i: usize, label: &'static str| {
+        let (start, len) = (bar_pos(i), bar_pos(i + 1) - bar_pos(i));
+        let bar = &bar;
+        move |f: f64, _| {
             bar.message(format!("{name}: {label}"));
             bar.set(start + (f * len as f64) as u64);
             true
-        })
-        .map_err(lib)?;
+        }
+    };
+    for (i, (label, o)) in runs_opts.iter().enumerate() {
+        let t = Instant::now();
+        let r = smooth_with_progress(&ns.points, o, &mut progress_of(i, label)).map_err(lib)?;
         results.push((label, r, t.elapsed().as_secs_f64()));
     }
+    // The robust smoothing with its defaults (its neighbourhoods are its own: the 24 nearest
+    // within 12h, planes over the 48 nearest).
+    let t = Instant::now();
+    let robust = RobustOptions {
+        orientation: Orientation::Propagate,
+        ..RobustOptions::default()
+    };
+    let r = smooth_robust_with_progress(
+        &ns.points,
+        &robust,
+        &mut progress_of(runs_opts.len(), "robust"),
+    )
+    .map_err(lib)?;
+    results.push(("robust", r, t.elapsed().as_secs_f64()));
 
     // Files, pictures and quality.
     bar.message(format!("{name}: files and pictures"));
@@ -386,9 +403,9 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
 }
 
 /// Bar position where smoothing run `i` starts (0: input's normals, 1: isotropic, 2:
-/// anisotropic, 3: the end of the last).
+/// anisotropic, 3: robust, 4: the end of the last).
 fn bar_pos(i: usize) -> u64 {
-    [5, 8, 18, 29][i]
+    [5, 8, 13, 18, 29][i]
 }
 
 fn write_ply(path: &Path, cloud: &PointCloud) -> Result<(), String> {
@@ -475,26 +492,27 @@ fn edge(q: &Quality) -> String {
 
 fn summary_table(reports: &[ShapeReport]) -> String {
     let mut t = String::from(
-        "| shape          | RMS noisy | RMS iso | RMS aniso | edge noisy | edge iso | edge aniso | normal° noisy/iso/aniso | iso s | aniso s |\n\
-         |----------------|-----------|---------|-----------|------------|----------|------------|-------------------------|-------|---------|\n",
+        "| shape          | method      | RMS   | edge RMS | normal° | seconds |\n\
+         |----------------|-------------|-------|----------|---------|---------|\n",
     );
     for r in reports {
-        let [n, i, a] = [&r.runs[0], &r.runs[1], &r.runs[2]];
-        let deg = |q: &Quality| q.normal_error_deg.unwrap_or(f64::NAN);
-        let _ = writeln!(
-            t,
-            "| {:<14} | {:>9.3} | {:>7.3} | {:>9.3} | {:>10} | {:>8} | {:>10} | {:>23} | {:>5.2} | {:>7.2} |",
-            r.name,
-            n.quality.rms,
-            i.quality.rms,
-            a.quality.rms,
-            edge(&n.quality),
-            edge(&i.quality),
-            edge(&a.quality),
-            format!("{:.1} / {:.1} / {:.1}", deg(&n.quality), deg(&i.quality), deg(&a.quality)),
-            i.seconds,
-            a.seconds
-        );
+        for run in &r.runs {
+            let q = &run.quality;
+            let _ = writeln!(
+                t,
+                "| {:<14} | {:<11} | {:.3} | {:>8} | {:>7.1} | {:>7} |",
+                r.name,
+                run.label,
+                q.rms,
+                edge(q),
+                q.normal_error_deg.unwrap_or(f64::NAN),
+                if run.label == "noisy" {
+                    "-".to_string()
+                } else {
+                    format!("{:.2}", run.seconds)
+                }
+            );
+        }
     }
     t
 }
