@@ -22,16 +22,18 @@ use crate::geometry::curvature::{
     all_principal_curvatures, directional_curvature, offset_curvature,
     offsets_principal_curvatures, DensityForm, PrincipalCurvatures, PrincipalFormula,
 };
-use crate::geometry::neighbors::{mean_spacing_of, neighbor_table, neighbor_table_and_order};
+use crate::geometry::neighbors::mean_spacing_of;
 use crate::geometry::normals::{
     local_frames, offsets_frame, offsets_normal, orient, LocalFrame, Orientation,
 };
-use crate::query::Neighborhood;
 use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
+use source::knn_rows;
+pub use source::{Neighbors, SearchMethod};
 
 pub mod robust;
+pub mod source;
 pub use robust::{
     smooth_robust, smooth_robust_report, smooth_robust_with_progress, RobustOptions, RobustReport,
 };
@@ -354,12 +356,29 @@ pub fn smooth_with_progress(
     options: &SmoothOptions,
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<SmoothResult> {
+    smooth_from(points, Neighbors::default(), options, progress)
+}
+
+/// [`smooth_with_progress`] with the neighbourhoods from `neighbors`: a search of the call's own
+/// (k-d tree, PCA sweep or brute force: the same result from each) or a table the caller
+/// already has (see [`source`]). With `update_neighbors`, the later searches use the k-d tree
+/// unless `neighbors` names another method.
+pub fn smooth_from(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &SmoothOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+) -> Result<SmoothResult> {
     options.validate()?;
     check_points(points)?;
     let total = options.steps as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
-    let (knn, order) = neighbor_table_and_order(points, Neighborhood::Knn { k: options.k }, true)?;
+    let (knn, order) = knn_rows(points, neighbors, options.k)?;
+    let research = match neighbors {
+        Neighbors::Search(method) => Neighbors::Search(method),
+        Neighbors::Table(_) => Neighbors::default(),
+    };
     let h = mean_spacing_of(&knn);
     if options.needs_relative() && !(h > 0.0 && h.is_finite()) {
         return Err(NbhdError::InvalidOption {
@@ -395,10 +414,7 @@ pub fn smooth_with_progress(
             if step > 0 && options.update_neighbors {
                 report(base, Stage::Neighbors)?;
                 unpermute(&stored, &order, &mut cur);
-                table = cut_to(
-                    neighbor_table(&cur, Neighborhood::Knn { k: options.k }, true)?,
-                    eps,
-                );
+                table = cut_to(knn_rows(&cur, research, options.k)?.0, eps);
                 rows = Rows::permuted(&table, &order);
             }
             report(base + 0.1, Stage::Geometry)?;
@@ -411,10 +427,7 @@ pub fn smooth_with_progress(
     let outputs = if options.outputs {
         report(options.steps as f64 + 0.2, Stage::Outputs)?;
         if options.update_neighbors && options.steps > 0 {
-            table = cut_to(
-                neighbor_table(&cur, Neighborhood::Knn { k: options.k }, true)?,
-                eps,
-            );
+            table = cut_to(knn_rows(&cur, research, options.k)?.0, eps);
         }
         point_outputs_with(&cur, &table, options, &res)?
     } else {
@@ -434,12 +447,22 @@ pub fn smooth_with_progress(
 /// The per-point outputs (Section 7.3) of `points` themselves, without smoothing: the
 /// neighbourhoods, thresholds and orientation of `options` apply.
 pub fn analyze(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult> {
+    analyze_from(points, Neighbors::default(), options)
+}
+
+/// [`analyze`] with the neighbourhoods from `neighbors` (see [`smooth_from`]): normals and
+/// curvatures of points whose neighbour table or tree the caller already has.
+pub fn analyze_from(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &SmoothOptions,
+) -> Result<SmoothResult> {
     let opts = SmoothOptions {
         steps: 0,
         outputs: true,
         ..*options
     };
-    smooth(points, &opts)
+    smooth_from(points, neighbors, &opts, &mut |_, _| true)
 }
 
 /// Rows of `knn` cut to the points within `eps` (the ε-k-neighbourhood, Section 2.1.1: the

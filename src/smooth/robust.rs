@@ -75,13 +75,13 @@ mod planes;
 mod rows;
 mod step;
 
+use super::source::{knn_rows, Neighbors};
 use super::{check_points, point_outputs_with, progress_in_units, Length, Resolved};
 use super::{FeatureCriterion, Weighting};
 use super::{SmoothOptions, SmoothResult, Stage};
 use crate::error::{NbhdError, Result};
-use crate::geometry::neighbors::{mean_spacing_of, neighbor_table_and_order};
+use crate::geometry::neighbors::mean_spacing_of;
 use crate::geometry::normals::Orientation;
-use crate::query::Neighborhood;
 use glam::DVec3;
 use planes::{covariance_planes, noise_estimate, selected_normals};
 use rows::Rows;
@@ -227,13 +227,25 @@ pub fn smooth_robust_report(
     options: &RobustOptions,
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<RobustReport> {
+    smooth_robust_from(points, Neighbors::default(), options, progress)
+}
+
+/// [`smooth_robust_report`] with the neighbourhoods from `neighbors`: a search of the call's
+/// own (k-d tree, PCA sweep or brute force: the same result from each) or a table the caller
+/// already has, of which the first `k_plane` of each row are taken (see
+/// [`super::source`]).
+pub fn smooth_robust_from(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &RobustOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+) -> Result<RobustReport> {
     options.validate()?;
     check_points(points)?;
     let total = options.max_iterations as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
-    let (knn, order) =
-        neighbor_table_and_order(points, Neighborhood::Knn { k: options.k_plane }, true)?;
+    let (knn, order) = knn_rows(points, neighbors, options.k_plane)?;
     let h = mean_spacing_of(&knn);
     let relative = matches!(options.epsilon, Length::Relative(_));
     if relative && !(h > 0.0 && h.is_finite()) {
@@ -246,10 +258,7 @@ pub fn smooth_robust_report(
     let eps = options.epsilon.resolve(h);
     // the points and their neighbour rows in tree order (rows.rs); back in input order at the end
     let mut cur: Vec<DVec3> = order.iter().map(|&o| points[o as usize]).collect();
-    let mut rows = Rows::in_stored_order(&knn, &order).ok_or_else(|| NbhdError::InvalidOption {
-        name: "points",
-        reason: "the k-nearest table has rows of unequal length".into(),
-    })?;
+    let mut rows = Rows::in_stored_order(&knn, &order);
     drop(knn);
     rows.cut(eps);
     let min_neighbors = rows.min_narrow_len(options.k);
@@ -282,13 +291,7 @@ pub fn smooth_robust_report(
         normals = selected_normals(&cur, &rows, &planes, width);
         report(base + 0.6, Stage::Step)?;
         let next = step(&cur, &rows, &normals, width, options);
-        let rms = (next
-            .iter()
-            .zip(&cur)
-            .map(|(a, b)| a.distance_squared(*b))
-            .sum::<f64>()
-            / cur.len() as f64)
-            .sqrt();
+        let rms = displacement_rms(&cur, &next, &order);
         moved.push(rms / hu);
         cur = next;
         rows_current = false;
@@ -347,6 +350,16 @@ pub fn smooth_robust_report(
         noise,
         moved,
     })
+}
+
+/// RMS distance between `before` and `after` (stored as `order` says), summed in the caller's
+/// order so that it does not depend on how the points are stored.
+fn displacement_rms(before: &[DVec3], after: &[DVec3], order: &[u32]) -> f64 {
+    let mut sq = vec![0.0; before.len()];
+    for ((a, b), &o) in after.iter().zip(before).zip(order) {
+        sq[o as usize] = a.distance_squared(*b);
+    }
+    (sq.iter().sum::<f64>() / sq.len() as f64).sqrt()
 }
 
 /// Values stored in tree order (`order[s]` is the caller's index of the value at `s`), in the

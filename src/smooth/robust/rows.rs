@@ -19,43 +19,48 @@ use rayon::prelude::*;
 /// candidates of the point stored at `s`, nearest first; only the first `len[s]` (those within
 /// ε) are its wide neighbourhood.
 pub(super) struct Rows {
-    /// Candidates per row (all rows have as many: the `k_plane` nearest other points).
+    /// Room per row: the longest row's number of candidates (the `k_plane` nearest other
+    /// points, fewer in a caller's table).
     width: usize,
-    /// Stored positions of the candidates, `width` per row.
+    /// Stored positions of the candidates, `width` per row (the first `candidates[s]` used).
     index: Vec<u32>,
     /// Squared distances to the candidates, `width` per row.
     sq_dist: Vec<f64>,
+    /// How many candidates a row has.
+    candidates: Vec<u32>,
     /// How many of a row's candidates lie within ε.
     len: Vec<u32>,
 }
 
 impl Rows {
-    /// The rows of `table` (a k-nearest table over the caller's indices, rows of equal length)
-    /// for the points stored as `order` says (`order[s]` is the caller's index of the point
-    /// stored at `s`). `None` if the rows are not all of one length.
-    pub(super) fn in_stored_order(table: &NeighborTable<f64>, order: &[u32]) -> Option<Self> {
-        let width = table.indices_of(0).len();
+    /// The rows of `table` (over the caller's indices, nearest first) for the points stored as
+    /// `order` says (`order[s]` is the caller's index of the point stored at `s`).
+    pub(super) fn in_stored_order(table: &NeighborTable<f64>, order: &[u32]) -> Self {
+        let width = table.max_row_len();
         let mut position = vec![0u32; order.len()];
         for (s, &o) in order.iter().enumerate() {
             position[o as usize] = s as u32;
         }
         let mut index = Vec::with_capacity(order.len() * width);
         let mut sq_dist = Vec::with_capacity(order.len() * width);
+        let mut candidates = Vec::with_capacity(order.len());
         for &o in order {
             let row = table.indices_of(o as usize);
-            if row.len() != width {
-                return None;
-            }
             index.extend(row.iter().map(|&j| position[j as usize]));
             sq_dist.extend_from_slice(table.sq_dists_of(o as usize));
+            // padding: never read (`candidates` bounds every row)
+            index.resize(index.len() + width - row.len(), 0);
+            sq_dist.resize(sq_dist.len() + width - row.len(), f64::INFINITY);
+            candidates.push(row.len() as u32);
         }
-        let len = vec![width as u32; order.len()];
-        Some(Self {
+        let len = candidates.clone();
+        Self {
             width,
             index,
             sq_dist,
+            candidates,
             len,
-        })
+        }
     }
 
     /// The wide neighbourhood of the point stored at `s`: stored positions, nearest first.
@@ -86,12 +91,15 @@ impl Rows {
     pub(super) fn update(&mut self, points: &[DVec3], order: &[u32], eps: f64) {
         let e2 = eps * eps;
         let width = self.width.max(1);
+        let candidates = &self.candidates;
         self.index
             .par_chunks_mut(width)
             .zip(self.sq_dist.par_chunks_mut(width))
             .zip(self.len.par_iter_mut())
             .enumerate()
             .for_each(|(s, ((index, sq_dist), len))| {
+                let used = candidates[s] as usize;
+                let (index, sq_dist) = (&mut index[..used], &mut sq_dist[..used]);
                 let p = points[s];
                 for (d, &j) in sq_dist.iter_mut().zip(index.iter()) {
                     *d = points[j as usize].distance_squared(p);
@@ -107,6 +115,7 @@ impl Rows {
         let e2 = eps * eps;
         let width = self.width.max(1);
         for (sq_dist, len) in self.sq_dist.chunks(width).zip(self.len.iter_mut()) {
+            // padding is infinite: never within ε
             *len = sq_dist.iter().take_while(|&&d| d <= e2).count() as u32;
         }
     }
@@ -165,7 +174,7 @@ mod tests {
             true,
         )
         .unwrap();
-        let mut rows = Rows::in_stored_order(&table, &order).unwrap();
+        let mut rows = Rows::in_stored_order(&table, &order);
         let stored: Vec<DVec3> = order.iter().map(|&o| pts_in[o as usize]).collect();
         // caller's point 1 (stored at 2): neighbours 0 and 2 tie at distance 1, then 3
         assert_eq!(rows.wide(2), &[3, 1, 0]);

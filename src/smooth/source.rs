@@ -1,0 +1,210 @@
+//! Where a smoothing call takes its neighbourhoods from (Section 2.1.1): its own search — by the
+//! k-d tree, or, as the thesis' program offers with 'Use Kd-Tree for NNSearch' switched off
+//! (Section 7.3), by the PCA sweep or brute force — or the rows of a table or a tree the caller
+//! already has, so that nothing is searched twice.
+//!
+//! Every source gives the same rows (the k nearest other points, ordered by
+//! `(sq_dist, index)`), so the smoothing's result does not depend on the source.
+
+use crate::error::{NbhdError, Result};
+use crate::geometry::neighbors::neighbor_table_and_order;
+use crate::query::Neighborhood;
+use crate::table::{neighborhoods_of_all, NeighborTable};
+use crate::{BruteForce, KdTree, NeighborSearch, NonFinitePolicy, PcaSweep, PointsView};
+use crate::{Scalar, ScalarType};
+use glam::DVec3;
+
+/// The search a smoothing call runs itself.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SearchMethod {
+    /// nbhd's k-d tree (the default; 'Use Kd-Tree for NNSearch' on).
+    #[default]
+    KdTree,
+    /// The PCA sweep of Chapter 4 (sorted along the main axis of the points).
+    PcaSweep,
+    /// Every pair of points.
+    BruteForce,
+}
+
+/// The neighbourhoods a smoothing call starts from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Neighbors<'a> {
+    /// Found by the call itself.
+    Search(SearchMethod),
+    /// The rows of a table the caller already has, row `i` for point `i`, the point itself not
+    /// in its row, nearest first by `(sq_dist, index)`: what [`KdTree::neighborhoods`] returns
+    /// with `exclude_self` (a k-nearest, radius or ε-k table). The call takes the first `k` of
+    /// each row (within ε), as from its own search; a k-nearest table with at least the
+    /// call's `k` gives exactly the result of the call's own search.
+    Table(&'a NeighborTable<f64>),
+}
+
+impl Default for Neighbors<'_> {
+    fn default() -> Self {
+        Neighbors::Search(SearchMethod::KdTree)
+    }
+}
+
+/// The first `k` neighbours of every point (self excluded, ordered by `(sq_dist, index)`) from
+/// `neighbors`, and an order to store the points in (the k-d tree's, where the call searched
+/// with one, so that neighbours lie close in memory; else the caller's).
+pub(crate) fn knn_rows(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    k: usize,
+) -> Result<(NeighborTable<f64>, Vec<u32>)> {
+    let identity = || (0..points.len() as u32).collect::<Vec<u32>>();
+    let nbhd = Neighborhood::Knn { k };
+    match neighbors {
+        Neighbors::Search(SearchMethod::KdTree) => neighbor_table_and_order(points, nbhd, true),
+        Neighbors::Search(method) => {
+            let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
+            let view = PointsView::from_flat(&flat, 3)?;
+            let table = if method == SearchMethod::PcaSweep {
+                neighborhoods_of_all(
+                    &PcaSweep::<f64>::new(&view, NonFinitePolicy::Reject)?,
+                    nbhd,
+                    true,
+                )?
+            } else {
+                neighborhoods_of_all(
+                    &BruteForce::<f64>::new(&view, NonFinitePolicy::Reject)?,
+                    nbhd,
+                    true,
+                )?
+            };
+            Ok((table, identity()))
+        }
+        Neighbors::Table(table) => {
+            check_rows(points, table)?;
+            Ok((first_of_rows(table, k), identity()))
+        }
+    }
+}
+
+/// A caller's table fits `points`: a row per point, indices in range, no point in its own
+/// row, rows ordered by `(sq_dist, index)` with finite distances ≥ 0.
+fn check_rows(points: &[DVec3], table: &NeighborTable<f64>) -> Result<()> {
+    let bad = |reason: String| {
+        Err(NbhdError::InvalidOption {
+            name: "table",
+            reason,
+        })
+    };
+    if table.len() != points.len() {
+        return bad(format!(
+            "the table has {} rows for {} points",
+            table.len(),
+            points.len()
+        ));
+    }
+    for i in 0..table.len() {
+        let (row, d2) = (table.indices_of(i), table.sq_dists_of(i));
+        for (r, (&j, &d)) in row.iter().zip(d2).enumerate() {
+            if j as usize >= points.len() || j as usize == i {
+                return bad(format!(
+                    "row {i} names point {j} (out of range, or the point itself)"
+                ));
+            }
+            if !(d.is_finite() && d >= 0.0) {
+                return bad(format!("row {i} has the squared distance {d}"));
+            }
+            if r > 0 && (d, j) <= (d2[r - 1], row[r - 1]) {
+                return bad(format!(
+                    "row {i} is not ordered by (sq_dist, index) at entry {r}"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The first `k` entries of every row.
+fn first_of_rows(table: &NeighborTable<f64>, k: usize) -> NeighborTable<f64> {
+    let mut offsets = Vec::with_capacity(table.len() + 1);
+    offsets.push(0);
+    let (mut index, mut sq_dist) = (Vec::new(), Vec::new());
+    for i in 0..table.len() {
+        let n = table.indices_of(i).len().min(k);
+        index.extend_from_slice(&table.indices_of(i)[..n]);
+        sq_dist.extend_from_slice(&table.sq_dists_of(i)[..n]);
+        offsets.push(index.len());
+    }
+    NeighborTable::from_parts(offsets, index, sq_dist).unwrap_or_default()
+}
+
+/// The points of a 3-D `tree` in the caller's order and the table of their `k` nearest other
+/// points, to smooth what the tree holds without a second build: pass them to a smoothing call
+/// as `(&points, Neighbors::Table(&table))`. The table is the tree's own search; an `f32`
+/// tree's rows are re-measured in `f64` and re-ordered by `(sq_dist, index)`. A tree that
+/// skipped non-finite points is refused ([`NbhdError::InvalidOption`]): its skipped points have
+/// no coordinates to smooth.
+pub fn tree_neighbors<T: Scalar>(
+    tree: &KdTree<T>,
+    k: usize,
+) -> Result<(Vec<DVec3>, NeighborTable<f64>)> {
+    let n = tree.tree_order().len();
+    if tree.dim() != 3 {
+        return Err(NbhdError::DimensionMismatch {
+            expected: 3,
+            got: tree.dim(),
+        });
+    }
+    let mut points = vec![DVec3::ZERO; n];
+    let mut held = 0usize;
+    for (pos, &id) in tree.tree_order().iter().enumerate() {
+        let c = tree.point_at(pos);
+        if let Some(p) = points.get_mut(id as usize) {
+            *p = DVec3::new(c[0].to_f64(), c[1].to_f64(), c[2].to_f64());
+            held += 1;
+        }
+    }
+    if held != n || tree.source_len() != n {
+        return Err(NbhdError::InvalidOption {
+            name: "tree",
+            reason: format!(
+                "the tree holds {n} of {} points (it skipped non-finite ones); smooth the \
+                 points themselves instead",
+                tree.source_len()
+            ),
+        });
+    }
+    let rows = tree.neighborhoods(
+        Neighborhood::Knn { k },
+        &crate::TableOptions {
+            exclude_self: true,
+            threads: 0,
+        },
+    )?;
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0);
+    let (mut index, mut sq_dist) = (Vec::with_capacity(rows.total()), Vec::new());
+    let mut row: Vec<(f64, u32)> = Vec::new();
+    for i in 0..n {
+        row.clear();
+        row.extend(
+            rows.indices_of(i)
+                .iter()
+                .zip(rows.sq_dists_of(i))
+                .map(|(&j, &d)| {
+                    let exact = if T::TYPE == ScalarType::F64 {
+                        d.to_f64()
+                    } else {
+                        points[j as usize].distance_squared(points[i])
+                    };
+                    (exact, j)
+                }),
+        );
+        row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        index.extend(row.iter().map(|e| e.1));
+        sq_dist.extend(row.iter().map(|e| e.0));
+        offsets.push(index.len());
+    }
+    let table = NeighborTable::from_parts(offsets, index, sq_dist).ok_or_else(|| {
+        NbhdError::InvalidOption {
+            name: "tree",
+            reason: "the tree's table is inconsistent".into(),
+        }
+    })?;
+    Ok((points, table))
+}
