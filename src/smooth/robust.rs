@@ -258,9 +258,8 @@ pub fn smooth_robust_from(
     let eps = options.epsilon.resolve(h);
     // the points and their neighbour rows in tree order (rows.rs); back in input order at the end
     let mut cur: Vec<DVec3> = order.iter().map(|&o| points[o as usize]).collect();
-    let mut rows = Rows::in_stored_order(&knn, &order);
+    let mut rows = Rows::in_stored_order(&knn, &order, eps);
     drop(knn);
-    rows.cut(eps);
     let min_neighbors = rows.min_narrow_len(options.k);
     let mut normals: Vec<DVec3> = Vec::new();
     let (mut noise, mut moved) = (Vec::new(), Vec::new());
@@ -313,7 +312,7 @@ pub fn smooth_robust_from(
     let lambda = 2.0 * options.inlier_width * sigma0 / (hu * hu);
     let outputs = if options.outputs {
         report(options.max_iterations as f64 + 0.2, Stage::Outputs)?;
-        let narrow = rows.narrow_table(options.k, &order);
+        let narrow = rows.narrow_table(&cur, options.k, &order);
         let so = SmoothOptions {
             k: options.k,
             epsilon: Length::Absolute(eps.max(f64::MIN_POSITIVE)),

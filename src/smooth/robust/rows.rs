@@ -17,15 +17,14 @@ use rayon::prelude::*;
 
 /// The neighbour rows of every stored point: row `s` lists the stored positions of the
 /// candidates of the point stored at `s`, nearest first; only the first `len[s]` (those within
-/// ε) are its wide neighbourhood.
+/// ε) are its wide neighbourhood. Distances are not kept (they change with every iteration and
+/// are measured where needed): at a million points and `k_plane` = 48 they would add 384 MB.
 pub(super) struct Rows {
     /// Room per row: the longest row's number of candidates (the `k_plane` nearest other
     /// points, fewer in a caller's table).
     width: usize,
     /// Stored positions of the candidates, `width` per row (the first `candidates[s]` used).
     index: Vec<u32>,
-    /// Squared distances to the candidates, `width` per row.
-    sq_dist: Vec<f64>,
     /// How many candidates a row has.
     candidates: Vec<u32>,
     /// How many of a row's candidates lie within ε.
@@ -34,30 +33,32 @@ pub(super) struct Rows {
 
 impl Rows {
     /// The rows of `table` (over the caller's indices, nearest first) for the points stored as
-    /// `order` says (`order[s]` is the caller's index of the point stored at `s`).
-    pub(super) fn in_stored_order(table: &NeighborTable<f64>, order: &[u32]) -> Self {
+    /// `order` says (`order[s]` is the caller's index of the point stored at `s`), cut at `eps`.
+    pub(super) fn in_stored_order(table: &NeighborTable<f64>, order: &[u32], eps: f64) -> Self {
         let width = table.max_row_len();
+        let e2 = eps * eps;
         let mut position = vec![0u32; order.len()];
         for (s, &o) in order.iter().enumerate() {
             position[o as usize] = s as u32;
         }
         let mut index = Vec::with_capacity(order.len() * width);
-        let mut sq_dist = Vec::with_capacity(order.len() * width);
         let mut candidates = Vec::with_capacity(order.len());
+        let mut len = Vec::with_capacity(order.len());
         for &o in order {
             let row = table.indices_of(o as usize);
             index.extend(row.iter().map(|&j| position[j as usize]));
-            sq_dist.extend_from_slice(table.sq_dists_of(o as usize));
             // padding: never read (`candidates` bounds every row)
             index.resize(index.len() + width - row.len(), 0);
-            sq_dist.resize(sq_dist.len() + width - row.len(), f64::INFINITY);
             candidates.push(row.len() as u32);
+            let within = table
+                .sq_dists_of(o as usize)
+                .iter()
+                .take_while(|&&d| d <= e2);
+            len.push(within.count() as u32);
         }
-        let len = candidates.clone();
         Self {
             width,
             index,
-            sq_dist,
             candidates,
             len,
         }
@@ -94,35 +95,30 @@ impl Rows {
         let candidates = &self.candidates;
         self.index
             .par_chunks_mut(width)
-            .zip(self.sq_dist.par_chunks_mut(width))
             .zip(self.len.par_iter_mut())
             .enumerate()
-            .for_each(|(s, ((index, sq_dist), len))| {
-                let used = candidates[s] as usize;
-                let (index, sq_dist) = (&mut index[..used], &mut sq_dist[..used]);
+            .for_each_init(Vec::new, |sq_dist, (s, (index, len))| {
+                let index = &mut index[..candidates[s] as usize];
                 let p = points[s];
-                for (d, &j) in sq_dist.iter_mut().zip(index.iter()) {
-                    *d = points[j as usize].distance_squared(p);
-                }
+                sq_dist.clear();
+                sq_dist.extend(
+                    index
+                        .iter()
+                        .map(|&j| points[j as usize].distance_squared(p)),
+                );
                 sort_row(index, sq_dist, order);
                 *len = sq_dist.iter().take_while(|&&d| d <= e2).count() as u32;
             });
     }
 
-    /// Cuts every row at `eps` without re-measuring it (after a search, whose rows are sorted
-    /// and measured already).
-    pub(super) fn cut(&mut self, eps: f64) {
-        let e2 = eps * eps;
-        let width = self.width.max(1);
-        for (sq_dist, len) in self.sq_dist.chunks(width).zip(self.len.iter_mut()) {
-            // padding is infinite: never within ε
-            *len = sq_dist.iter().take_while(|&&d| d <= e2).count() as u32;
-        }
-    }
-
     /// The first `k` neighbours of every point within ε as a table over the caller's indices
-    /// (row `i` for the caller's point `i`), for the per-point outputs.
-    pub(super) fn narrow_table(&self, k: usize, order: &[u32]) -> NeighborTable<f64> {
+    /// (row `i` for the caller's point `i`), for the per-point outputs; `points` in stored order.
+    pub(super) fn narrow_table(
+        &self,
+        points: &[DVec3],
+        k: usize,
+        order: &[u32],
+    ) -> NeighborTable<f64> {
         let mut position = vec![0usize; order.len()];
         for (s, &o) in order.iter().enumerate() {
             position[o as usize] = s;
@@ -133,7 +129,10 @@ impl Rows {
         for &s in &position {
             let row = self.narrow(s, k);
             index.extend(row.iter().map(|&j| order[j as usize]));
-            sq_dist.extend_from_slice(&self.sq_dist[s * self.width..][..row.len()]);
+            sq_dist.extend(
+                row.iter()
+                    .map(|&j| points[j as usize].distance_squared(points[s])),
+            );
             offsets.push(index.len());
         }
         NeighborTable::from_parts(offsets, index, sq_dist).unwrap_or_default()
@@ -174,7 +173,7 @@ mod tests {
             true,
         )
         .unwrap();
-        let mut rows = Rows::in_stored_order(&table, &order);
+        let mut rows = Rows::in_stored_order(&table, &order, 10.0);
         let stored: Vec<DVec3> = order.iter().map(|&o| pts_in[o as usize]).collect();
         // caller's point 1 (stored at 2): neighbours 0 and 2 tie at distance 1, then 3
         assert_eq!(rows.wide(2), &[3, 1, 0]);
@@ -184,7 +183,7 @@ mod tests {
         rows.update(&moved, &order, 1.2);
         assert_eq!(rows.wide(2), &[3, 1]); // 3 (caller's 3, at 2.0) is beyond ε = 1.2
         assert_eq!(rows.narrow(2, 1), &[3]);
-        let t = rows.narrow_table(2, &order);
+        let t = rows.narrow_table(&moved, 2, &order);
         assert_eq!(t.indices_of(1), &[0, 2]);
         assert_eq!(t.sq_dists_of(1), &[0.25, 1.0]);
         assert_eq!(rows.min_narrow_len(5), 1);
