@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # Builds nbhd, installs it into a build-local prefix, builds the C++ examples against that
 # installation (find_package(nbhd) through CMAKE_PREFIX_PATH) and runs their tests with ctest:
-# nbhd's neighbourhoods compared with FLANN's and PCL's on the real data in ../shared/data, and
+# nbhd's neighbourhoods compared with FLANN's and PCL's on the real data in tests/data, and
 # a program linked against the static library.
 #
 # Needs cmake, g++, libflann-dev, libpcl-dev, libopenmesh-dev, libnanoflann-dev, libeigen3-dev,
 # liblz4-dev (scripts/test.sh installs them when missing).
 #
 # Environment:
-#   NBHD_DATA_DIR   the data directory (default: ../shared/data from the repository root)
+#   NBHD_DATA_DIR   the data directory (default: tests/data of the repository)
 #   CTEST_PARALLEL  ctest jobs (default: number of cores)
 #   Extra arguments are passed to ctest (e.g. scripts/cpp-test.sh -R bunny).
 set -euo pipefail
@@ -20,9 +20,9 @@ case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
 prefix="$target_dir/cpp/prefix"
 build="$target_dir/cpp/build"
 
-data="${NBHD_DATA_DIR:-$repo/../shared/data}"
+data="${NBHD_DATA_DIR:-$repo/tests/data}"
 if [ ! -d "$data/pcl" ] || [ ! -d "$data/meshes" ]; then
-    echo "cpp-test.sh: no data at $data (expected pcl/*.pcd and meshes/*.obj); set NBHD_DATA_DIR" >&2
+    echo "cpp-test.sh: no data at $data (expected pcl/*.pcd and meshes/*.obj; tests/data is the default)" >&2
     exit 1
 fi
 data="$(cd "$data" && pwd)"
