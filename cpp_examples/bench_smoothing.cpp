@@ -39,7 +39,7 @@
 // Exit 1 if a method fails (an nbhd status, an empty or non-finite PCL output) or, on the torus,
 // if a method's RMS distance is not below the noisy input's; exit 2 on bad arguments.
 #include "cloud_io.hpp"
-#include "nbhd.hpp"
+#include <nbhd.hpp>
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>

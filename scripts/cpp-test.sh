@@ -34,6 +34,34 @@ done
 echo "== installing nbhd into $prefix"
 scripts/install.sh "$prefix"
 
+# Installs are release-grade (scripts/install.sh): no debug sections in either library, the
+# C++ header next to the C header, and the shared library still exporting the C API.
+echo "== checking the installed files (stripped, nbhd.hpp present)"
+so_file="$(readlink -f "$prefix/lib/libnbhd.so")"
+if [ "${NBHD_KEEP_SYMBOLS:-0}" != 1 ]; then
+    for lib in "$so_file" "$prefix/lib/libnbhd.a"; do
+        if readelf -S "$lib" | grep -q '\.debug'; then
+            echo "cpp-test.sh: $lib has debug sections (readelf -S); installs must be stripped" >&2
+            exit 1
+        fi
+    done
+    if readelf -S "$so_file" | grep -q '\.symtab'; then
+        echo "cpp-test.sh: $so_file still has a symbol table (.symtab)" >&2
+        exit 1
+    fi
+fi
+if ! nm -D --defined-only "$so_file" | grep -q ' T nbhd_tree_build$'; then
+    echo "cpp-test.sh: $so_file does not export nbhd_tree_build" >&2
+    exit 1
+fi
+for h in nbhd.h nbhd.hpp; do
+    if ! cmp -s "include/$h" "$prefix/include/nbhd/$h"; then
+        echo "cpp-test.sh: $prefix/include/nbhd/$h is missing or differs from include/$h" >&2
+        exit 1
+    fi
+done
+ls -l "$so_file" "$prefix/lib/libnbhd.a" | awk '{ print "   " $5 " bytes  " $NF }'
+
 echo "== configuring cpp_examples (Release, -O2, no -march=native)"
 cmake -S cpp_examples -B "$build" \
     -DCMAKE_BUILD_TYPE=Release \
@@ -61,6 +89,14 @@ if readelf -d "$pc_out-static" | grep -q 'libnbhd'; then
     exit 1
 fi
 "$pc_out-static"
+
+# The C++ header compiles with nothing but the pkg-config file's flags.
+echo "== compiling <nbhd.hpp> with pkg-config --cflags nbhd (C++14)"
+# shellcheck disable=SC2046
+printf '#include <nbhd.hpp>\nint main() { nbhdpp::check(nbhd_version() == NBHD_VERSION ? NBHD_STATUS_OK : NBHD_STATUS_INVALID_ARGUMENT, "version"); return 0; }\n' |
+    c++ -std=c++14 -Wall -Wextra -Werror -x c++ -o "$pc_out-hpp" - \
+        $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs nbhd) -Wl,-rpath,"$prefix/lib"
+"$pc_out-hpp"
 
 # The shared library carries a SONAME (build.rs); programs linked against it, through the CMake
 # package or pkg-config, must record that name and not a bare libnbhd.so.
