@@ -886,3 +886,17 @@ fn bench_thesis_quick_writes_the_report_plots_and_checks() {
     }
     assert!(dir.join("results.json").is_file());
 }
+
+#[test]
+fn an_absurd_thread_count_is_refused_at_once() {
+    let start = std::time::Instant::now();
+    let o = nbhd(&["--threads", "100000", "info", "x.pcd"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("--threads 100000 is above the maximum of 1024"),
+        "{e}"
+    );
+    // Refused before any thread is made, not after spawning until failure.
+    assert!(start.elapsed() < std::time::Duration::from_secs(10));
+}
