@@ -21,7 +21,7 @@
 // Points with NaN coordinates are skipped by nbhd and PCL; nanoflann and FLANN get a compact copy
 // of the finite points (as compare_neighbors does), which is then built and queried.
 #include "cloud_io.hpp"
-#include "nbhd.hpp"
+#include <nbhd.hpp>
 
 #include <flann/flann.hpp>
 #include <nanoflann.hpp>

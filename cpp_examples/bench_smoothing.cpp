@@ -8,7 +8,7 @@
 // uniformly by area from std::mt19937(3) bits turned into floats by hand (as bench_neighbors
 // generates its clouds), then moved by A * h * g per coordinate (g ~ N(0, 1) by Box-Muller from
 // the same generator: along the normal and in the tangent plane alike, as
-// ../shared/notes/smoothing.md defines noise), A = 1 by default, h = the mean nearest-neighbour
+// docs/smoothing-results.md defines noise), A = 1 by default, h = the mean nearest-neighbour
 // distance of the clean sample; then every FILE, loaded as bench_neighbors loads it (a .pcd with
 // pcl::io::loadPCDFile<pcl::PointXYZ>), its NaN points dropped (nbhd_smooth rejects them and
 // MovingLeastSquares needs a dense cloud), h = the mean nearest-neighbour distance of the scan.
@@ -24,7 +24,7 @@
 //                      (its OpenMP loop on one thread; PCL 1.13 has no separate OMP class),
 //                      search radius 5h, polynomial order 2, a pcl::search::KdTree, no
 //                      upsampling, setComputeNormals(false): the
-//                      settings of ../shared/notes/smoothing.md, which compare positions only
+//                      settings docs/smoothing-results.md compares with, positions only
 //                      (MLS fits the local plane and polynomial either way; the flag only copies
 //                      the normal into the output). The call (process) includes PCL's tree build
 //                      and radius searches. MLS leaves out a point with fewer than 3 points
@@ -39,7 +39,7 @@
 // Exit 1 if a method fails (an nbhd status, an empty or non-finite PCL output) or, on the torus,
 // if a method's RMS distance is not below the noisy input's; exit 2 on bad arguments.
 #include "cloud_io.hpp"
-#include "nbhd.hpp"
+#include <nbhd.hpp>
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>

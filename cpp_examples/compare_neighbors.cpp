@@ -39,7 +39,7 @@
 // Any mismatch prints the first differing query (both answers) and the program exits with 1
 // after finishing the check at hand.
 #include "cloud_io.hpp"
-#include "nbhd.hpp"
+#include <nbhd.hpp>
 
 #include <flann/flann.hpp>
 #include <pcl/kdtree/kdtree_flann.h>

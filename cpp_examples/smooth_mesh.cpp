@@ -28,7 +28,7 @@
 //
 // OUT defaults to STEM_smoothed.obj in the current directory.
 
-#include "nbhd.hpp"
+#include <nbhd.hpp>
 #include "surface_distance.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>

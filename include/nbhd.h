@@ -48,6 +48,40 @@
  *   The same holds for reading a table. Freeing a tree or table while another thread uses it is
  *   undefined. The library's own worker threads (builds and tables with threads = 0) come from
  *   one shared pool with a thread per core.
+ *   - The `threads` option of every call is 0 (the shared pool) or 1 .. NBHD_MAX_THREADS (1024);
+ *     a larger value fails with NBHD_STATUS_INVALID_OPTION, naming it, before any thread starts.
+ *   - A call with threads = n runs on a pool of n threads. The most recently used such pool is
+ *     kept for the next call if n is at most the number of cores; any other pool is the call's
+ *     own, and its threads have exited when the call returns. So nbhd's idle threads are the
+ *     shared pool (once threads = 0 was used) plus at most one pool of at most a thread per core.
+ *   - fork(): a child forked after nbhd ran in the parent may call nbhd. The parent's worker
+ *     threads do not exist in the child, so nbhd notices the fork (the process id changed), never
+ *     uses or frees a pool made before it, and gives the child pools of its own (threads = 0 then
+ *     means a child-owned pool with a thread per core). Trees and tables built before the fork
+ *     are plain memory and may be used in the child. As with any library, fork() while another
+ *     thread is inside an nbhd call leaves that call's state (its memory) behind in the child.
+ *
+ * ABI policy
+ *   - The SONAME is the ABI version: libnbhd.so.0.MINOR while nbhd is 0.x, libnbhd.so.MAJOR
+ *     from 1.0 on. Releases that keep the SONAME keep the ABI: no struct changes size or layout,
+ *     no signature changes, no enum value or status code is renumbered or removed. They may add
+ *     functions, enum values and status codes, so expect values you do not know from enums the
+ *     library returns (treat any status other than NBHD_STATUS_OK as an error and describe it
+ *     with nbhd_status_string). A program linked against one release runs with any later
+ *     release of the same SONAME.
+ *   - Everything else gets a new SONAME: a 0.x minor release (0.1 -> 0.2) or, from 1.0 on, a
+ *     major release. The dynamic linker then keeps loading the library a program was built for.
+ *   - Option structs (nbhd_build_options, nbhd_table_options, nbhd_smooth_options,
+ *     nbhd_robust_options) grow: new fields are added at their end, with defaults that keep the
+ *     previous behaviour, in releases with a new SONAME (a program compiled against the smaller
+ *     struct would hand the library too few bytes). Your source stays compatible across such
+ *     releases if you always start from the library's defaults and set fields by name:
+ *         nbhd_build_options o = nbhd_build_options_default();
+ *         o.threads = 4;
+ *     or pass NULL for the defaults. Never fill an options struct from zero (memset, `= {0}`)
+ *     or with a positional initializer: a field added later would then be 0, not its default.
+ *   - Compare nbhd_version() with NBHD_VERSION at start-up to detect a header/library mismatch.
+ *   - Changes are listed in CHANGELOG.md of the source distribution.
  *
  * Linking
  *   Link with -lnbhd (libnbhd.so / libnbhd.dylib / nbhd.dll, or the static libnbhd.a plus the
@@ -85,6 +119,13 @@
  * compare it with `nbhd_version()` to detect a header/library mismatch at run time.
  */
 #define NBHD_VERSION (((NBHD_VERSION_MAJOR * 1000000) + (NBHD_VERSION_MINOR * 1000)) + NBHD_VERSION_PATCH)
+
+/**
+ * The largest `threads` option a call accepts. A larger value fails with
+ * NBHD_STATUS_INVALID_OPTION, naming the value, before any thread is started. (0, a thread
+ * per core, is always accepted.)
+ */
+#define NBHD_MAX_THREADS 1024
 
 /**
  * How a tree node chooses its splitting dimension and pivot (thesis Sections 3.2 and 5.4).
@@ -419,8 +460,9 @@ typedef struct {
     nbhd_non_finite_policy non_finite;
     /**
      * Worker threads of the build: 0 uses a shared pool with one thread per core, 1 builds
-     * on the calling thread, n > 1 uses a pool of n threads made for this call.
-     * The tree is identical for every value. Default: 0.
+     * on the calling thread, n > 1 uses a pool of n threads made for this call; more than
+     * NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION. The tree is identical for every value.
+     * Default: 0.
      */
     size_t threads;
 } nbhd_build_options;
@@ -512,7 +554,8 @@ typedef struct {
     bool exclude_self;
     /**
      * Worker threads: 0 uses a shared pool with one thread per core, n >= 1 a pool of n
-     * threads made for this call. The table is identical for every value. Default: 0.
+     * threads made for this call; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION.
+     * The table is identical for every value. Default: 0.
      */
     size_t threads;
 } nbhd_table_options;
@@ -627,7 +670,8 @@ typedef struct {
     double orientation_point[3];
     /**
      * Worker threads: 0 the shared pool with a thread per core, n >= 1 a pool of n threads
-     * made for this call. Results are identical for every value. Default 0.
+     * made for this call (at most NBHD_MAX_THREADS, else NBHD_STATUS_INVALID_OPTION). Results
+     * are identical for every value. Default 0.
      */
     size_t threads;
     /**
@@ -780,8 +824,9 @@ typedef struct {
      */
     double orientation_point[3];
     /**
-     * Worker threads: 0 the shared pool, n >= 1 a pool of n threads for this call. Results are
-     * identical for every value. Default 0.
+     * Worker threads: 0 the shared pool, n >= 1 a pool of n threads for this call (at most
+     * NBHD_MAX_THREADS, else NBHD_STATUS_INVALID_OPTION). Results are identical for every
+     * value. Default 0.
      */
     size_t threads;
     /**

@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # Builds nbhd, installs it into a build-local prefix, builds the C++ examples against that
 # installation (find_package(nbhd) through CMAKE_PREFIX_PATH) and runs their tests with ctest:
-# nbhd's neighbourhoods compared with FLANN's and PCL's on the real data in ../shared/data, and
+# nbhd's neighbourhoods compared with FLANN's and PCL's on the real data in tests/data, and
 # a program linked against the static library.
 #
 # Needs cmake, g++, libflann-dev, libpcl-dev, libopenmesh-dev, libnanoflann-dev, libeigen3-dev,
 # liblz4-dev (scripts/test.sh installs them when missing).
 #
 # Environment:
-#   NBHD_DATA_DIR   the data directory (default: ../shared/data from the repository root)
+#   NBHD_DATA_DIR   the data directory (default: tests/data of the repository)
 #   CTEST_PARALLEL  ctest jobs (default: number of cores)
 #   Extra arguments are passed to ctest (e.g. scripts/cpp-test.sh -R bunny).
 set -euo pipefail
@@ -20,9 +20,9 @@ case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
 prefix="$target_dir/cpp/prefix"
 build="$target_dir/cpp/build"
 
-data="${NBHD_DATA_DIR:-$repo/../shared/data}"
+data="${NBHD_DATA_DIR:-$repo/tests/data}"
 if [ ! -d "$data/pcl" ] || [ ! -d "$data/meshes" ]; then
-    echo "cpp-test.sh: no data at $data (expected pcl/*.pcd and meshes/*.obj); set NBHD_DATA_DIR" >&2
+    echo "cpp-test.sh: no data at $data (expected pcl/*.pcd and meshes/*.obj; tests/data is the default)" >&2
     exit 1
 fi
 data="$(cd "$data" && pwd)"
@@ -33,6 +33,34 @@ done
 
 echo "== installing nbhd into $prefix"
 scripts/install.sh "$prefix"
+
+# Installs are release-grade (scripts/install.sh): no debug sections in either library, the
+# C++ header next to the C header, and the shared library still exporting the C API.
+echo "== checking the installed files (stripped, nbhd.hpp present)"
+so_file="$(readlink -f "$prefix/lib/libnbhd.so")"
+if [ "${NBHD_KEEP_SYMBOLS:-0}" != 1 ]; then
+    for lib in "$so_file" "$prefix/lib/libnbhd.a"; do
+        if readelf -S "$lib" | grep -q '\.debug'; then
+            echo "cpp-test.sh: $lib has debug sections (readelf -S); installs must be stripped" >&2
+            exit 1
+        fi
+    done
+    if readelf -S "$so_file" | grep -q '\.symtab'; then
+        echo "cpp-test.sh: $so_file still has a symbol table (.symtab)" >&2
+        exit 1
+    fi
+fi
+if ! nm -D --defined-only "$so_file" | grep -q ' T nbhd_tree_build$'; then
+    echo "cpp-test.sh: $so_file does not export nbhd_tree_build" >&2
+    exit 1
+fi
+for h in nbhd.h nbhd.hpp; do
+    if ! cmp -s "include/$h" "$prefix/include/nbhd/$h"; then
+        echo "cpp-test.sh: $prefix/include/nbhd/$h is missing or differs from include/$h" >&2
+        exit 1
+    fi
+done
+ls -l "$so_file" "$prefix/lib/libnbhd.a" | awk '{ print "   " $5 " bytes  " $NF }'
 
 echo "== configuring cpp_examples (Release, -O2, no -march=native)"
 cmake -S cpp_examples -B "$build" \
@@ -61,6 +89,14 @@ if readelf -d "$pc_out-static" | grep -q 'libnbhd'; then
     exit 1
 fi
 "$pc_out-static"
+
+# The C++ header compiles with nothing but the pkg-config file's flags.
+echo "== compiling <nbhd.hpp> with pkg-config --cflags nbhd (C++14)"
+# shellcheck disable=SC2046
+printf '#include <nbhd.hpp>\nint main() { nbhdpp::check(nbhd_version() == NBHD_VERSION ? NBHD_STATUS_OK : NBHD_STATUS_INVALID_ARGUMENT, "version"); return 0; }\n' |
+    c++ -std=c++14 -Wall -Wextra -Werror -x c++ -o "$pc_out-hpp" - \
+        $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs nbhd) -Wl,-rpath,"$prefix/lib"
+"$pc_out-hpp"
 
 # The shared library carries a SONAME (build.rs); programs linked against it, through the CMake
 # package or pkg-config, must record that name and not a bare libnbhd.so.

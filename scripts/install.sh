@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
-# Builds the nbhd library in release and installs it into PREFIX for C and C++ users:
+# Builds the nbhd library for release and installs it into PREFIX for C and C++ users, in the
+# layout cargo-c gives a crate's C library (headers in a subdirectory named after the library,
+# versioned shared library with SONAME links, pkg-config file), plus a CMake package:
 #
-#   PREFIX/include/nbhd.h
+#   PREFIX/include/nbhd/nbhd.h      the C API (found as <nbhd.h>: the CMake package and the
+#   PREFIX/include/nbhd/nbhd.hpp    pkg-config files put PREFIX/include/nbhd on the include path)
+#                                   and the C++ RAII layer over it (<nbhd.hpp>, header-only)
 #   PREFIX/lib/libnbhd.so.X.Y.Z   the shared library, version X.Y.Z of Cargo.toml
 #   PREFIX/lib/libnbhd.so.0.Y     -> libnbhd.so.X.Y.Z: the SONAME, the name programs record
 #                                    (libnbhd.so.X from version 1.0 on; see below)
 #   PREFIX/lib/libnbhd.so         -> the SONAME link: the name the linker finds for -lnbhd
-#   PREFIX/lib/libnbhd.a
+#   PREFIX/lib/libnbhd.a          the static library
 #   PREFIX/lib/cmake/nbhd/nbhdConfig.cmake, nbhdConfigVersion.cmake
 #       find_package(nbhd CONFIG REQUIRED) gives nbhd::nbhd (shared library) and
 #       nbhd::nbhd_static (static library plus the system libraries Rust's std needs)
@@ -23,6 +27,14 @@
 #
 # The installed files are relocatable: the CMake config and the .pc file locate the prefix from
 # their own place, so the prefix directory may be moved after installation.
+#
+# Release-grade by default: the libraries are built with Cargo's `dist` profile (Cargo.toml: the
+# release profile's code without debug information, the shared library's symbol table stripped;
+# its exported nbhd_* symbols stay), and the static library's debug sections, which come with
+# Rust's standard library, are removed with `strip --strip-debug`. To keep symbols and line
+# tables (profiling, debugging a crash inside nbhd), install the `release` profile unstripped:
+#
+#   NBHD_KEEP_SYMBOLS=1 scripts/install.sh PREFIX
 #
 # Usage: scripts/install.sh PREFIX     (PREFIX relative to the current directory, or absolute)
 set -euo pipefail
@@ -58,11 +70,22 @@ else
 fi
 real_name="libnbhd.so.$v_major.$v_minor.$v_patch"
 
-echo "== building nbhd $version (cargo build --release --lib)"
-cargo build --release --lib -p nbhd
+keep_symbols="${NBHD_KEEP_SYMBOLS:-0}"
+case "$keep_symbols" in
+    0 | "") keep_symbols=0; profile=dist ;;
+    1) profile=release ;;
+    *) echo "install.sh: NBHD_KEEP_SYMBOLS must be 0 or 1 (got '$keep_symbols')" >&2; exit 2 ;;
+esac
+if [ "$keep_symbols" = 0 ] && ! command -v strip >/dev/null 2>&1; then
+    echo "install.sh: strip (binutils) is missing; install it, or set NBHD_KEEP_SYMBOLS=1" >&2
+    exit 1
+fi
+
+echo "== building nbhd $version (cargo build --profile $profile --lib)"
+cargo build --profile "$profile" --lib -p nbhd
 target_dir="${CARGO_TARGET_DIR:-$repo/target}"
 case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
-release="$target_dir/release"
+release="$target_dir/$profile"
 for f in libnbhd.so libnbhd.a; do
     [ -f "$release/$f" ] || { echo "install.sh: $release/$f was not built" >&2; exit 1; }
 done
@@ -85,12 +108,19 @@ static_deps_cmake="Threads::Threads;\${CMAKE_DL_LIBS};m;rt;util;gcc_s"
 static_deps_pc="-lgcc_s -lutil -lrt -lpthread -lm -ldl -lc"
 
 echo "== installing into $prefix"
-install -d "$prefix/include" "$prefix/lib/cmake/nbhd" "$prefix/lib/pkgconfig"
-install -m 644 include/nbhd.h "$prefix/include/nbhd.h"
+install -d "$prefix/include/nbhd" "$prefix/lib/cmake/nbhd" "$prefix/lib/pkgconfig"
+install -m 644 include/nbhd.h include/nbhd.hpp "$prefix/include/nbhd/"
 install -m 755 "$release/libnbhd.so" "$prefix/lib/$real_name"
 ln -sfn "$real_name" "$prefix/lib/$soname"
 ln -sfn "$soname" "$prefix/lib/libnbhd.so"
 install -m 644 "$release/libnbhd.a" "$prefix/lib/libnbhd.a"
+if [ "$keep_symbols" = 0 ]; then
+    # The shared library was stripped by the profile; this also covers a linker that left
+    # something behind. --strip-debug (not --strip-all) on the archive keeps the symbols its
+    # objects are linked by.
+    strip --strip-unneeded "$prefix/lib/$real_name"
+    strip --strip-debug "$prefix/lib/libnbhd.a"
+fi
 
 cat >"$prefix/lib/cmake/nbhd/nbhdConfig.cmake" <<EOF
 # CMake package of nbhd $version, written by scripts/install.sh.
@@ -99,15 +129,17 @@ cat >"$prefix/lib/cmake/nbhd/nbhdConfig.cmake" <<EOF
 #   target_link_libraries(app PRIVATE nbhd::nbhd)          # shared library
 #   target_link_libraries(app PRIVATE nbhd::nbhd_static)   # static library
 #
-# Sets nbhd_FOUND, nbhd_VERSION, nbhd_INCLUDE_DIR, nbhd_LIBRARY, nbhd_STATIC_LIBRARY.
+# Sets nbhd_FOUND, nbhd_VERSION, nbhd_INCLUDE_DIR (holding nbhd.h and nbhd.hpp), nbhd_LIBRARY,
+# nbhd_STATIC_LIBRARY.
 include(CMakeFindDependencyMacro)
 find_dependency(Threads)
 
 get_filename_component(_nbhd_prefix "\${CMAKE_CURRENT_LIST_DIR}/../../.." ABSOLUTE)
-set(nbhd_INCLUDE_DIR "\${_nbhd_prefix}/include")
+set(nbhd_INCLUDE_DIR "\${_nbhd_prefix}/include/nbhd")
 set(nbhd_LIBRARY "\${_nbhd_prefix}/lib/libnbhd.so")
 set(nbhd_STATIC_LIBRARY "\${_nbhd_prefix}/lib/libnbhd.a")
-foreach(_nbhd_file IN ITEMS "\${nbhd_INCLUDE_DIR}/nbhd.h" "\${_nbhd_prefix}/lib/$real_name"
+foreach(_nbhd_file IN ITEMS "\${nbhd_INCLUDE_DIR}/nbhd.h" "\${nbhd_INCLUDE_DIR}/nbhd.hpp"
+        "\${_nbhd_prefix}/lib/$real_name"
         "\${_nbhd_prefix}/lib/$soname" "\${nbhd_LIBRARY}" "\${nbhd_STATIC_LIBRARY}")
   if(NOT EXISTS "\${_nbhd_file}")
     set(nbhd_FOUND FALSE)
@@ -168,7 +200,8 @@ EOF
 # -lnbhd finds the link lib/libnbhd.so; the program records the SONAME, $soname.
 cat >"$prefix/lib/pkgconfig/nbhd.pc" <<EOF
 prefix=\${pcfiledir}/../..
-libdir=\${prefix}/lib
+exec_prefix=\${prefix}
+libdir=\${exec_prefix}/lib
 includedir=\${prefix}/include
 
 Name: nbhd
@@ -176,25 +209,27 @@ Description: Exact neighbourhoods in point clouds with k-d trees, and point-set 
 Version: $version
 Libs: -L\${libdir} -lnbhd
 Libs.private: $static_deps_pc
-Cflags: -I\${includedir}
+Cflags: -I\${includedir}/nbhd
 EOF
 
 # -lnbhd picks libnbhd.so when both libraries are present, so static linking gets its own file.
 cat >"$prefix/lib/pkgconfig/nbhd-static.pc" <<EOF
 prefix=\${pcfiledir}/../..
-libdir=\${prefix}/lib
+exec_prefix=\${prefix}
+libdir=\${exec_prefix}/lib
 includedir=\${prefix}/include
 
 Name: nbhd-static
 Description: nbhd, linked statically (libnbhd.a and the system libraries it needs)
 Version: $version
 Libs: \${libdir}/libnbhd.a $static_deps_pc
-Cflags: -I\${includedir}
+Cflags: -I\${includedir}/nbhd
 EOF
 
-echo "== installed nbhd $version:"
-(cd "$prefix" && find include/nbhd.h "lib/$real_name" "lib/$soname" lib/libnbhd.so lib/libnbhd.a \
+if [ "$keep_symbols" = 0 ]; then what="stripped, no debug information"; else what="with symbols and line tables"; fi
+echo "== installed nbhd $version ($profile profile, $what):"
+(cd "$prefix" && find include/nbhd/nbhd.h include/nbhd/nbhd.hpp "lib/$real_name" "lib/$soname" lib/libnbhd.so lib/libnbhd.a \
     lib/cmake/nbhd lib/pkgconfig/nbhd.pc lib/pkgconfig/nbhd-static.pc \( -type f -o -type l \) \
     -printf '%p\n' | sort | while read -r f; do
-        if [ -L "$f" ]; then echo "   $f -> $(readlink "$f")"; else echo "   $f"; fi
+        if [ -L "$f" ]; then echo "   $f -> $(readlink "$f")"; else echo "   $f ($(stat -c %s "$f") bytes)"; fi
     done)

@@ -355,6 +355,15 @@ fn c_threads_are_clean_under_valgrind() {
     }
 }
 
+/// Thread counts bounded, a call's own pool gone when it returns, and nbhd usable in a child
+/// forked after parallel calls (a hang is an alarm() in the child, reported by the parent).
+/// Natively only: valgrind runs threads one at a time, and the test counts them.
+#[cfg(target_os = "linux")]
+#[test]
+fn c_pools_are_bounded_and_survive_fork() {
+    run(Command::new(compiled("fork_test")), "tests/c/fork_test");
+}
+
 #[test]
 fn c_smoothing_checks_against_a_sphere() {
     run(Command::new(compiled("smooth_test")), "tests/c/smooth_test");

@@ -1,4 +1,4 @@
-//! nbhd::io: round trips through every writable format, the real files of shared/data, and
+//! nbhd::io: round trips through every writable format, the real files of tests/data, and
 //! malformed input whose errors must name the place.
 #![cfg(feature = "io")]
 
@@ -7,14 +7,17 @@ use nbhd::io::{
 };
 use std::path::PathBuf;
 
+/// The real scans of `tests/data` (see its README). They are part of the repository, so a
+/// missing folder is a broken checkout and fails the test rather than skipping it. (The
+/// `Option` stays so that tests written against the old optional data keep compiling.)
 fn data_dir() -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
-    if d.is_dir() {
-        Some(d)
-    } else {
-        println!("NOTE: {} is missing; real-file test skipped", d.display());
-        None
-    }
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    assert!(
+        d.join("pcl").is_dir(),
+        "{} is missing: the test data belongs to the repository",
+        d.display()
+    );
+    Some(d)
 }
 
 fn tmp(name: &str) -> PathBuf {

@@ -51,7 +51,7 @@ struct Cli {
     #[arg(long, short, global = true)]
     quiet: bool,
 
-    /// Worker threads [default: one per core]
+    /// Worker threads, 1 to 1024 [default: one per core]
     #[arg(long, global = true)]
     threads: Option<usize>,
 
@@ -93,6 +93,12 @@ fn run(cli: Cli) -> Result<(), String> {
     if let Some(t) = cli.threads {
         if t == 0 {
             return Err("--threads must be at least 1".into());
+        }
+        if t > nbhd::parallel::MAX_THREADS {
+            return Err(format!(
+                "--threads {t} is above the maximum of {} worker threads",
+                nbhd::parallel::MAX_THREADS
+            ));
         }
         rayon_threads(t)?;
     }

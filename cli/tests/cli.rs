@@ -18,13 +18,19 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// A file of the repository's `tests/data` (see its README). The data is part of the repository,
+/// so a missing file is a broken checkout and fails the test rather than skipping it. (The
+/// `Option` stays so that tests written against the old optional data keep compiling.)
 fn data(rel: &str) -> Option<String> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
-    if !d.is_dir() {
-        println!("NOTE: {} is missing; real-file test skipped", d.display());
-        return None;
-    }
-    Some(d.join(rel).display().to_string())
+    let f = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/data")
+        .join(rel);
+    assert!(
+        f.is_file(),
+        "{} is missing: the test data belongs to the repository",
+        f.display()
+    );
+    Some(f.display().to_string())
 }
 
 fn tmp(name: &str) -> String {
@@ -984,4 +990,18 @@ fn bench_thesis_quick_writes_the_report_plots_and_checks() {
         assert!(report.contains(svg), "report does not show {svg}");
     }
     assert!(dir.join("results.json").is_file());
+}
+
+#[test]
+fn an_absurd_thread_count_is_refused_at_once() {
+    let start = std::time::Instant::now();
+    let o = nbhd(&["--threads", "100000", "info", "x.pcd"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("--threads 100000 is above the maximum of 1024"),
+        "{e}"
+    );
+    // Refused before any thread is made, not after spawning until failure.
+    assert!(start.elapsed() < std::time::Duration::from_secs(10));
 }

@@ -3,7 +3,7 @@
 // the mesh's vertices. Header-only; needs nbhd.hpp.
 #pragma once
 
-#include "nbhd.hpp"
+#include <nbhd.hpp>
 
 #include <algorithm>
 #include <array>

@@ -56,6 +56,11 @@ pub const NBHD_VERSION_PATCH: u32 = 0;
 pub const NBHD_VERSION: u32 =
     NBHD_VERSION_MAJOR * 1_000_000 + NBHD_VERSION_MINOR * 1_000 + NBHD_VERSION_PATCH;
 
+/// The largest `threads` option a call accepts. A larger value fails with
+/// NBHD_STATUS_INVALID_OPTION, naming the value, before any thread is started. (0, a thread
+/// per core, is always accepted.)
+pub const NBHD_MAX_THREADS: usize = 1024;
+
 /// The version of the library that is linked, as `MAJOR * 1000000 + MINOR * 1000 + PATCH`
 /// (compare with `NBHD_VERSION` from the header you compiled against).
 #[no_mangle]
@@ -84,5 +89,10 @@ mod tests {
         // SAFETY: nbhd_version_string returns a static NUL-terminated string.
         let s = unsafe { std::ffi::CStr::from_ptr(nbhd_version_string()) };
         assert_eq!(s.to_str().unwrap(), env!("CARGO_PKG_VERSION"));
+    }
+
+    #[test]
+    fn the_thread_limit_is_the_core_s() {
+        assert_eq!(NBHD_MAX_THREADS, crate::parallel::MAX_THREADS);
     }
 }

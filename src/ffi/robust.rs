@@ -45,8 +45,9 @@ pub struct nbhd_robust_options {
     pub orientation: nbhd_orientation,
     /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
     pub orientation_point: [f64; 3],
-    /// Worker threads: 0 the shared pool, n >= 1 a pool of n threads for this call. Results are
-    /// identical for every value. Default 0.
+    /// Worker threads: 0 the shared pool, n >= 1 a pool of n threads for this call (at most
+    /// NBHD_MAX_THREADS, else NBHD_STATUS_INVALID_OPTION). Results are identical for every
+    /// value. Default 0.
     pub threads: usize,
     /// Called with the progress of the run; NULL for none. Default NULL.
     pub progress: nbhd_progress_fn,

@@ -173,7 +173,8 @@ pub struct nbhd_smooth_options {
     /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
     pub orientation_point: [f64; 3],
     /// Worker threads: 0 the shared pool with a thread per core, n >= 1 a pool of n threads
-    /// made for this call. Results are identical for every value. Default 0.
+    /// made for this call (at most NBHD_MAX_THREADS, else NBHD_STATUS_INVALID_OPTION). Results
+    /// are identical for every value. Default 0.
     pub threads: usize,
     /// Called with the progress of the run; NULL for none. Default NULL.
     pub progress: nbhd_progress_fn,

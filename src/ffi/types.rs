@@ -378,8 +378,9 @@ pub struct nbhd_build_options {
     /// Reject or skip points with NaN or infinite coordinates. Default: reject.
     pub non_finite: nbhd_non_finite_policy,
     /// Worker threads of the build: 0 uses a shared pool with one thread per core, 1 builds
-    /// on the calling thread, n > 1 uses a pool of n threads made for this call.
-    /// The tree is identical for every value. Default: 0.
+    /// on the calling thread, n > 1 uses a pool of n threads made for this call; more than
+    /// NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION. The tree is identical for every value.
+    /// Default: 0.
     pub threads: usize,
 }
 
@@ -537,7 +538,8 @@ pub struct nbhd_table_options {
     /// nbhd_tree_neighborhoods only. Default: true.
     pub exclude_self: bool,
     /// Worker threads: 0 uses a shared pool with one thread per core, n >= 1 a pool of n
-    /// threads made for this call. The table is identical for every value. Default: 0.
+    /// threads made for this call; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION.
+    /// The table is identical for every value. Default: 0.
     pub threads: usize,
 }
 

@@ -102,7 +102,8 @@ pub struct BuildOptions {
     /// Reject or skip points with NaN or infinite coordinates.
     pub non_finite: NonFinitePolicy,
     /// Worker threads: 0 uses the current rayon pool, 1 builds serially, n > 1 uses a pool of
-    /// n threads. The tree is identical for every value.
+    /// n threads; at most [`crate::parallel::MAX_THREADS`]. The tree is identical for every
+    /// value.
     pub threads: usize,
 }
 
@@ -131,8 +132,9 @@ impl BuildOptions {
         }
     }
 
-    /// Checks the leaf size.
+    /// Checks the leaf size and the thread count (at most [`crate::parallel::MAX_THREADS`]).
     pub fn validate(&self) -> Result<()> {
+        crate::parallel::check_threads(self.threads)?;
         if self.leaf_size == 0 {
             return Err(NbhdError::InvalidOption {
                 name: "leaf_size",

@@ -207,6 +207,16 @@ fn plan(a: &SpeedArgs) -> Result<Plan, String> {
     if a.thread_counts.contains(&0) {
         return Err("--thread-counts must be at least 1 each".into());
     }
+    if let Some(t) = a
+        .thread_counts
+        .iter()
+        .find(|&&t| t > nbhd::parallel::MAX_THREADS)
+    {
+        return Err(format!(
+            "--thread-counts {t} is above the maximum of {} worker threads",
+            nbhd::parallel::MAX_THREADS
+        ));
+    }
     let mut ops = a.ops.clone();
     ops.dedup();
     let mut threads = a.thread_counts.clone();

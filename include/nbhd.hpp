@@ -1,6 +1,17 @@
-// A thin C++ layer over nbhd's C API (include/nbhd.h) for the examples: owning handles that
-// free themselves, statuses turned into exceptions, and query helpers that grow their buffers.
-// It adds no behaviour: every call is one C call (or a retry after NBHD_STATUS_BUFFER_TOO_SMALL).
+// nbhd.hpp: a thin C++ layer over nbhd's C API (nbhd.h), installed next to it by
+// scripts/install.sh. Header-only, C++14 or later, namespace nbhdpp:
+//
+//   - owning handles that free themselves (nbhdpp::Tree, nbhdpp::Table: std::unique_ptr with
+//     nbhd_tree_free / nbhd_neighborhoods_free as deleter);
+//   - statuses turned into exceptions (nbhdpp::Error carries the nbhd_status and nbhd's message,
+//     read on the calling thread right after the failed call);
+//   - query helpers that grow their buffers when nbhd answers NBHD_STATUS_BUFFER_TOO_SMALL.
+//
+// It adds no behaviour: every function is one C call (or one retry after
+// NBHD_STATUS_BUFFER_TOO_SMALL), so the C header's documentation applies unchanged. It depends on
+// nothing but nbhd.h and the C++ standard library; with the CMake package (nbhd::nbhd) or
+// pkg-config (`pkg-config --cflags nbhd`) it is found as <nbhd.hpp>. The C ABI's compatibility
+// rules (README.md, "ABI policy") apply to it too: it is inline code compiled into your program.
 #pragma once
 
 #include <nbhd.h>
