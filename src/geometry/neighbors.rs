@@ -65,12 +65,16 @@ pub fn mean_spacing(points: &[DVec3]) -> Result<f64> {
 /// Mean nearest-neighbour distance read off a table whose rows hold the nearest other point
 /// first (rows without neighbours are left out; 0 if no row has one).
 pub fn mean_spacing_of(table: &NeighborTable<f64>) -> f64 {
+    mean_spacing_of_nearest((0..table.len()).map(|i| table.sq_dists_of(i).first().copied()))
+}
+
+/// [`mean_spacing_of`] from each point's squared distance to its nearest other point, in index
+/// order (`None` for a point without neighbours).
+pub(crate) fn mean_spacing_of_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> f64 {
     let (mut sum, mut count) = (0.0, 0usize);
-    for i in 0..table.len() {
-        if let Some(&d2) = table.sq_dists_of(i).first() {
-            sum += d2.sqrt();
-            count += 1;
-        }
+    for d2 in nearest_sq_dist.flatten() {
+        sum += d2.sqrt();
+        count += 1;
     }
     if count == 0 {
         0.0

@@ -75,12 +75,12 @@ mod planes;
 mod rows;
 mod step;
 
-use super::source::{knn_rows, Neighbors};
+use super::source::{knn_rows, Neighbors, SearchMethod};
 use super::{check_points, point_outputs_with, progress_in_units, Length, Resolved};
 use super::{FeatureCriterion, Weighting};
 use super::{SmoothOptions, SmoothResult, Stage};
 use crate::error::{NbhdError, Result};
-use crate::geometry::neighbors::mean_spacing_of;
+use crate::geometry::neighbors::mean_spacing_of_nearest;
 use crate::geometry::normals::Orientation;
 use glam::DVec3;
 use planes::{covariance_planes, noise_estimate, selected_normals};
@@ -245,8 +245,19 @@ pub fn smooth_robust_from(
     let total = options.max_iterations as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
-    let (knn, order) = knn_rows(points, neighbors, options.k_plane)?;
-    let h = mean_spacing_of(&knn);
+    // the rows in the k-d tree's order (`robust/rows.rs`), by blocks where the call searches
+    // with the tree; from a table like every other smoothing call otherwise
+    let (mut rows, order, nearest) = match neighbors {
+        Neighbors::Search(SearchMethod::KdTree) => Rows::search(points, options.k_plane)?,
+        _ => {
+            let (knn, order) = knn_rows(points, neighbors, options.k_plane)?;
+            let nearest = (0..knn.len())
+                .map(|i| knn.sq_dists_of(i).first().copied())
+                .collect();
+            (Rows::in_stored_order(&knn, &order), order, nearest)
+        }
+    };
+    let h = mean_spacing_of_nearest(nearest.into_iter());
     let relative = matches!(options.epsilon, Length::Relative(_));
     if relative && !(h > 0.0 && h.is_finite()) {
         return Err(NbhdError::InvalidOption {
@@ -258,8 +269,7 @@ pub fn smooth_robust_from(
     let eps = options.epsilon.resolve(h);
     // the points and their neighbour rows in tree order (rows.rs); back in input order at the end
     let mut cur: Vec<DVec3> = order.iter().map(|&o| points[o as usize]).collect();
-    let mut rows = Rows::in_stored_order(&knn, &order, eps);
-    drop(knn);
+    rows.update(&cur, &order, eps);
     let min_neighbors = rows.min_narrow_len(options.k);
     let mut normals: Vec<DVec3> = Vec::new();
     let (mut noise, mut moved) = (Vec::new(), Vec::new());
@@ -313,6 +323,7 @@ pub fn smooth_robust_from(
     let outputs = if options.outputs {
         report(options.max_iterations as f64 + 0.2, Stage::Outputs)?;
         let narrow = rows.narrow_table(&cur, options.k, &order);
+        drop(rows); // the wide rows are done with: their memory goes to the outputs
         let so = SmoothOptions {
             k: options.k,
             epsilon: Length::Absolute(eps.max(f64::MIN_POSITIVE)),

@@ -11,9 +11,17 @@
 //! The points are stored in the k-d tree's order, so the neighbours of a point lie close in
 //! memory; every row keeps the `(sq_dist, index)` order of the caller's indices.
 
-use crate::table::NeighborTable;
+use crate::error::Result;
+use crate::query::Neighborhood;
+use crate::table::{NeighborTable, TableOptions};
+use crate::{BuildOptions, KdTree, PointsView};
 use glam::DVec3;
 use rayon::prelude::*;
+
+/// Stored points searched at once by [`Rows::search`]: large enough to keep both threads busy
+/// and the tree's leaf-order batching effective, small enough that the block's table (about
+/// 600 bytes per point at k = 48) stays a few tens of MB.
+const SEARCH_BLOCK: usize = 1 << 16;
 
 /// The neighbour rows of every stored point: row `s` lists the stored positions of the
 /// candidates of the point stored at `s`, nearest first; only the first `len[s]` (those within
@@ -33,35 +41,89 @@ pub(super) struct Rows {
 
 impl Rows {
     /// The rows of `table` (over the caller's indices, nearest first) for the points stored as
-    /// `order` says (`order[s]` is the caller's index of the point stored at `s`), cut at `eps`.
-    pub(super) fn in_stored_order(table: &NeighborTable<f64>, order: &[u32], eps: f64) -> Self {
+    /// `order` says (`order[s]` is the caller's index of the point stored at `s`), not yet cut
+    /// at ε (see [`Rows::update`]).
+    pub(super) fn in_stored_order(table: &NeighborTable<f64>, order: &[u32]) -> Self {
         let width = table.max_row_len();
-        let e2 = eps * eps;
         let mut position = vec![0u32; order.len()];
         for (s, &o) in order.iter().enumerate() {
             position[o as usize] = s as u32;
         }
         let mut index = Vec::with_capacity(order.len() * width);
         let mut candidates = Vec::with_capacity(order.len());
-        let mut len = Vec::with_capacity(order.len());
         for &o in order {
             let row = table.indices_of(o as usize);
             index.extend(row.iter().map(|&j| position[j as usize]));
             // padding: never read (`candidates` bounds every row)
             index.resize(index.len() + width - row.len(), 0);
             candidates.push(row.len() as u32);
-            let within = table
-                .sq_dists_of(o as usize)
-                .iter()
-                .take_while(|&&d| d <= e2);
-            len.push(within.count() as u32);
         }
+        let len = candidates.clone();
         Self {
             width,
             index,
             candidates,
             len,
         }
+    }
+
+    /// The `k` nearest other points of every point by the k-d tree, the points stored in the
+    /// tree's order (returned), and each point's squared distance to its nearest (by caller
+    /// index): the rows of `KdTree::neighborhoods` with `exclude_self`, searched in blocks of
+    /// stored points, so that no table of all rows and distances is ever held (at a million
+    /// points and k = 48, 576 MB). Not yet cut at ε (see [`Rows::update`]).
+    pub(super) fn search(points: &[DVec3], k: usize) -> Result<(Self, Vec<u32>, Vec<Option<f64>>)> {
+        let n = points.len();
+        let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
+        let tree =
+            KdTree::<f64>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())?;
+        drop(flat);
+        let order = tree.tree_order().to_vec();
+        let mut position = vec![0u32; n];
+        for (s, &o) in order.iter().enumerate() {
+            position[o as usize] = s as u32;
+        }
+        let width = k.min(n.saturating_sub(1));
+        let mut index = vec![0u32; n * width];
+        let mut nearest = vec![None; n];
+        let mut queries: Vec<f64> = Vec::new();
+        // the k + 1 nearest of each stored point, itself dropped: without it, the first k of
+        // the (sq_dist, index) order are the k nearest other points; a point with more than k
+        // copies of lower index is not among its own k + 1, and its first k are those copies
+        let with_self = Neighborhood::Knn { k: width + 1 };
+        for (block, rows) in order
+            .chunks(SEARCH_BLOCK)
+            .zip(index.chunks_mut(SEARCH_BLOCK * width.max(1)))
+        {
+            queries.clear();
+            queries.extend(block.iter().flat_map(|&o| points[o as usize].to_array()));
+            let table = tree.neighborhoods_of(
+                &PointsView::from_flat(&queries, 3)?,
+                with_self,
+                &TableOptions::default(),
+            )?;
+            for (q, &o) in block.iter().enumerate() {
+                let (ids, d2) = (table.indices_of(q), table.sq_dists_of(q));
+                let others = ids.iter().zip(d2).filter(|(&j, _)| j != o).take(width);
+                let row = &mut rows[q * width..(q + 1) * width];
+                for (slot, (&j, &d)) in row.iter_mut().zip(others.clone()) {
+                    *slot = position[j as usize];
+                    nearest[o as usize].get_or_insert(d);
+                }
+            }
+        }
+        let candidates = vec![width as u32; n];
+        let len = candidates.clone();
+        Ok((
+            Self {
+                width,
+                index,
+                candidates,
+                len,
+            },
+            order,
+            nearest,
+        ))
     }
 
     /// The wide neighbourhood of the point stored at `s`: stored positions, nearest first.
@@ -173,7 +235,7 @@ mod tests {
             true,
         )
         .unwrap();
-        let mut rows = Rows::in_stored_order(&table, &order, 10.0);
+        let mut rows = Rows::in_stored_order(&table, &order);
         let stored: Vec<DVec3> = order.iter().map(|&o| pts_in[o as usize]).collect();
         // caller's point 1 (stored at 2): neighbours 0 and 2 tie at distance 1, then 3
         assert_eq!(rows.wide(2), &[3, 1, 0]);
