@@ -307,16 +307,31 @@ property float z\nend_header\n0 0 0\n1 zero 0\n",
         "{e}"
     );
 
-    // Truncated binary PLY: the byte where the missing record starts.
+    // Truncated binary PLY: the element line whose count the data cannot hold.
     let mut b = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n\
 property float y\nproperty float z\nend_header\n"
         .to_vec();
-    let header = b.len();
     b.extend([0u8; 12 + 5]);
+    let e = err_of(&b, Format::Ply);
+    assert_eq!(e.location, Some(Location::Line(3)), "{e}");
+    assert!(
+        e.to_string()
+            .contains("3 records of at least 12 bytes, but only 17 bytes"),
+        "{e}"
+    );
+
+    // Truncated binary PLY with a list: the byte where the cut record starts.
+    let mut b = b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n\
+property float y\nproperty float z\nproperty list uchar int l\nend_header\n"
+        .to_vec();
+    let header = b.len();
+    b.extend([0u8; 13]); // vertex 0, empty list
+    b.extend([0u8; 12]);
+    b.push(3); // vertex 1: a list of 3 ints that is not there
     let e = err_of(&b, Format::Ply);
     assert_eq!(
         e.location,
-        Some(Location::Byte((header + 12) as u64)),
+        Some(Location::Byte((header + 13) as u64)),
         "{e}"
     );
 
@@ -546,4 +561,112 @@ fn real_office_scan_has_colours() {
     let bytes = io::write_bytes(&c, Format::Pcd, &WriteOptions::default()).unwrap();
     let back = io::read_bytes(&bytes, Format::Pcd).unwrap();
     assert_eq!(back.scalar("rgb"), c.scalar("rgb"));
+}
+
+/// Issue 16, item 2: header counts are never trusted. Each of these files once aborted
+/// (allocation failure, capacity overflow), hung or read as empty with success; each must be an
+/// error naming the header line, quickly.
+#[test]
+fn hostile_header_counts_are_errors_naming_the_line() {
+    let ply_xyz = |fmt: &str, count: &str| {
+        format!(
+            "ply\nformat {fmt} 1.0\nelement vertex {count}\nproperty float x\nproperty float y\n\
+             property float z\nend_header\n"
+        )
+        .into_bytes()
+    };
+    let pcd = |fields: &str, count: &str, points: &str, data: &str| {
+        format!(
+            "VERSION 0.7\nFIELDS {fields}\nSIZE 4 4 4\nTYPE F F F\nCOUNT {count}\nWIDTH {points}\n\
+             HEIGHT 1\nPOINTS {points}\nDATA {data}\n"
+        )
+        .into_bytes()
+    };
+    let start = std::time::Instant::now();
+    let mut cases: Vec<(&str, Vec<u8>, Format, usize)> = Vec::new();
+
+    // A 148-byte binary PLY declaring 4e9 vertices, and 2^64 - 1 vertices.
+    let mut b = ply_xyz("binary_little_endian", "4000000000");
+    b.resize(148, 0);
+    cases.push(("PLY 4e9 vertices", b, Format::Ply, 3));
+    let mut b = ply_xyz("binary_little_endian", &u64::MAX.to_string());
+    b.extend([0u8; 24]);
+    cases.push(("PLY 2^64-1 vertices", b, Format::Ply, 3));
+    let mut b = ply_xyz("ascii", &u64::MAX.to_string());
+    b.extend(b"0 0 0\n1 1 1\n");
+    cases.push(("ascii PLY 2^64-1 vertices", b, Format::Ply, 0));
+    // An element without properties and 2^64 - 1 records before the vertices (once a hang).
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement nothing {}\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\nend_header\n",
+        u64::MAX,
+        u64::MAX
+    )
+    .into_bytes();
+    b.extend([0u8; 12]);
+    cases.push(("PLY empty element 2^64-1 then vertices", b, Format::Ply, 4));
+    // An element with properties and a huge count before the vertices.
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement face {}\nproperty list uchar int v\n\
+         element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
+        u64::MAX / 2
+    )
+    .into_bytes();
+    b.extend([0u8; 12]);
+    cases.push(("PLY huge face element", b, Format::Ply, 3));
+
+    // PCD: POINTS 10^12 in binary, ascii and binary_compressed.
+    let tera = "1000000000000";
+    let mut b = pcd("x y z", "1 1 1", tera, "binary");
+    b.extend([0u8; 24]);
+    cases.push(("PCD binary POINTS 1e12", b, Format::Pcd, 8));
+    let mut b = pcd("x y z", "1 1 1", tera, "ascii");
+    b.extend(b"0 0 0\n");
+    cases.push(("PCD ascii POINTS 1e12", b, Format::Pcd, 8));
+    let mut b = pcd("x y z", "1 1 1", tera, "binary_compressed");
+    b.extend([0u8; 16]);
+    cases.push(("PCD compressed POINTS 1e12", b, Format::Pcd, 8));
+    // COUNT 1 1 10^12.
+    let mut b = pcd("x y z", &format!("1 1 {tera}"), "1", "binary");
+    b.extend([0u8; 24]);
+    cases.push(("PCD COUNT 1 1 1e12", b, Format::Pcd, 5));
+    // COUNT that overflows the sum.
+    let mut b = pcd(
+        "x y z",
+        &format!("1 {} {}", usize::MAX, usize::MAX),
+        "1",
+        "ascii",
+    );
+    b.extend(b"0 0 0\n");
+    cases.push(("PCD COUNT overflow", b, Format::Pcd, 5));
+    // WIDTH x HEIGHT overflows (once 0 points with success).
+    let b = b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n\
+WIDTH 4294967296\nHEIGHT 4294967296\nDATA binary\n"
+        .to_vec();
+    cases.push(("PCD WIDTH x HEIGHT overflow", b, Format::Pcd, 7));
+
+    for (what, data, format, line) in &cases {
+        let e = err_of(data, *format);
+        assert!(matches!(e.kind, IoErrorKind::Malformed(_)), "{what}: {e:?}");
+        if *line > 0 {
+            assert_eq!(e.location, Some(Location::Line(*line)), "{what}: {e}");
+        }
+        println!("{what}: {e}");
+    }
+
+    // binary_compressed declaring 357,913,941 points (about 4 GiB) in a few bytes of LZF.
+    let mut b = pcd("x y z", "1 1 1", "357913941", "binary_compressed");
+    let at = b.len();
+    b.extend(16u32.to_le_bytes());
+    b.extend((357_913_941u32 * 12).to_le_bytes());
+    b.extend([0u8; 16]);
+    let e = err_of(&b, Format::Pcd);
+    assert_eq!(e.location, Some(Location::Byte((at + 4) as u64)), "{e}");
+    assert!(e.to_string().contains("cannot come from 16 bytes"), "{e}");
+
+    assert!(
+        start.elapsed().as_secs_f64() < 5.0,
+        "hostile headers took {:?}",
+        start.elapsed()
+    );
 }

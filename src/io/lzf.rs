@@ -2,10 +2,17 @@
 //! complete; the encoder writes a valid stream of literal runs only (no back references),
 //! which every LZF decoder, PCL's included, reads.
 
+/// The most bytes `n` bytes of LZF can expand to: a 3-byte back reference copies at most
+/// 264 bytes (88 per input byte); literals and short references expand less.
+pub(crate) fn max_decompressed(n: usize) -> usize {
+    n.saturating_mul(88)
+}
+
 /// Decompresses `input` into exactly `out_len` bytes. On failure returns the offset in
 /// `input` where the stream stopped making sense, and why.
 pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, (usize, String)> {
-    let mut out = Vec::with_capacity(out_len);
+    // The stated size is only trusted as far as the input can expand to it.
+    let mut out = Vec::with_capacity(out_len.min(max_decompressed(input.len())));
     let mut i = 0;
     while i < input.len() {
         let at = i;

@@ -575,6 +575,10 @@ pub(crate) fn assign_columns(
     Ok((dest, scalars, normals))
 }
 
+/// Most points reserved from a file's declared count before they are read: the readers check
+/// counts against the bytes left, and this bounds what a hint can allocate in any case.
+pub(crate) const MAX_RESERVE: usize = 1 << 20;
+
 /// Builds a cloud point by point from column values.
 pub(crate) struct Builder {
     dest: Vec<Dest>,
@@ -584,7 +588,10 @@ pub(crate) struct Builder {
 }
 
 impl Builder {
+    /// `n` is the number of points the file declares: a hint only, never trusted for more
+    /// than [`MAX_RESERVE`] points (the vectors grow as points are pushed).
     pub fn new(dest: Vec<Dest>, scalar_names: Vec<String>, has_normals: bool, n: usize) -> Self {
+        let n = n.min(MAX_RESERVE);
         let scalars = scalar_names
             .into_iter()
             .map(|name| ScalarField {

@@ -79,8 +79,8 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             "SIZE" => sizes = Some((ln, nums("SIZE")?)),
             "TYPE" => kinds = Some((ln, rest.iter().map(|s| s.to_ascii_uppercase()).collect())),
             "COUNT" => counts = Some((ln, nums("COUNT")?)),
-            "WIDTH" => width = Some(one("WIDTH")?),
-            "HEIGHT" => height = Some(one("HEIGHT")?),
+            "WIDTH" => width = Some((ln, one("WIDTH")?)),
+            "HEIGHT" => height = Some((ln, one("HEIGHT")?)),
             "POINTS" => points = Some((ln, one("POINTS")?)),
             "DATA" => {
                 kind = Some(
@@ -154,16 +154,27 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             count: counts[i],
         });
     }
-    let n = match (points, width, height) {
-        (Some((pl, p)), Some(w), Some(h)) if w * h != p => {
+    // WIDTH x HEIGHT, checked for overflow.
+    let grid_points = match (width, height) {
+        (Some((_, w)), Some((hl, h))) => Some(w.checked_mul(h).ok_or_else(|| {
+            Fail::line(
+                hl,
+                format!("WIDTH x HEIGHT = {w} x {h} overflows: no file holds that many points"),
+            )
+        })?),
+        _ => None,
+    };
+    let (n, n_line) = match (points, width, grid_points) {
+        (Some((pl, p)), Some((_, w)), Some(wh)) if wh != p => {
+            let h = height.map_or(0, |h| h.1);
             return Err(Fail::line(
                 pl,
                 format!("POINTS {p} differs from WIDTH x HEIGHT = {w} x {h}"),
-            ))
+            ));
         }
-        (Some((_, p)), _, _) => p,
-        (None, Some(w), Some(h)) => w * h,
-        (None, Some(w), None) => w,
+        (Some((pl, p)), _, _) => (p, pl),
+        (None, Some((wl, _)), Some(wh)) => (wh, wl),
+        (None, Some((wl, w)), None) => (w, wl),
         _ => {
             return Err(Fail::line(
                 data_line,
@@ -171,6 +182,70 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             ))
         }
     };
+    // Values per point and bytes per point, checked for overflow and against the file: a
+    // point cannot have more values than the file has bytes.
+    let mut values_per_point = 0usize;
+    let mut rec = 0usize;
+    for f in &fields {
+        values_per_point = values_per_point
+            .checked_add(f.count)
+            .filter(|&v| v <= data.len())
+            .ok_or_else(|| {
+                Fail::line(
+                    cl,
+                    format!(
+                        "COUNT {} of field '{}' gives more values per point than the file has \
+                         bytes ({})",
+                        f.count,
+                        f.name,
+                        data.len()
+                    ),
+                )
+            })?;
+        // Cannot overflow: count <= data.len() and size <= 8.
+        rec += f.ty.size() * f.count;
+    }
+    let body_len = data.len() - header_end;
+    match kind {
+        Data::Binary => {
+            if n.checked_mul(rec).is_none_or(|need| need > body_len) {
+                return Err(Fail::line(
+                    n_line,
+                    format!(
+                        "the header declares {n} points of {rec} bytes, but only {body_len} \
+                         bytes follow it"
+                    ),
+                ));
+            }
+        }
+        Data::Compressed => {
+            if n.checked_mul(rec)
+                .is_none_or(|need| need > u32::MAX as usize)
+            {
+                return Err(Fail::line(
+                    n_line,
+                    format!(
+                        "the header declares {n} points of {rec} bytes, more than \
+                         binary_compressed data can hold (4 GiB)"
+                    ),
+                ));
+            }
+        }
+        // A point takes at least 2 bytes of text per value ("0 ").
+        Data::Ascii => {
+            if n.checked_mul(values_per_point.max(1))
+                .is_none_or(|need| need > body_len)
+            {
+                return Err(Fail::line(
+                    n_line,
+                    format!(
+                        "the header declares {n} points of {values_per_point} values, but only \
+                         {body_len} bytes of text follow it"
+                    ),
+                ));
+            }
+        }
+    }
     // Columns: fields expanded by COUNT; padding fields ('_') skipped.
     // A packed colour stored as the bits of a float is read as those bits (a 32-bit
     // unsigned integer): converting it as a float would change NaN-pattern colours.
@@ -192,7 +267,6 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
     let (dest, scalar_names, has_normals) =
         assign_columns(&col_names).map_err(|m| Fail::line(fl, m))?;
     let mut b = Builder::new(dest, scalar_names, has_normals, n);
-    let rec: usize = fields.iter().map(|f| f.ty.size() * f.count).sum();
     match kind {
         Data::Ascii => {
             let mut got = 0;
@@ -276,6 +350,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             let csize = u32::from_le_bytes(body[0..4].try_into().unwrap()) as usize;
             let usize_ = u32::from_le_bytes(body[4..8].try_into().unwrap()) as usize;
             if usize_ != n * rec {
+                // n * rec was checked above.
                 return Err(Fail::byte(
                     header_end + 4,
                     format!(
@@ -290,6 +365,14 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                     format!(
                         "compressed size {csize} exceeds the {} bytes left in the file",
                         body.len() - 8
+                    ),
+                ));
+            }
+            if usize_ > lzf::max_decompressed(csize) {
+                return Err(Fail::byte(
+                    header_end + 4,
+                    format!(
+                        "uncompressed size {usize_} cannot come from {csize} bytes of LZF data"
                     ),
                 ));
             }
@@ -320,8 +403,8 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         }
     }
     let mut cloud = b.finish();
-    if let (Some(w), Some(h)) = (width, height) {
-        if h > 1 && w * h == n {
+    if let (Some((_, w)), Some((_, h)), Some(wh)) = (width, height, grid_points) {
+        if h > 1 && wh == n {
             cloud.grid = Some(Grid {
                 width: w,
                 height: h,

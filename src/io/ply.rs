@@ -22,6 +22,21 @@ struct Element {
     name: String,
     count: usize,
     props: Vec<(String, Prop)>,
+    /// Header line of the `element` entry, for errors about its count.
+    line: usize,
+}
+
+impl Element {
+    /// Fewest bytes one binary record can take: the scalars plus each list's length field.
+    fn min_record(&self) -> usize {
+        self.props
+            .iter()
+            .map(|(_, p)| match p {
+                Prop::Scalar(t) => t.size(),
+                Prop::List(ct, _) => ct.size(),
+            })
+            .sum()
+    }
 }
 
 fn ty_of(s: &str) -> Option<Ty> {
@@ -87,6 +102,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                     name: name.to_string(),
                     count,
                     props: Vec::new(),
+                    line: ln,
                 });
             }
             "property" => {
@@ -220,6 +236,30 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         };
         for (ei, el) in elements[..=vi].iter().enumerate() {
             let is_vertex = ei == vi;
+            // Never trust the count: the records must fit in the bytes that are left.
+            let left = data.len() - pos;
+            let min = el.min_record();
+            match el.count.checked_mul(min) {
+                Some(need) if need <= left => {}
+                _ => {
+                    return Err(Fail::line(
+                        el.line,
+                        format!(
+                            "element '{}' declares {} records of at least {min} bytes, but only \
+                             {left} bytes follow the header",
+                            el.name, el.count
+                        ),
+                    ))
+                }
+            }
+            if min == 0 {
+                // No properties: the records take no bytes (and are not looped over).
+                continue;
+            }
+            if !is_vertex && el.props.iter().all(|(_, p)| matches!(p, Prop::Scalar(_))) {
+                pos += el.count * min;
+                continue;
+            }
             for i in 0..el.count {
                 let what = || format!("element '{}' {i} of {}", el.name, el.count);
                 let start = pos;
