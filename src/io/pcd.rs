@@ -492,7 +492,7 @@ pub(crate) fn write(
                     "binary_compressed PCD holds at most 4 GiB of data; write binary",
                 ));
             }
-            let c = lzf::compress_literal(&raw);
+            let c = lzf::compress(&raw);
             w.write_all(&(c.len() as u32).to_le_bytes())?;
             w.write_all(&(raw.len() as u32).to_le_bytes())?;
             w.write_all(&c)?;
