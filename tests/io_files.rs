@@ -131,32 +131,40 @@ fn positions_only_round_trip_has_no_normals() {
         let path = tmp(&format!("plain.{ext}"));
         io::write(&path, &c, &WriteOptions::default()).unwrap();
         let back = io::read(&path).unwrap();
-        assert_eq!(back, c, "{ext}");
+        assert_eq!(back.positions, c.positions, "{ext}");
         assert_eq!(back.field_names(), ["x", "y", "z"]);
+        // Written as float by default, and read as such.
+        assert_eq!(back.source_precision, Some(Precision::Single), "{ext}");
     }
 }
 
 #[test]
 fn ply_header_names_normals_and_scalars_as_viewers_expect() {
+    // Float by default: what PCL's loaders match.
     let bytes = io::write_bytes(&sample(), Format::Ply, &WriteOptions::ascii()).unwrap();
     let text = String::from_utf8(bytes).unwrap();
     for line in [
         "format ascii 1.0",
         "element vertex 12",
-        "property double nx",
-        "property double nz",
-        "property double curvature",
+        "property float x",
+        "property float nx",
+        "property float nz",
+        "property float curvature",
         "end_header",
     ] {
         assert!(text.contains(line), "missing '{line}' in\n{text}");
     }
-    let single = WriteOptions {
-        precision: Precision::Single,
+    let double = WriteOptions {
+        precision: Precision::Double,
         ..WriteOptions::ascii()
     };
     let text =
+        String::from_utf8(io::write_bytes(&sample(), Format::Ply, &double).unwrap()).unwrap();
+    assert!(text.contains("property double x\n"));
+    assert!(text.contains("property double curvature"));
+    let single = WriteOptions::ascii();
+    let text =
         String::from_utf8(io::write_bytes(&sample(), Format::Ply, &single).unwrap()).unwrap();
-    assert!(text.contains("property float curvature"));
     assert!(
         text.contains("nan nan nan"),
         "NaN written as C and PCL write it"
@@ -521,7 +529,11 @@ WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n"
     };
     let out = io::write_bytes(&c, Format::Pcd, &single).unwrap();
     let text = String::from_utf8_lossy(&out);
-    assert!(text.contains("TYPE F F F U\n"), "{text}");
+    // PCL's PointXYZRGB: rgb is a 4-byte float holding the packed bits.
+    assert!(
+        text.contains("FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\n"),
+        "{text}"
+    );
     assert_eq!(&out[out.len() - 16 + 12..], &0x00102030u32.to_le_bytes());
     assert_eq!(
         &out[out.len() - 32 + 12..out.len() - 16],
@@ -541,8 +553,31 @@ WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n"
     ] {
         let bytes = io::write_bytes(&c, format, &opts).unwrap();
         let back = io::read_bytes(&bytes, format).unwrap();
-        assert_eq!(back.scalar("rgb"), c.scalar("rgb"), "{format:?}");
+        assert_eq!(back.colors(), c.colors(), "{format:?}");
+        if format == Format::Pcd {
+            // PCD keeps the packed bits, alpha included.
+            assert_eq!(back.scalar("rgb"), c.scalar("rgb"), "{format:?}");
+        } else {
+            // PLY and XYZ: 8-bit red green blue, as MeshLab and CloudCompare read them.
+            assert_eq!(back.field_names(), ["x", "y", "z", "red", "green", "blue"]);
+            let text = String::from_utf8_lossy(&bytes);
+            if format == Format::Ply {
+                assert!(
+                    text.contains(
+                        "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                    ),
+                    "{text}"
+                );
+            }
+        }
     }
+    // Colours given as channels go to PCD as 0x00RRGGBB.
+    let mut ch = PointCloud::from_positions(vec![[0.0; 3]]);
+    ch.set_scalar("red", vec![1.0]).unwrap();
+    ch.set_scalar("green", vec![2.0]).unwrap();
+    ch.set_scalar("blue", vec![255.0]).unwrap();
+    let out = io::write_bytes(&ch, Format::Pcd, &WriteOptions::ascii()).unwrap();
+    assert!(String::from_utf8_lossy(&out).ends_with("\n0 0 0 66303\n"));
     // PCL's ascii form: the float printed as a number.
     let f = f32::from_bits(0x00102030);
     let t = format!("FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nWIDTH 1\nPOINTS 1\nDATA ascii\n0 0 0 {f:e}\n");

@@ -83,6 +83,11 @@ pub struct PointCloud {
     pub scalars: Vec<ScalarField>,
     /// Width and height of an organized cloud (PCD with `HEIGHT` > 1).
     pub grid: Option<Grid>,
+    /// How precisely the file read held the coordinates: [`Precision::Double`] for PLY
+    /// `double`/`int`/`uint`, PCD `F 8`/`I 4`/`U 4`/64-bit, LAS (scaled 32-bit integers), and
+    /// text with a coordinate that a `float` does not hold exactly; [`Precision::Single`]
+    /// otherwise; `None` for a cloud made in memory. [`Precision::Keep`] writes by it.
+    pub source_precision: Option<Precision>,
 }
 
 impl PointCloud {
@@ -148,7 +153,7 @@ impl PointCloud {
     /// Per-point colours, if the cloud has them: a packed `rgb`/`rgba` field (as PCL writes
     /// them) or `red`, `green`, `blue` fields (as PLY files have them, 0..255).
     pub fn colors(&self) -> Option<Vec<[u8; 3]>> {
-        if let Some(v) = self.scalar("rgb").or_else(|| self.scalar("rgba")) {
+        if let Some(v) = self.packed_color_field() {
             return Some(
                 v.iter()
                     .map(|&c| {
@@ -169,6 +174,17 @@ impl PointCloud {
                 .map(|i| [ch(r[i]), ch(g[i]), ch(b[i])])
                 .collect(),
         )
+    }
+
+    /// The packed colour field (`rgb`, else `rgba`) if it holds 32-bit unsigned integers.
+    fn packed_color_field(&self) -> Option<&[f64]> {
+        ["rgb", "rgba"]
+            .iter()
+            .filter_map(|n| self.scalar(n))
+            .find(|v| {
+                v.iter()
+                    .all(|&x| (0.0..=u32::MAX as f64).contains(&x) && x.fract() == 0.0)
+            })
     }
 
     /// Number of points with a NaN or infinite coordinate.
@@ -317,14 +333,52 @@ pub enum Encoding {
     BinaryCompressed,
 }
 
-/// Width of the stored floating-point values.
+/// Width of the stored floating-point values (coordinates, normals, scalar fields).
+///
+/// The default is [`Single`](Precision::Single), because that is what other tools load:
+/// PCL's `PointXYZ`, `PointNormal`, `PointXYZRGB` are `float` types and its loaders match a
+/// field only if its type is `float` (a `double` x is "Failed to find match for field 'x'"
+/// and the point stays 0); MeshLab and CloudCompare read both.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Precision {
-    /// 32-bit `float` (PLY `float`, PCD `F 4`): half the size, about 7 digits.
+    /// 32-bit `float` (PLY `float`, PCD `F 4`): what PCL's point types hold, about 7 digits.
+    #[default]
     Single,
     /// 64-bit `double` (PLY `double`, PCD `F 8`): exact for nbhd's `f64` values.
-    #[default]
     Double,
+    /// As the cloud was read ([`PointCloud::source_precision`]): double if the file held
+    /// the coordinates more precisely than a `float` does, single otherwise.
+    Keep,
+}
+
+impl Precision {
+    /// Whether `cloud` is written in single precision.
+    pub fn is_single_for(self, cloud: &PointCloud) -> bool {
+        match self {
+            Precision::Single => true,
+            Precision::Double => false,
+            Precision::Keep => cloud.source_precision != Some(Precision::Double),
+        }
+    }
+
+    /// The precision a file's coordinate type holds.
+    pub(crate) fn of_type(ty: value::Ty) -> Precision {
+        use value::Ty;
+        match ty {
+            Ty::F64 | Ty::I32 | Ty::U32 | Ty::I64 | Ty::U64 => Precision::Double,
+            _ => Precision::Single,
+        }
+    }
+
+    /// The precision text coordinates need: double if one is not exactly a `float`.
+    pub(crate) fn of_text(positions: &[[f64; 3]]) -> Precision {
+        let exact = |v: f64| !v.is_finite() || v as f32 as f64 == v;
+        if positions.iter().all(|p| p.iter().all(|&v| exact(v))) {
+            Precision::Single
+        } else {
+            Precision::Double
+        }
+    }
 }
 
 /// Options of [`write()`].
@@ -334,12 +388,13 @@ pub struct WriteOptions {
     pub format: Option<Format>,
     /// Encoding; `None` is binary for PLY and PCD, text for XYZ.
     pub encoding: Option<Encoding>,
-    /// Width of positions, normals and scalar fields.
+    /// Width of positions, normals and scalar fields (colours are always 8-bit channels or
+    /// PCL's packed `rgb`).
     pub precision: Precision,
 }
 
 impl WriteOptions {
-    /// Text output, double precision.
+    /// Text output, single precision.
     pub fn ascii() -> Self {
         Self {
             encoding: Some(Encoding::Ascii),
@@ -479,7 +534,7 @@ fn write_to(
     format: Format,
     options: &WriteOptions,
 ) -> PResult<()> {
-    let single = options.precision == Precision::Single;
+    let single = options.precision.is_single_for(cloud);
     match format {
         Format::Ply => ply::write(
             w,
@@ -606,6 +661,7 @@ impl Builder {
                 normals: None,
                 scalars,
                 grid: None,
+                source_precision: None,
             },
             normals: Vec::with_capacity(if has_normals { n } else { 0 }),
             has_normals,
@@ -638,64 +694,183 @@ impl Builder {
     }
 }
 
-/// The columns a writer emits: names and a getter per point.
-pub(crate) fn out_columns<'a>(
-    cloud: &'a PointCloud,
-    normal_names: [&str; 3],
-) -> Vec<(String, Col<'a>)> {
-    let mut cols: Vec<(String, Col<'a>)> = ["x", "y", "z"]
-        .iter()
-        .enumerate()
-        .map(|(j, n)| (n.to_string(), Col::Pos(j)))
-        .collect();
-    if cloud.normals.is_some() {
-        for (j, n) in normal_names.iter().enumerate() {
-            cols.push((n.to_string(), Col::Normal(j)));
-        }
-    }
-    for s in &cloud.scalars {
-        let col = if is_packed_color(&s.name, &s.values) {
-            Col::Packed(&s.values)
-        } else {
-            Col::Scalar(&s.values)
-        };
-        cols.push((header_name(&s.name), col));
-    }
-    cols
+/// How a writer lays out colours.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ColorStyle {
+    /// `red green blue` as 8-bit unsigned integers (PLY `uchar`, XYZ integers): what MeshLab,
+    /// CloudCompare and PCL's PLY reader take as colour.
+    Channels,
+    /// One `rgb` field holding `0x00RRGGBB` in the bits of a 32-bit float (PCD `F 4`), as
+    /// PCL's `PointXYZRGB` stores it.
+    PackedFloat,
 }
 
-/// One output column.
+/// How a column is stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Store {
+    /// `float` or `double` by the precision asked for.
+    Float,
+    /// 8-bit unsigned integer (colour channels).
+    U8,
+    /// A packed colour: the 32 bits of a PCD `F 4` field (text: the unsigned integer).
+    RgbBits,
+}
+
 #[derive(Clone, Copy)]
-pub(crate) enum Col<'a> {
+enum Col<'a> {
     Pos(usize),
     Normal(usize),
     Scalar(&'a [f64]),
-    /// A packed colour (`rgb`, `rgba`): written as a 32-bit unsigned integer.
-    Packed(&'a [f64]),
+    Channel(usize),
+    Rgb,
 }
 
-impl Col<'_> {
-    pub fn get(&self, cloud: &PointCloud, i: usize) -> f64 {
-        match *self {
-            Col::Pos(j) => cloud.positions[i][j],
-            Col::Normal(j) => cloud.normals.as_ref().map_or(0.0, |n| n[i][j]),
-            Col::Scalar(v) | Col::Packed(v) => v[i],
+/// The columns a writer emits, with their names and storage.
+pub(crate) struct Columns<'a> {
+    cloud: &'a PointCloud,
+    names: Vec<String>,
+    cols: Vec<Col<'a>>,
+    colors: Vec<[u8; 3]>,
+    packed: Vec<u32>,
+}
+
+impl<'a> Columns<'a> {
+    /// `x y z`, the normals under `normal_names`, the colour (if the cloud has one, in
+    /// `style`), then the other scalar fields in order.
+    pub fn new(cloud: &'a PointCloud, normal_names: [&str; 3], style: ColorStyle) -> Self {
+        let mut c = Columns {
+            cloud,
+            names: Vec::new(),
+            cols: Vec::new(),
+            colors: Vec::new(),
+            packed: Vec::new(),
+        };
+        for (j, n) in ["x", "y", "z"].iter().enumerate() {
+            c.push(n, Col::Pos(j));
+        }
+        if cloud.normals.is_some() {
+            for (j, n) in normal_names.iter().enumerate() {
+                c.push(n, Col::Normal(j));
+            }
+        }
+        let colors = cloud.colors();
+        if let Some(colors) = colors.clone() {
+            match style {
+                ColorStyle::Channels => {
+                    for (k, n) in ["red", "green", "blue"].iter().enumerate() {
+                        c.push(n, Col::Channel(k));
+                    }
+                    c.colors = colors;
+                }
+                ColorStyle::PackedFloat => {
+                    // A packed field read from a file keeps its 32 bits (alpha included);
+                    // channels are packed as 0x00RRGGBB.
+                    c.packed = match cloud.packed_color_field() {
+                        Some(v) => v.iter().map(|&x| x as u32).collect(),
+                        None => colors
+                            .iter()
+                            .map(|[r, g, b]| (*r as u32) << 16 | (*g as u32) << 8 | *b as u32)
+                            .collect(),
+                    };
+                    c.push("rgb", Col::Rgb);
+                }
+            }
+        }
+        for s in &cloud.scalars {
+            if colors.is_some() && is_color_name(&s.name) {
+                continue;
+            }
+            c.push(&header_name(&s.name), Col::Scalar(&s.values));
+        }
+        c
+    }
+
+    fn push(&mut self, name: &str, col: Col<'a>) {
+        self.names.push(name.to_string());
+        self.cols.push(col);
+    }
+
+    /// Column names, in order.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Number of columns.
+    pub fn len(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// How column `c` is stored.
+    pub fn store(&self, c: usize) -> Store {
+        match self.cols[c] {
+            Col::Channel(_) => Store::U8,
+            Col::Rgb => Store::RgbBits,
+            _ => Store::Float,
         }
     }
 
-    /// The value of point `i` as text (packed colours as integers).
-    pub fn text(&self, cloud: &PointCloud, i: usize, single: bool) -> String {
-        let v = self.get(cloud, i);
-        if self.packed() {
-            (v as u32).to_string()
-        } else {
-            value::fmt_num(v, single)
+    /// The value of column `c` at point `i`.
+    pub fn get(&self, c: usize, i: usize) -> f64 {
+        match self.cols[c] {
+            Col::Pos(j) => self.cloud.positions[i][j],
+            Col::Normal(j) => self.cloud.normals.as_ref().map_or(0.0, |n| n[i][j]),
+            Col::Scalar(v) => v[i],
+            Col::Channel(k) => self.colors[i][k] as f64,
+            Col::Rgb => self.packed[i] as f64,
         }
     }
 
-    pub fn packed(&self) -> bool {
-        matches!(self, Col::Packed(_))
+    /// Column `c` of point `i` as text: floats as the shortest form that reads back exactly
+    /// at the precision, colours as unsigned integers (PCL writes `rgb` so in ascii PCD).
+    pub fn text(&self, c: usize, i: usize, single: bool) -> String {
+        match self.cols[c] {
+            Col::Channel(k) => self.colors[i][k].to_string(),
+            Col::Rgb => self.packed[i].to_string(),
+            _ => value::fmt_num(self.get(c, i), single),
+        }
     }
+
+    /// Appends column `c` of point `i` in binary.
+    pub fn put(&self, buf: &mut Vec<u8>, c: usize, i: usize, single: bool, big_endian: bool) {
+        macro_rules! put {
+            ($v:expr) => {
+                if big_endian {
+                    buf.extend_from_slice(&$v.to_be_bytes())
+                } else {
+                    buf.extend_from_slice(&$v.to_le_bytes())
+                }
+            };
+        }
+        match self.cols[c] {
+            Col::Channel(k) => buf.push(self.colors[i][k]),
+            Col::Rgb => put!(self.packed[i]),
+            _ => {
+                let v = self.get(c, i);
+                if single {
+                    put!(v as f32)
+                } else {
+                    put!(v)
+                }
+            }
+        }
+    }
+
+    /// One text line of point `i`, columns separated by a space.
+    pub fn line(&self, out: &mut String, i: usize, single: bool) {
+        out.clear();
+        for c in 0..self.len() {
+            if c > 0 {
+                out.push(' ');
+            }
+            out.push_str(&self.text(c, i, single));
+        }
+        out.push('\n');
+    }
+}
+
+/// Scalar fields that hold a colour: a packed `rgb`/`rgba`, or `red`/`green`/`blue`.
+fn is_color_name(name: &str) -> bool {
+    matches!(name, "rgb" | "rgba" | "red" | "green" | "blue")
 }
 
 /// `rgb` and `rgba` fields hold a colour packed as `0xAARRGGBB`: PCL stores it as the bits of
@@ -703,11 +878,4 @@ impl Col<'_> {
 /// integer, which is bit-identical to PCL's float.
 pub(crate) fn is_packed_name(name: &str) -> bool {
     name == "rgb" || name == "rgba"
-}
-
-fn is_packed_color(name: &str, values: &[f64]) -> bool {
-    is_packed_name(name)
-        && values
-            .iter()
-            .all(|&v| v >= 0.0 && v <= u32::MAX as f64 && v.fract() == 0.0)
 }

@@ -3,7 +3,7 @@
 use super::error::{Fail, PResult};
 use super::lzf;
 use super::value::{parse_num, tokens, Lines, Ty};
-use super::{assign_columns, out_columns, Builder, Col, Encoding, Grid, PointCloud};
+use super::{assign_columns, Builder, ColorStyle, Columns, Encoding, Grid, PointCloud, Store};
 use std::io::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -282,9 +282,24 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                 }
                 vals.clear();
                 for tok in tokens(t) {
-                    vals.push(parse_num(tok).ok_or_else(|| {
-                        Fail::line(ln, format!("'{tok}' is not a number (point {got})"))
-                    })?);
+                    let c = vals.len();
+                    // A packed colour in text: PCL (1.7 on) writes the unsigned integer of its
+                    // bits; older writers printed the float.
+                    let packed = packed_float.get(c) == Some(&true);
+                    let v = match tok.parse::<u32>() {
+                        Ok(u) if packed => u as f64,
+                        _ => {
+                            let v = parse_num(tok).ok_or_else(|| {
+                                Fail::line(ln, format!("'{tok}' is not a number (point {got})"))
+                            })?;
+                            match (packed, col_ty.get(c)) {
+                                (true, _) => (v as f32).to_bits() as f64,
+                                (false, Some(t)) => t.round_text(v),
+                                (false, None) => v,
+                            }
+                        }
+                    };
+                    vals.push(v);
                 }
                 if vals.len() != col_ty.len() {
                     return Err(Fail::line(
@@ -296,18 +311,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                         ),
                     ));
                 }
-                b.push(
-                    vals.iter()
-                        .zip(&col_ty)
-                        .zip(&packed_float)
-                        .map(|((v, t), p)| {
-                            if *p {
-                                (*v as f32).to_bits() as f64
-                            } else {
-                                t.round_text(*v)
-                            }
-                        }),
-                );
+                b.push(vals.iter().copied());
                 got += 1;
             }
             if got < n {
@@ -403,6 +407,10 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         }
     }
     let mut cloud = b.finish();
+    cloud.source_precision = fields
+        .iter()
+        .find(|f| f.name == "x")
+        .map(|f| super::Precision::of_type(f.ty));
     if let (Some((_, w)), Some((_, h)), Some(wh)) = (width, height, grid_points) {
         if h > 1 && wh == n {
             cloud.grid = Some(Grid {
@@ -420,71 +428,64 @@ pub(crate) fn write(
     enc: Encoding,
     single: bool,
 ) -> PResult<()> {
-    let cols = out_columns(cloud, ["normal_x", "normal_y", "normal_z"]);
+    let cols = Columns::new(
+        cloud,
+        ["normal_x", "normal_y", "normal_z"],
+        ColorStyle::PackedFloat,
+    );
     let n = cloud.len();
     let (width, height) = cloud.grid.map_or((n, 1), |g| (g.width, g.height));
-    let size = if single { 4 } else { 8 };
-    let names: Vec<&str> = cols.iter().map(|(s, _)| s.as_str()).collect();
     let data = match enc {
         Encoding::Ascii => "ascii",
         Encoding::Binary => "binary",
         Encoding::BinaryCompressed => "binary_compressed",
         Encoding::BinaryBigEndian => unreachable!("refused by check_writable"),
     };
-    let per_col = |packed: &str, float: &str| {
-        cols.iter()
-            .map(|(_, c)| if c.packed() { packed } else { float })
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
+    let float_size = if single { "4" } else { "8" };
+    let (mut size, mut ty) = (Vec::new(), Vec::new());
+    for c in 0..cols.len() {
+        let (s, t) = match cols.store(c) {
+            Store::Float => (float_size, "F"),
+            Store::U8 => ("1", "U"),
+            // PCL's PointXYZRGB: rgb is a float field holding the packed bits.
+            Store::RgbBits => ("4", "F"),
+        };
+        size.push(s);
+        ty.push(t);
+    }
     write!(
         w,
         "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\n\
          COUNT {}\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n",
-        names.join(" "),
-        per_col("4", &size.to_string()),
-        per_col("U", "F"),
-        per_col("1", "1"),
+        cols.names().join(" "),
+        size.join(" "),
+        ty.join(" "),
+        vec!["1"; cols.len()].join(" "),
     )?;
-    let put = |buf: &mut Vec<u8>, col: &Col<'_>, v: f64| {
-        if col.packed() {
-            buf.extend_from_slice(&(v as u32).to_le_bytes())
-        } else if single {
-            buf.extend_from_slice(&(v as f32).to_le_bytes())
-        } else {
-            buf.extend_from_slice(&v.to_le_bytes())
-        }
-    };
     match enc {
         Encoding::Ascii => {
             let mut line = String::new();
             for i in 0..n {
-                line.clear();
-                for (c, (_, col)) in cols.iter().enumerate() {
-                    if c > 0 {
-                        line.push(' ');
-                    }
-                    line.push_str(&col.text(cloud, i, single));
-                }
-                line.push('\n');
+                cols.line(&mut line, i, single);
                 w.write_all(line.as_bytes())?;
             }
         }
         Encoding::Binary => {
-            let mut buf = Vec::with_capacity(cols.len() * size);
+            let mut buf = Vec::new();
             for i in 0..n {
                 buf.clear();
-                for (_, col) in &cols {
-                    put(&mut buf, col, col.get(cloud, i));
+                for c in 0..cols.len() {
+                    cols.put(&mut buf, c, i, single, false);
                 }
                 w.write_all(&buf)?;
             }
         }
         Encoding::BinaryCompressed => {
-            let mut raw = Vec::with_capacity(n * cols.len() * size);
-            for (_, col) in &cols {
+            // Field by field, as PCL stores it: all points' x, then all y, ...
+            let mut raw = Vec::new();
+            for c in 0..cols.len() {
                 for i in 0..n {
-                    put(&mut raw, col, col.get(cloud, i));
+                    cols.put(&mut raw, c, i, single, false);
                 }
             }
             if raw.len() > u32::MAX as usize {

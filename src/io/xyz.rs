@@ -5,7 +5,7 @@
 
 use super::error::{Fail, PResult};
 use super::value::{parse_num, Lines};
-use super::{assign_columns, out_columns, Builder, PointCloud};
+use super::{assign_columns, Builder, ColorStyle, Columns, PointCloud};
 use std::io::Write;
 
 fn split(line: &str) -> impl Iterator<Item = &str> {
@@ -75,26 +75,20 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         }
         builder.push(vals.iter().copied());
     }
-    match b {
-        Some((builder, _)) => Ok(builder.finish()),
-        None => Ok(PointCloud::default()),
-    }
+    let mut cloud = match b {
+        Some((builder, _)) => builder.finish(),
+        None => PointCloud::default(),
+    };
+    cloud.source_precision = Some(super::Precision::of_text(&cloud.positions));
+    Ok(cloud)
 }
 
 pub(crate) fn write(w: &mut impl Write, cloud: &PointCloud, single: bool) -> PResult<()> {
-    let cols = out_columns(cloud, ["nx", "ny", "nz"]);
-    let names: Vec<&str> = cols.iter().map(|(s, _)| s.as_str()).collect();
-    writeln!(w, "# {}", names.join(" "))?;
+    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels);
+    writeln!(w, "# {}", cols.names().join(" "))?;
     let mut line = String::new();
     for i in 0..cloud.len() {
-        line.clear();
-        for (c, (_, col)) in cols.iter().enumerate() {
-            if c > 0 {
-                line.push(' ');
-            }
-            line.push_str(&col.text(cloud, i, single));
-        }
-        line.push('\n');
+        cols.line(&mut line, i, single);
         w.write_all(line.as_bytes())?;
     }
     Ok(())
