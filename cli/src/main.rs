@@ -72,14 +72,15 @@ enum Command {
     Neighbors(commands::neighbors::NeighborsArgs),
     /// PCA normals of every point over its ε-k neighbourhood (thesis eq. 2.8–2.10)
     ///
-    /// Writes the input with normals (nx ny nz) and the surface variation λ0/(λ0+λ1+λ2) of
-    /// the covariance as a scalar property.
+    /// Writes the input with normals (nx ny nz; normal_x normal_y normal_z in PCD) and curvature,
+    /// PCL's surface variation λ0/(λ0+λ1+λ2) of the covariance, as float32 (--precision).
     Normals(commands::geometry::Args),
     /// Normals and curvatures of every point over its ε-k neighbourhood (thesis Section 2.2)
     ///
-    /// Writes the input with normals and the scalar properties curvature (max(|k1|,|k2|),
-    /// 'Max Princ'), mean_curvature ((k1+k2)/2), k1, k2 (Weingarten estimate, eq. 2.25, signed
-    /// against the normal) and surface_variation, which MeshLab and CloudCompare colour by.
+    /// Writes the input with normals and the scalar properties curvature (PCL's surface
+    /// variation λ0/(λ0+λ1+λ2)), k1, k2 (principal curvatures, Weingarten estimate eq. 2.25,
+    /// signed against the normal), mean_curvature ((k1+k2)/2) and max_abs_curvature
+    /// (max(|k1|,|k2|), 'Max Princ'), which MeshLab and CloudCompare colour by.
     Curvature(commands::geometry::Args),
     Smooth(commands::smooth::Args),
     Bench(commands::bench::Args),

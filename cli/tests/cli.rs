@@ -246,7 +246,7 @@ fn demo_writes_files_pictures_and_a_summary_where_smoothing_reduces_the_error() 
             let cloud = nbhd::io::read(&ply).unwrap();
             assert_eq!(cloud.len(), 3000, "{}", ply.display());
             assert!(cloud.normals.is_some(), "{}", ply.display());
-            for f in ["curvature", "mean_curvature", "surface_variation"] {
+            for f in ["curvature", "mean_curvature", "max_abs_curvature"] {
                 let values = cloud.scalar(f).unwrap();
                 assert!(values.iter().all(|x| x.is_finite()), "{f}");
             }
@@ -544,7 +544,11 @@ fn noisy_sphere_file(name: &str) -> (String, Vec<DVec3>) {
     let path = tmp(name);
     let cloud =
         nbhd::io::PointCloud::from_positions(ns.points.iter().map(|p| p.to_array()).collect());
-    nbhd::io::write(&path, &cloud, &nbhd::io::WriteOptions::default()).unwrap();
+    let double = nbhd::io::WriteOptions {
+        precision: nbhd::io::Precision::Double,
+        ..Default::default()
+    };
+    nbhd::io::write(&path, &cloud, &double).unwrap();
     (path, ns.points)
 }
 
@@ -563,8 +567,11 @@ fn normals_and_curvature_match_the_library_and_point_outward() {
         "5h",
         "--png",
         &png,
+        "--precision",
+        "keep",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("(float64)"), "{}", stdout(&o));
     let cloud = nbhd::io::read(&out).unwrap();
     assert_eq!(
         cloud.field_names(),
@@ -576,10 +583,10 @@ fn normals_and_curvature_match_the_library_and_point_outward() {
             "ny",
             "nz",
             "curvature",
-            "mean_curvature",
             "k1",
             "k2",
-            "surface_variation"
+            "mean_curvature",
+            "max_abs_curvature"
         ]
     );
     let lib = nbhd::smooth::analyze(
@@ -596,8 +603,10 @@ fn normals_and_curvature_match_the_library_and_point_outward() {
     for (i, o) in lib.outputs.iter().enumerate() {
         assert_eq!(normals[i], o.normal.to_array(), "normal {i}");
         assert_eq!(cloud.scalar("k1").unwrap()[i], o.principal.k1);
+        // curvature is PCL's: the surface variation.
+        assert_eq!(cloud.scalar("curvature").unwrap()[i], o.covariance_quotient);
         assert_eq!(
-            cloud.scalar("curvature").unwrap()[i],
+            cloud.scalar("max_abs_curvature").unwrap()[i],
             o.max_principal_curvature
         );
         // Propagated orientation is outward on a sphere.
@@ -610,18 +619,21 @@ fn normals_and_curvature_match_the_library_and_point_outward() {
     let (w, h, _) = read_png(std::path::Path::new(&png));
     assert_eq!((w, h), (800, 600));
 
-    // normals: normals and the surface variation only.
+    // normals: normals and the surface variation as PCL's curvature, float32 by default
+    // (what pcl::PointNormal loads).
     let out = tmp("nsphere-normals.pcd");
     let o = nbhd(&["--json", "normals", &file, &out, "--orient", "none"]);
     let v = json_of(&o);
     assert_eq!(v["points"], 2000);
+    assert_eq!(v["precision"], "float32");
     let cloud = nbhd::io::read(&out).unwrap();
     assert_eq!(
         cloud.field_names(),
-        ["x", "y", "z", "nx", "ny", "nz", "surface_variation"]
+        ["x", "y", "z", "nx", "ny", "nz", "curvature"]
     );
     let head = std::fs::read(&out).unwrap();
-    let fields = b"FIELDS x y z normal_x normal_y normal_z surface_variation";
+    let fields = b"FIELDS x y z normal_x normal_y normal_z curvature\nSIZE 4 4 4 4 4 4 4\n\
+TYPE F F F F F F F\n";
     assert!(head.windows(fields.len()).any(|w| w == fields));
 }
 
@@ -690,7 +702,16 @@ fn smooth_matches_the_library_and_brings_points_closer_to_the_surface() {
     ] {
         let out = tmp("nsphere-smooth.ply");
         let png = tmp("nsphere-smooth.png");
-        let mut a = vec!["--json", "smooth", &file, &out, "--png", &png];
+        let mut a = vec![
+            "--json",
+            "smooth",
+            &file,
+            &out,
+            "--png",
+            &png,
+            "--precision",
+            "keep",
+        ];
         a.extend(&args);
         let v = json_of(&nbhd(&a));
         let lib = nbhd::smooth::smooth(&pts, &opts).unwrap();

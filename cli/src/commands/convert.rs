@@ -1,6 +1,6 @@
 //! `nbhd convert IN OUT`: from one point-cloud format to another.
 
-use crate::commands::FormatArg;
+use crate::commands::{precision_text, FormatArg, PrecisionArgs};
 use crate::output::Output;
 use nbhd::io::{self, Encoding, Format, Precision, WriteOptions};
 use serde_json::json;
@@ -17,15 +17,6 @@ pub enum EncodingArg {
     BinaryBigEndian,
     /// LZF-compressed, field by field (PCD binary_compressed only)
     Compressed,
-}
-
-/// Width of the stored numbers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum PrecisionArg {
-    /// 32-bit float: half the size, about 7 significant digits
-    Single,
-    /// 64-bit double: exact
-    Double,
 }
 
 /// Convert a point cloud between formats, keeping normals and scalar fields
@@ -50,9 +41,8 @@ pub struct Args {
     #[arg(long, short, value_enum)]
     pub encoding: Option<EncodingArg>,
 
-    /// Width of the stored numbers
-    #[arg(long, short, value_enum, default_value = "double")]
-    pub precision: PrecisionArg,
+    #[command(flatten)]
+    pub precision: PrecisionArgs,
 }
 
 pub fn run(a: Args, out: &Output) -> Result<(), String> {
@@ -65,11 +55,9 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
             EncodingArg::BinaryBigEndian => Encoding::BinaryBigEndian,
             EncodingArg::Compressed => Encoding::BinaryCompressed,
         }),
-        precision: match a.precision {
-            PrecisionArg::Single => Precision::Single,
-            PrecisionArg::Double => Precision::Double,
-        },
+        precision: a.precision.get(),
     };
+    let stored = precision_text(opts.precision, &cloud);
     io::write(&a.output, &cloud, &opts).map_err(|e| e.to_string())?;
     let to = Format::from_path(&a.output).map_or("?", |f| f.name());
     out.json(&json!({
@@ -80,9 +68,15 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         "points": cloud.len(),
         "non_finite": cloud.non_finite_count(),
         "fields": cloud.field_names(),
+        "precision": stored,
+        "input_precision": match cloud.source_precision {
+            Some(Precision::Double) => "float64",
+            Some(_) => "float32",
+            None => "unknown",
+        },
     }));
     out.text(format!(
-        "{} -> {}: {} points ({} -> {}), fields {}",
+        "{} -> {}: {} points ({} -> {}), fields {} ({stored})",
         a.input.display(),
         a.output.display(),
         cloud.len(),
@@ -90,5 +84,11 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         to,
         cloud.field_names().join(" ")
     ));
+    if stored == "float32" && cloud.source_precision == Some(Precision::Double) {
+        out.text(
+            "note: the input held double-precision coordinates; they were written as float32 \
+             (what PCL's point types load). Use --precision keep or double to keep them.",
+        );
+    }
     Ok(())
 }

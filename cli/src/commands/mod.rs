@@ -35,6 +35,56 @@ impl From<FormatArg> for Format {
     }
 }
 
+/// Width of the stored floats of an output file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrecisionArg {
+    /// 32-bit float: what PCL's point types (PointXYZ, PointNormal, ...) load; ~7 digits
+    Single,
+    /// 64-bit double: exact, but PCL's float point types do not load it
+    Double,
+    /// Double if the input held its coordinates more precisely than float (PLY double, PCD
+    /// F 8, LAS, text with more digits), float otherwise
+    Keep,
+}
+
+impl From<PrecisionArg> for nbhd::io::Precision {
+    fn from(p: PrecisionArg) -> Self {
+        match p {
+            PrecisionArg::Single => nbhd::io::Precision::Single,
+            PrecisionArg::Double => nbhd::io::Precision::Double,
+            PrecisionArg::Keep => nbhd::io::Precision::Keep,
+        }
+    }
+}
+
+/// The `--precision` option of the commands that write a point-cloud file.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct PrecisionArgs {
+    /// Width of the stored coordinates, normals and scalar fields (colours are always 8-bit)
+    #[arg(long, short = 'p', value_enum, default_value = "single")]
+    pub precision: PrecisionArg,
+
+    /// The same as --precision single, the default (kept for older scripts)
+    #[arg(long, hide = true)]
+    pub single: bool,
+}
+
+impl PrecisionArgs {
+    /// The library's precision.
+    pub fn get(&self) -> nbhd::io::Precision {
+        self.precision.into()
+    }
+}
+
+/// `float32` or `float64`: what `precision` writes for `cloud`.
+pub fn precision_text(precision: nbhd::io::Precision, cloud: &PointCloud) -> &'static str {
+    if precision.is_single_for(cloud) {
+        "float32"
+    } else {
+        "float64"
+    }
+}
+
 /// Parses `x,y,z`.
 pub fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
     let v: Vec<f64> = s
