@@ -705,3 +705,74 @@ WIDTH 4294967296\nHEIGHT 4294967296\nDATA binary\n"
         start.elapsed()
     );
 }
+
+/// Issue 13, item 5: text headers are recognised, colours are not taken for normals, and the
+/// reader says what it read.
+#[test]
+fn text_columns_by_header_option_or_values_and_said() {
+    let read = |data: &[u8], cols: Option<&[&str]>| {
+        let opts = io::ReadOptions {
+            columns: cols.map(|c| c.iter().map(|s| s.to_string()).collect()),
+            ..Default::default()
+        };
+        io::read_bytes_with(data, Format::Xyz, &opts).unwrap()
+    };
+    // Header lines without a comment marker, with commas, and CloudCompare's.
+    for (data, names) in [
+        (&b"x y z\n1 2 3\n"[..], vec!["x", "y", "z"]),
+        (
+            b"x,y,z,intensity\n1,2,3,7\n",
+            vec!["x", "y", "z", "intensity"],
+        ),
+        (
+            b"//X,Y,Z,R,G,B\n1,2,3,255,0,10\n",
+            vec!["x", "y", "z", "red", "green", "blue"],
+        ),
+        (
+            b"# x y z nx ny nz\n1 2 3 0 0.6 0.8\n",
+            vec!["x", "y", "z", "nx", "ny", "nz"],
+        ),
+    ] {
+        let (c, info) = read(data, None);
+        let t = info.text_columns.unwrap();
+        assert_eq!(t.names, names);
+        assert_eq!(t.from, "the header on line 1");
+        assert_eq!(c.positions, vec![[1.0, 2.0, 3.0]]);
+    }
+    let (c, _) = read(b"//X,Y,Z,R,G,B\n1,2,3,255,0,10\n", None);
+    assert_eq!(c.colors().unwrap(), vec![[255, 0, 10]]);
+    assert!(c.normals.is_none());
+
+    // No header, 6 columns of 0..255 integers: a colour, not normals, and said so.
+    let (c, info) = read(b"1 2 3 255 128 0\n4 5 6 0 0 1\n", None);
+    assert!(c.normals.is_none());
+    assert_eq!(c.colors().unwrap(), vec![[255, 128, 0], [0, 0, 1]]);
+    let t = info.text_columns.unwrap();
+    assert_eq!(t.names, ["x", "y", "z", "red", "green", "blue"]);
+    assert!(t.from.contains("0..255"), "{}", t.from);
+    // Unit vectors: normals.
+    let (c, info) = read(b"1 2 3 0 0 1\n4 5 6 0.6 0.8 0\n", None);
+    assert_eq!(c.normals.unwrap()[1], [0.6, 0.8, 0.0]);
+    assert!(info.text_columns.unwrap().from.contains("unit vectors"));
+    // Neither: scalars.
+    let (c, _) = read(b"1 2 3 0.5 7 1000\n", None);
+    assert!(c.normals.is_none() && c.colors().is_none());
+    assert_eq!(c.scalar("field5").unwrap(), [1000.0]);
+    // The caller's names win over the header and the values.
+    let (c, info) = read(
+        b"x y z a b c\n1 2 3 0 0 1\n",
+        Some(&["x", "y", "z", "r", "g", "b"]),
+    );
+    assert_eq!(c.colors().unwrap(), vec![[0, 0, 1]]);
+    assert_eq!(info.text_columns.unwrap().from, "the column names given");
+    // Counts that disagree are errors naming the line.
+    let e = io::read_bytes_with(b"x y z nx ny nz\n1 2 3\n", Format::Xyz, &Default::default())
+        .unwrap_err();
+    assert_eq!(e.location, Some(Location::Line(1)), "{e}");
+    let opts = io::ReadOptions {
+        columns: Some(vec!["x".into(), "y".into()]),
+        ..Default::default()
+    };
+    let e = io::read_bytes_with(b"\n1 2 3\n", Format::Xyz, &opts).unwrap_err();
+    assert_eq!(e.location, Some(Location::Line(2)), "{e}");
+}

@@ -55,6 +55,12 @@ struct Cli {
     #[arg(long, global = true)]
     threads: Option<usize>,
 
+    /// Names of the columns of a text (XYZ) input, e.g. x,y,z,r,g,b or x,y,z,nx,ny,nz; without
+    /// it a header line names them (x y z / x,y,z / //X,Y,Z,R,G,B), else they are guessed from
+    /// the values, and what was read is printed
+    #[arg(long, global = true, value_delimiter = ',')]
+    columns: Option<Vec<String>>,
+
     /// What to do [default: demo]
     #[command(subcommand)]
     command: Option<Command>,
@@ -91,6 +97,7 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), String> {
     let out = Output::new(cli.json, cli.quiet);
+    commands::set_read_context(out, cli.columns.clone());
     if let Some(t) = cli.threads {
         if t == 0 {
             return Err("--threads must be at least 1".into());

@@ -271,8 +271,10 @@ pub enum Format {
     Pcd,
     /// Wavefront OBJ (`.obj`): the `v` lines are the points. Read only.
     Obj,
-    /// Text, one point per line: `x y z [nx ny nz] [scalars...]` (`.xyz`, `.txt`, `.pts`,
-    /// `.asc`, `.csv`).
+    /// Text, one point per line (`.xyz`, `.txt`, `.pts`, `.asc`, `.csv`): `x y z` and more
+    /// columns, named by [`ReadOptions::columns`], by a header line (`x y z`, `x,y,z`,
+    /// `//X,Y,Z,R,G,B`), or else guessed from the values and reported in [`TextColumns`]
+    /// (6 columns: colour if 0..255 integers, normals if unit vectors, scalars otherwise).
     Xyz,
 }
 
@@ -430,39 +432,103 @@ pub fn read_as(
     path: impl AsRef<Path>,
     format: Option<Format>,
 ) -> Result<(PointCloud, Format), IoError> {
+    let opts = ReadOptions {
+        format,
+        ..ReadOptions::default()
+    };
+    read_with(path, &opts).map(|(c, info)| (c, info.format))
+}
+
+/// Options of [`read_with`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// Format; `None` recognises it by content, then by extension.
+    pub format: Option<Format>,
+    /// Names of the columns of a text (XYZ) file, e.g. `x y z red green blue` or
+    /// `x y z nx ny nz`: they override a header line and the guess from the values (see
+    /// [`Format::Xyz`]). Ignored for the other formats.
+    pub columns: Option<Vec<String>>,
+}
+
+/// What the columns of a text file were read as, and what decided it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TextColumns {
+    /// Column names as read (`x y z red green blue`, `x y z nx ny nz`, ...).
+    pub names: Vec<String>,
+    /// What decided them, in words: "the header on line 1", "the column names given", or
+    /// the guess from the values and why.
+    pub from: String,
+}
+
+/// What [`read_with`] read.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReadInfo {
+    /// The format read.
+    pub format: Format,
+    /// For text (XYZ) files: the columns and what decided them.
+    pub text_columns: Option<TextColumns>,
+}
+
+/// Reads a point cloud with options, and tells what was read.
+pub fn read_with(
+    path: impl AsRef<Path>,
+    options: &ReadOptions,
+) -> Result<(PointCloud, ReadInfo), IoError> {
     let path = path.as_ref();
     let data = std::fs::read(path).map_err(|e| IoError::new(path, IoErrorKind::Io(e)))?;
-    let format = match format
+    let format = match options
+        .format
         .or_else(|| Format::sniff(&data))
         .or_else(|| Format::from_path(path))
     {
         Some(f) => f,
         None => {
             let msg = unsupported_extension(path).unwrap_or_else(|| {
-                "unknown point-cloud format: not a PLY or PCD file, and the extension is none of \
-                 .ply .pcd .obj .xyz .txt .pts .asc .csv"
+                "unknown point-cloud format: not a PLY, PCD or LAS file, and the extension is \
+                 none of .ply .pcd .las .laz .obj .xyz .txt .pts .asc .csv"
                     .to_string()
             });
             return Err(IoError::new(path, IoErrorKind::Unsupported(msg)));
         }
     };
-    parse(&data, format)
-        .map(|c| (c, format))
-        .map_err(|f| f.with_path(path))
+    parse(&data, format, options).map_err(|f| f.with_path(path))
 }
 
 /// Reads a point cloud of the given format from memory; errors name the path `<memory>`.
 pub fn read_bytes(data: &[u8], format: Format) -> Result<PointCloud, IoError> {
-    parse(data, format).map_err(|f| f.with_path(Path::new("<memory>")))
+    let opts = ReadOptions::default();
+    read_bytes_with(data, format, &opts).map(|(c, _)| c)
 }
 
-fn parse(data: &[u8], format: Format) -> PResult<PointCloud> {
-    match format {
-        Format::Ply => ply::read(data),
-        Format::Pcd => pcd::read(data),
-        Format::Obj => obj::read(data),
-        Format::Xyz => xyz::read(data),
-    }
+/// Reads a point cloud of the given format from memory with options (`options.format` is
+/// ignored); errors name the path `<memory>`.
+pub fn read_bytes_with(
+    data: &[u8],
+    format: Format,
+    options: &ReadOptions,
+) -> Result<(PointCloud, ReadInfo), IoError> {
+    parse(data, format, options).map_err(|f| f.with_path(Path::new("<memory>")))
+}
+
+fn parse(data: &[u8], format: Format, options: &ReadOptions) -> PResult<(PointCloud, ReadInfo)> {
+    let mut text_columns = None;
+    let cloud = match format {
+        Format::Ply => ply::read(data)?,
+        Format::Pcd => pcd::read(data)?,
+        Format::Obj => obj::read(data)?,
+        Format::Xyz => {
+            let (c, t) = xyz::read(data, options.columns.as_deref())?;
+            text_columns = Some(t);
+            c
+        }
+    };
+    Ok((
+        cloud,
+        ReadInfo {
+            format,
+            text_columns,
+        },
+    ))
 }
 
 /// Writes a point cloud: PLY (ascii, binary little or big endian), PCD (ascii, binary,

@@ -46,7 +46,8 @@ pub struct Args {
 }
 
 pub fn run(a: Args, out: &Output) -> Result<(), String> {
-    let (cloud, from) = io::read_as(&a.input, a.from.map(Into::into)).map_err(|e| e.to_string())?;
+    let (cloud, info) = crate::commands::read_cloud_info(&a.input, a.from)?;
+    let from = info.format;
     let opts = WriteOptions {
         format: None,
         encoding: a.encoding.map(|e| match e {
@@ -68,6 +69,7 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         "points": cloud.len(),
         "non_finite": cloud.non_finite_count(),
         "fields": cloud.field_names(),
+        "columns": info.text_columns.as_ref().map(|t| json!({"names": t.names, "from": t.from})),
         "precision": stored,
         "input_precision": match cloud.source_precision {
             Some(Precision::Double) => "float64",
@@ -84,6 +86,9 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         to,
         cloud.field_names().join(" ")
     ));
+    if let Some(note) = crate::commands::columns_note(&info) {
+        out.text(format!("{}: {note}", a.input.display()));
+    }
     if stored == "float32" && cloud.source_precision == Some(Precision::Double) {
         out.text(
             "note: the input held double-precision coordinates; they were written as float32 \

@@ -214,11 +214,43 @@ impl TreeArgs {
     }
 }
 
-/// Reads a cloud; errors name the file.
+/// What every command reads input files with: the output mode (for the note on text
+/// columns) and the global `--columns`.
+static READ_CONTEXT: std::sync::OnceLock<(crate::output::Output, Option<Vec<String>>)> =
+    std::sync::OnceLock::new();
+
+/// Sets the output mode and `--columns` for [`read_cloud`] (once, from `main`).
+pub fn set_read_context(out: crate::output::Output, columns: Option<Vec<String>>) {
+    let _ = READ_CONTEXT.set((out, columns));
+}
+
+/// Reads a cloud with the global `--columns`, and tells what was read; errors name the file.
+pub fn read_cloud_info(
+    path: &Path,
+    format: Option<FormatArg>,
+) -> Result<(PointCloud, nbhd::io::ReadInfo), String> {
+    let opts = nbhd::io::ReadOptions {
+        format: format.map(Into::into),
+        columns: READ_CONTEXT.get().and_then(|c| c.1.clone()),
+    };
+    nbhd::io::read_with(path, &opts).map_err(|e| e.to_string())
+}
+
+/// `columns x y z red green blue (the header on line 1)` for a text input.
+pub fn columns_note(info: &nbhd::io::ReadInfo) -> Option<String> {
+    info.text_columns
+        .as_ref()
+        .map(|t| format!("columns {} ({})", t.names.join(" "), t.from))
+}
+
+/// Reads a cloud; errors name the file. For a text input, says on standard error what its
+/// columns were read as (unless --quiet or --json).
 pub fn read_cloud(path: &Path, format: Option<FormatArg>) -> Result<PointCloud, String> {
-    nbhd::io::read_as(path, format.map(Into::into))
-        .map(|(c, _)| c)
-        .map_err(|e| e.to_string())
+    let (cloud, info) = read_cloud_info(path, format)?;
+    if let (Some(note), Some((out, _))) = (columns_note(&info), READ_CONTEXT.get()) {
+        out.note(format!("{}: {note}", path.display()));
+    }
+    Ok(cloud)
 }
 
 /// The finite points of a cloud as `DVec3` and their indices in the file.
