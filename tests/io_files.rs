@@ -396,14 +396,20 @@ property float y\nproperty float z\nproperty list uchar int l\nend_header\n"
 
 #[test]
 fn unsupported_and_missing_files_say_so() {
-    let p = tmp("scan.las");
-    std::fs::write(&p, b"LASF....").unwrap();
+    let p = tmp("scan.e57");
+    std::fs::write(&p, b"ASTM-E57....").unwrap();
     let e = io::read(&p).unwrap_err();
     assert!(matches!(e.kind, IoErrorKind::Unsupported(_)));
     assert!(
-        e.to_string().contains("scan.las") && e.to_string().contains("LAS"),
+        e.to_string().contains("scan.e57") && e.to_string().contains("E57"),
         "{e}"
     );
+    // A LAS file cut after its signature is malformed, not unsupported.
+    let p = tmp("scan.las");
+    std::fs::write(&p, b"LASF....").unwrap();
+    let e = io::read(&p).unwrap_err();
+    assert!(matches!(e.kind, IoErrorKind::Malformed(_)), "{e}");
+    assert!(e.to_string().contains("scan.las"), "{e}");
 
     let p = tmp("does-not-exist.ply");
     let e = io::read(&p).unwrap_err();

@@ -19,6 +19,8 @@
 //! points, in file order.
 
 mod error;
+#[cfg(feature = "las")]
+mod las;
 mod lzf;
 mod obj;
 mod pcd;
@@ -271,6 +273,9 @@ pub enum Format {
     Pcd,
     /// Wavefront OBJ (`.obj`): the `v` lines are the points. Read only.
     Obj,
+    /// ASPRS LAS lidar format (`.las`, and `.laz` compressed): points, intensity,
+    /// classification, colour (needs the `las` feature, on by default).
+    Las,
     /// Text, one point per line (`.xyz`, `.txt`, `.pts`, `.asc`, `.csv`): `x y z` and more
     /// columns, named by [`ReadOptions::columns`], by a header line (`x y z`, `x,y,z`,
     /// `//X,Y,Z,R,G,B`), or else guessed from the values and reported in [`TextColumns`]
@@ -286,25 +291,30 @@ impl Format {
             "ply" => Format::Ply,
             "pcd" => Format::Pcd,
             "obj" => Format::Obj,
+            "las" | "laz" => Format::Las,
             "xyz" | "txt" | "pts" | "asc" | "csv" | "xyzn" => Format::Xyz,
             _ => return None,
         })
     }
 
-    /// Short name (`PLY`, `PCD`, `OBJ`, `XYZ`).
+    /// Short name (`PLY`, `PCD`, `OBJ`, `LAS`, `XYZ`).
     pub fn name(self) -> &'static str {
         match self {
             Format::Ply => "PLY",
             Format::Pcd => "PCD",
             Format::Obj => "OBJ",
+            Format::Las => "LAS",
             Format::Xyz => "XYZ",
         }
     }
 
-    /// Recognises PLY and PCD by their first bytes.
+    /// Recognises PLY, PCD and LAS/LAZ by their first bytes.
     pub fn sniff(data: &[u8]) -> Option<Format> {
         if data.starts_with(b"ply\n") || data.starts_with(b"ply\r\n") {
             return Some(Format::Ply);
+        }
+        if data.starts_with(b"LASF") {
+            return Some(Format::Las);
         }
         let head = &data[..data.len().min(4096)];
         let text = String::from_utf8_lossy(head);
@@ -409,7 +419,6 @@ impl WriteOptions {
 fn unsupported_extension(path: &Path) -> Option<String> {
     let ext = path.extension()?.to_str()?.to_ascii_lowercase();
     let what = match ext.as_str() {
-        "las" | "laz" => "LAS/LAZ lidar files",
         "e57" => "E57 scanner files",
         "stl" => "STL meshes",
         "off" => "OFF meshes",
@@ -417,7 +426,7 @@ fn unsupported_extension(path: &Path) -> Option<String> {
         _ => return None,
     };
     Some(format!(
-        "{what} are not read by nbhd; convert to PLY, PCD, OBJ or XYZ first (e.g. with CloudCompare)"
+        "{what} are not read by nbhd; convert to PLY, PCD, LAS, OBJ or XYZ first (e.g. with CloudCompare)"
     ))
 }
 
@@ -437,6 +446,20 @@ pub fn read_as(
         ..ReadOptions::default()
     };
     read_with(path, &opts).map(|(c, info)| (c, info.format))
+}
+
+#[cfg(not(feature = "las"))]
+const NO_LAS: &str = "LAS/LAZ needs nbhd's `las` feature, which this build leaves out";
+
+/// The fields of `cloud` that writing it as `format` leaves out: for LAS, normals and scalar
+/// fields other than integer `intensity` and `classification` and the colour (PLY, PCD and
+/// XYZ write every field).
+pub fn not_written(cloud: &PointCloud, format: Format) -> Vec<String> {
+    match format {
+        #[cfg(feature = "las")]
+        Format::Las => las::not_written(cloud),
+        _ => Vec::new(),
+    }
 }
 
 /// Options of [`read_with`].
@@ -516,6 +539,10 @@ fn parse(data: &[u8], format: Format, options: &ReadOptions) -> PResult<(PointCl
         Format::Ply => ply::read(data)?,
         Format::Pcd => pcd::read(data)?,
         Format::Obj => obj::read(data)?,
+        #[cfg(feature = "las")]
+        Format::Las => las::read(data)?,
+        #[cfg(not(feature = "las"))]
+        Format::Las => return Err(Fail::unsupported(NO_LAS)),
         Format::Xyz => {
             let (c, t) = xyz::read(data, options.columns.as_deref())?;
             text_columns = Some(t);
@@ -547,11 +574,21 @@ pub fn write(
             None => return Err(IoError::new(
                 path,
                 IoErrorKind::Unsupported(
-                    "cannot tell the format to write from the extension; use .ply, .pcd or .xyz"
+                    "cannot tell the format to write from the extension; use .ply, .pcd, .las, .laz or .xyz"
                         .into(),
                 ),
             )),
         };
+    // `.laz` is LAS compressed.
+    let laz = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
+    let mut options = *options;
+    if format == Format::Las && laz && options.encoding.is_none() {
+        options.encoding = Some(Encoding::BinaryCompressed);
+    }
+    let options = &options;
     // Check before creating the file, so that a refused write leaves nothing behind.
     check_writable(cloud, format, options).map_err(|f| f.with_path(path))?;
     let file = std::fs::File::create(path).map_err(|e| IoError::new(path, IoErrorKind::Io(e)))?;
@@ -590,6 +627,23 @@ fn check_writable(cloud: &PointCloud, format: Format, options: &WriteOptions) ->
         (Format::Xyz, Some(e)) if e != Encoding::Ascii => Err(Fail::unsupported(
             "XYZ is a text format; it has no binary encoding",
         )),
+        (Format::Las, Some(Encoding::Ascii | Encoding::BinaryBigEndian)) => Err(Fail::unsupported(
+            "LAS is binary little endian: write it as binary (LAS) or compressed (LAZ)",
+        )),
+        #[cfg(not(feature = "las"))]
+        (Format::Las, _) => Err(Fail::unsupported(NO_LAS)),
+        (Format::Las, _) => match cloud
+            .positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            Some(i) => Err(Fail::invalid(format!(
+                "LAS cannot store non-finite coordinates: point {i} (and {} in all) has NaN or \
+                 infinite coordinates",
+                cloud.non_finite_count()
+            ))),
+            None => Ok(()),
+        },
         _ => Ok(()),
     }
 }
@@ -615,6 +669,13 @@ fn write_to(
             single,
         ),
         Format::Xyz => xyz::write(w, cloud, single),
+        #[cfg(feature = "las")]
+        Format::Las => {
+            let compressed = options.encoding == Some(Encoding::BinaryCompressed);
+            Ok(w.write_all(&las::write(cloud, compressed)?)?)
+        }
+        #[cfg(not(feature = "las"))]
+        Format::Las => unreachable!("refused by check_writable"),
         Format::Obj => unreachable!("refused by check_writable"),
     }
 }

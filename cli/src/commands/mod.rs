@@ -21,6 +21,8 @@ pub enum FormatArg {
     Ply,
     Pcd,
     Obj,
+    /// LAS or LAZ
+    Las,
     Xyz,
 }
 
@@ -30,6 +32,7 @@ impl From<FormatArg> for Format {
             FormatArg::Ply => Format::Ply,
             FormatArg::Pcd => Format::Pcd,
             FormatArg::Obj => Format::Obj,
+            FormatArg::Las => Format::Las,
             FormatArg::Xyz => Format::Xyz,
         }
     }
