@@ -447,7 +447,9 @@ pub(crate) fn write(
         let (s, t) = match cols.store(c) {
             Store::Float => (float_size, "F"),
             Store::U8 => ("1", "U"),
-            // PCL's PointXYZRGB: rgb is a float field holding the packed bits.
+            // PCL's PointXYZRGB: rgb is a float field holding the packed bits; in ascii PCL
+            // (1.13) writes it as the unsigned integer of those bits, typed U, and reads it so.
+            Store::RgbBits if enc == Encoding::Ascii => ("4", "U"),
             Store::RgbBits => ("4", "F"),
         };
         size.push(s);
