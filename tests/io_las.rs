@@ -139,6 +139,33 @@ fn hostile_las_headers_are_errors() {
     b[247..255].copy_from_slice(&(u32::MAX as u64).to_le_bytes());
     let e = io::read_bytes(&b, Format::Las).unwrap_err();
     println!("{e}");
+    // Found by the fuzzer (read_las): a point count whose byte size overflows, which the las
+    // crate multiplies unchecked; refused before it is handed the file.
+    let crash = std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz-regressions/las/mul-overflow-offset-to-end.las"),
+    )
+    .unwrap();
+    let e = io::read_bytes(&crash, Format::Las).unwrap_err();
+    assert!(e.to_string().contains("overflows"), "{e}");
+    // Also found by the fuzzer: a LAZ chunk table declaring ~4e9 chunks, which the laz crate
+    // reserved for (a 64 GiB allocation: abort).
+    let crash = std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz-regressions/las/laz-chunk-count.laz"),
+    )
+    .unwrap();
+    let e = io::read_bytes(&crash, Format::Las).unwrap_err();
+    assert!(e.to_string().contains("chunk table declares"), "{e}");
+    // And a LAZ item list the laz crate panics on (an `expect`): the panic is caught and
+    // returned as an error.
+    let crash = std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz-regressions/las/laz-missing-item.laz"),
+    )
+    .unwrap();
+    let e = io::read_bytes(&crash, Format::Las).unwrap_err();
+    assert!(matches!(e.kind, IoErrorKind::Malformed(_)), "{e}");
 }
 
 /// nbhd's LAS and LAZ read by laspy, the reference implementation the files came from.

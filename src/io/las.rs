@@ -54,7 +54,76 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
     guarded("LAS", || read_inner(data))
 }
 
+/// Checks the raw header's point count against the file before the `las` crate uses it (it
+/// computes `offset + count * record length` unchecked).
+fn check_raw_header(data: &[u8]) -> PResult<()> {
+    let raw =
+        las::raw::Header::read_from(Cursor::new(data)).map_err(|e| las_err("LAS header", e))?;
+    let legacy = u64::from(raw.number_of_point_records);
+    let count = match raw.large_file {
+        Some(lf) if legacy == 0 => lf.number_of_point_records,
+        _ => legacy,
+    };
+    let bad = |msg: String| Fail {
+        at: Some(super::Location::Byte(107)),
+        kind: super::IoErrorKind::Malformed(msg),
+    };
+    let end = count
+        .checked_mul(u64::from(raw.point_data_record_length))
+        .and_then(|b| b.checked_add(u64::from(raw.offset_to_point_data)));
+    let compressed = raw.point_data_record_format & 0x80 != 0;
+    match end {
+        None => Err(bad(format!(
+            "the LAS header declares {count} points of {} bytes, which overflows",
+            raw.point_data_record_length
+        ))),
+        Some(end) if !compressed && end > data.len() as u64 => Err(bad(format!(
+            "the LAS header declares {count} points of {} bytes from byte {}, but the file \
+             has {} bytes",
+            raw.point_data_record_length,
+            raw.offset_to_point_data,
+            data.len()
+        ))),
+        _ if compressed => check_laz_chunk_table(data, raw.offset_to_point_data as usize),
+        _ => Ok(()),
+    }
+}
+
+/// The LAZ chunk table's count, which the `laz` crate reserves for unchecked: each chunk
+/// takes at least a byte of the file. (Where to find the table, as LASzip writes it: an i64
+/// offset at the start of the point data, or the file's last 8 bytes when that was not
+/// filled in.)
+fn check_laz_chunk_table(data: &[u8], start: usize) -> PResult<()> {
+    let i64_at = |o: usize| -> Option<i64> {
+        data.get(o..o.checked_add(8)?)
+            .map(|b| i64::from_le_bytes(b.try_into().unwrap()))
+    };
+    let mut table = i64_at(start).unwrap_or(-1);
+    if table <= start as i64 {
+        table = data.len().checked_sub(8).and_then(i64_at).unwrap_or(-1);
+        if table <= start as i64 {
+            return Ok(());
+        }
+    }
+    let at = table as u64 + 4;
+    let count = usize::try_from(at)
+        .ok()
+        .and_then(|a| data.get(a..a.checked_add(4)?))
+        .map(|b| u32::from_le_bytes(b.try_into().unwrap()));
+    match count {
+        Some(c) if c as usize > data.len() => Err(Fail {
+            at: Some(super::Location::Byte(at)),
+            kind: super::IoErrorKind::Malformed(format!(
+                "the LAZ chunk table declares {c} chunks, more than the file has bytes ({})",
+                data.len()
+            )),
+        }),
+        _ => Ok(()),
+    }
+}
+
 fn read_inner(data: &[u8]) -> PResult<PointCloud> {
+    check_raw_header(data)?;
     let mut reader =
         las::Reader::new(Cursor::new(data.to_vec())).map_err(|e| las_err("LAS header", e))?;
     let header = reader.header().clone();
