@@ -205,8 +205,8 @@ fn laspy_reads_nbhds_files() {
         assert_eq!(rows.len(), c.len(), "{name}");
         let colors = c.colors().unwrap();
         for (i, r) in rows.iter().enumerate() {
-            for j in 0..3 {
-                assert!((r[j] - c.positions[i][j]).abs() <= 0.6e-7, "{name}: {i}");
+            for (got, want) in r.iter().zip(c.positions[i]) {
+                assert!((got - want).abs() <= 0.6e-7, "{name}: {i}");
             }
             assert_eq!(r[3], c.scalar("intensity").unwrap()[i]);
             assert_eq!(r[4], c.scalar("classification").unwrap()[i]);

@@ -1,4 +1,5 @@
-//! Point-cloud files: read PLY, PCD, OBJ (vertices) and XYZ text; write PLY, PCD and XYZ.
+//! Point-cloud files: read PLY, PCD, LAS/LAZ, OBJ (vertices) and XYZ text; write PLY, PCD,
+//! LAS/LAZ and XYZ.
 //!
 //! ```no_run
 //! use nbhd::io::{self, WriteOptions};
@@ -11,12 +12,45 @@
 //! Points with NaN coordinates (holes of organized scans) are kept as read, so indices stay
 //! the file's; the tree skips or rejects them by its `NonFinitePolicy`.
 //!
-//! The parsers are written here rather than taken from crates so that every error can name
-//! the line or byte where a file went wrong, and the `io` feature adds no dependency:
-//! `pcd-rs` (which reads `binary_compressed` since 0.13) reports no byte offsets in binary data
-//! and brings `regex` and a derive macro; the `lzf` crate is deprecated; `tobj` re-indexes
-//! vertices per object and drops unreferenced ones, whereas here an OBJ's `v` lines are the
-//! points, in file order.
+//! # What is written, and for whom
+//!
+//! Files are written so that PCL, MeshLab, CloudCompare and lidar tools read them back (the
+//! ctest `pcl_loads_nbhd_files` in cpp_examples/ loads each with PCL's own loaders):
+//!
+//! | | PLY | PCD | XYZ | LAS/LAZ |
+//! |---|---|---|---|---|
+//! | x y z | `float` (default) or `double` | `F 4` or `F 8` | text | scaled `i32` |
+//! | normals | `nx ny nz` | `normal_x normal_y normal_z` | `nx ny nz` | not stored |
+//! | colour | `uchar red green blue` | `rgb`: `F 4` holding `0x00RRGGBB` (ascii: `U 4`, the integer) | `red green blue` 0–255 | RGB ×257 |
+//! | scalars | `float`/`double` | `F 4`/`F 8` | text | `intensity`, `classification` only |
+//!
+//! - [`Precision::Single`] is the default, because PCL's point types are `float` and its
+//!   loaders skip a `double` field; [`Precision::Double`] writes exact doubles;
+//!   [`Precision::Keep`] follows [`PointCloud::source_precision`].
+//! - Field names are the tools' own: a `curvature` field is read by PCL as
+//!   `PointNormal::curvature`, which is the surface variation λ0/(λ0+λ1+λ2); the command-line
+//!   tool writes that meaning under that name, and principal curvatures as `k1`, `k2`.
+//! - PCD `binary_compressed` is LZF field by field, as PCL writes it; the encoder (`lzf.rs`)
+//!   matches greedily over a hash table as liblzf does.
+//! - LAS/LAZ go through the `las` crate (feature `las`, on by default); see [`not_written`]
+//!   for what LAS cannot hold.
+//! - Text (XYZ) columns are named by [`ReadOptions::columns`], a header line or a guess from the
+//!   values, and [`ReadInfo::text_columns`] says which.
+//!
+//! # Hostile files
+//!
+//! Readers never trust a count in a header: element, point, field and LZF sizes are checked
+//! for overflow and against the bytes that follow before anything is reserved or looped over,
+//! and a malformed file is an [`IoError`] naming the line or byte. LAS/LAZ headers are checked
+//! the same way before the `las`/`laz` crates see them, and a panic inside those crates is
+//! caught and returned as an error. The readers are fuzzed (fuzz/, scripts/fuzz.sh).
+//!
+//! The PLY, PCD, OBJ and XYZ parsers are written here rather than taken from crates so that
+//! every error can name the line or byte where a file went wrong, and the `io` feature alone
+//! adds no dependency: `pcd-rs` (which reads `binary_compressed` since 0.13) reports no byte
+//! offsets in binary data and brings `regex` and a derive macro; the `lzf` crate is
+//! deprecated; `tobj` re-indexes vertices per object and drops unreferenced ones, whereas here
+//! an OBJ's `v` lines are the points, in file order.
 
 mod error;
 #[cfg(feature = "las")]

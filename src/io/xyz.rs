@@ -96,8 +96,10 @@ pub(crate) fn read(data: &[u8], given: Option<&[String]>) -> PResult<(PointCloud
         rows += 1;
     }
     let Some((nc, first_line)) = ncols else {
-        let mut cloud = PointCloud::default();
-        cloud.source_precision = Some(super::Precision::Single);
+        let cloud = PointCloud {
+            source_precision: Some(super::Precision::Single),
+            ..PointCloud::default()
+        };
         let (names, from) = match (given, header) {
             (Some(g), _) => (g.to_vec(), "the caller's column names".to_string()),
             (None, Some((ln, h))) => (h, format!("the header on line {ln}")),
