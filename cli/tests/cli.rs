@@ -318,7 +318,12 @@ fn sphere_file(name: &str) -> (String, Vec<[f64; 3]>) {
     pts[17] = [f64::NAN; 3];
     let path = tmp(name);
     let cloud = nbhd::io::PointCloud::from_positions(pts.clone());
-    nbhd::io::write(&path, &cloud, &nbhd::io::WriteOptions::ascii()).unwrap();
+    // Every digit: the brute-force answers are computed on these f64 points.
+    let double = nbhd::io::WriteOptions {
+        precision: nbhd::io::Precision::Double,
+        ..nbhd::io::WriteOptions::ascii()
+    };
+    nbhd::io::write(&path, &cloud, &double).unwrap();
     (path, pts)
 }
 
