@@ -906,3 +906,54 @@ fn bench_thesis_quick_writes_the_report_plots_and_checks() {
     }
     assert!(dir.join("results.json").is_file());
 }
+
+/// Issue 13, items 5 and 6: text columns are said, `--columns` overrides, LAS in and out.
+#[test]
+fn text_columns_are_reported_and_las_converts() {
+    let txt = tmp("colours.txt");
+    std::fs::write(&txt, "1 2 3 255 0 0\n2 2 3 0 255 0\n3 1 0 0 0 255\n").unwrap();
+    let o = nbhd(&["info", &txt]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("read as    columns x y z red green blue (no header: columns 4-6"),
+        "{}",
+        stdout(&o)
+    );
+    let v = json_of(&nbhd(&[
+        "--json",
+        "info",
+        &txt,
+        "--columns",
+        "x,y,z,nx,ny,nz",
+    ]));
+    assert_eq!(v["columns"]["from"], "the column names given");
+    assert_eq!(v["normals"], true);
+
+    // XYZ -> LAZ -> PLY: the colour survives, and what LAS cannot hold is named.
+    let laz = tmp("colours.laz");
+    let v = json_of(&nbhd(&["--json", "convert", &txt, &laz]));
+    assert_eq!(v["to"], "LAS");
+    assert!(std::fs::read(&laz).unwrap().starts_with(b"LASF"));
+    let ply = tmp("colours-from-laz.ply");
+    let o = nbhd(&["convert", &laz, &ply]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let c = nbhd::io::read(&ply).unwrap();
+    assert_eq!(
+        c.colors().unwrap(),
+        vec![[255, 0, 0], [0, 255, 0], [0, 0, 255]]
+    );
+    let head = String::from_utf8_lossy(&std::fs::read(&ply).unwrap()[..200]).to_string();
+    assert!(head.contains("property uchar red\n"), "{head}");
+    let (file, _) = noisy_sphere_file("nsphere-las.ply");
+    let normals = tmp("nsphere-las-normals.ply");
+    assert!(nbhd(&["normals", &file, &normals, "--orient", "none"])
+        .status
+        .success());
+    let o = nbhd(&["convert", &normals, &tmp("nsphere.las")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("note: LAS cannot hold normals, curvature; not written"),
+        "{}",
+        stdout(&o)
+    );
+}
