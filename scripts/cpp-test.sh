@@ -62,11 +62,17 @@ for h in nbhd.h nbhd.hpp; do
 done
 ls -l "$so_file" "$prefix/lib/libnbhd.a" | awk '{ print "   " $5 " bytes  " $NF }'
 
+# The command-line tool writes the files that pcl_loads_nbhd_files loads with PCL.
+echo "== building the nbhd command-line tool (release)"
+cargo build --release -p nbhd-cli --quiet
+nbhd_cli="$target_dir/release/nbhd"
+
 echo "== configuring cpp_examples (Release, -O2, no -march=native)"
 cmake -S cpp_examples -B "$build" \
     -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_PREFIX_PATH="$prefix" \
-    -DNBHD_DATA_DIR="$data" >"$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
+    -DNBHD_DATA_DIR="$data" \
+    -DNBHD_CLI="$nbhd_cli" >"$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
 grep -E "nbhd [0-9]|Found PCL|Found flann" "$build.configure.log" || true
 
 jobs="$(nproc 2>/dev/null || echo 2)"

@@ -26,6 +26,13 @@ if [ -f cpp_examples/CMakeLists.txt ]; then
 fi
 if [ "${#missing[@]}" -gt 0 ]; then apt_install "${missing[@]}"; fi
 
+# --- Python: laspy reads nbhd's LAS/LAZ files in tests/io_las.rs -------------------------
+if ! python3 -c "import laspy, lazrs" >/dev/null 2>&1; then
+    echo "== installing laspy with lazrs (pip)"
+    python3 -m pip install --quiet 'laspy[lazrs]'
+fi
+export NBHD_REQUIRE_LASPY=1
+
 # --- Rust ---------------------------------------------------------------------------------
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
@@ -35,6 +42,10 @@ echo "== cargo test"
 # valgrind was installed above: its memcheck runs of the C ABI tests must not be skipped.
 export NBHD_REQUIRE_VALGRIND=1
 cargo test --workspace
+
+# --- fuzzing: a few seconds of each reader of nbhd::io (cargo-fuzz; scripts/fuzz.sh) ---------
+echo "== fuzzing the file readers (FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"
+scripts/fuzz.sh
 
 # --- C++ examples under ctest ---------------------------------------------------------------
 if [ -f cpp_examples/CMakeLists.txt ]; then

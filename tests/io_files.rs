@@ -134,32 +134,40 @@ fn positions_only_round_trip_has_no_normals() {
         let path = tmp(&format!("plain.{ext}"));
         io::write(&path, &c, &WriteOptions::default()).unwrap();
         let back = io::read(&path).unwrap();
-        assert_eq!(back, c, "{ext}");
+        assert_eq!(back.positions, c.positions, "{ext}");
         assert_eq!(back.field_names(), ["x", "y", "z"]);
+        // Written as float by default, and read as such.
+        assert_eq!(back.source_precision, Some(Precision::Single), "{ext}");
     }
 }
 
 #[test]
 fn ply_header_names_normals_and_scalars_as_viewers_expect() {
+    // Float by default: what PCL's loaders match.
     let bytes = io::write_bytes(&sample(), Format::Ply, &WriteOptions::ascii()).unwrap();
     let text = String::from_utf8(bytes).unwrap();
     for line in [
         "format ascii 1.0",
         "element vertex 12",
-        "property double nx",
-        "property double nz",
-        "property double curvature",
+        "property float x",
+        "property float nx",
+        "property float nz",
+        "property float curvature",
         "end_header",
     ] {
         assert!(text.contains(line), "missing '{line}' in\n{text}");
     }
-    let single = WriteOptions {
-        precision: Precision::Single,
+    let double = WriteOptions {
+        precision: Precision::Double,
         ..WriteOptions::ascii()
     };
     let text =
+        String::from_utf8(io::write_bytes(&sample(), Format::Ply, &double).unwrap()).unwrap();
+    assert!(text.contains("property double x\n"));
+    assert!(text.contains("property double curvature"));
+    let single = WriteOptions::ascii();
+    let text =
         String::from_utf8(io::write_bytes(&sample(), Format::Ply, &single).unwrap()).unwrap();
-    assert!(text.contains("property float curvature"));
     assert!(
         text.contains("nan nan nan"),
         "NaN written as C and PCL write it"
@@ -310,16 +318,31 @@ property float z\nend_header\n0 0 0\n1 zero 0\n",
         "{e}"
     );
 
-    // Truncated binary PLY: the byte where the missing record starts.
+    // Truncated binary PLY: the element line whose count the data cannot hold.
     let mut b = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n\
 property float y\nproperty float z\nend_header\n"
         .to_vec();
-    let header = b.len();
     b.extend([0u8; 12 + 5]);
+    let e = err_of(&b, Format::Ply);
+    assert_eq!(e.location, Some(Location::Line(3)), "{e}");
+    assert!(
+        e.to_string()
+            .contains("3 records of at least 12 bytes, but only 17 bytes"),
+        "{e}"
+    );
+
+    // Truncated binary PLY with a list: the byte where the cut record starts.
+    let mut b = b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n\
+property float y\nproperty float z\nproperty list uchar int l\nend_header\n"
+        .to_vec();
+    let header = b.len();
+    b.extend([0u8; 13]); // vertex 0, empty list
+    b.extend([0u8; 12]);
+    b.push(3); // vertex 1: a list of 3 ints that is not there
     let e = err_of(&b, Format::Ply);
     assert_eq!(
         e.location,
-        Some(Location::Byte((header + 12) as u64)),
+        Some(Location::Byte((header + 13) as u64)),
         "{e}"
     );
 
@@ -376,14 +399,20 @@ property float y\nproperty float z\nend_header\n"
 
 #[test]
 fn unsupported_and_missing_files_say_so() {
-    let p = tmp("scan.las");
-    std::fs::write(&p, b"LASF....").unwrap();
+    let p = tmp("scan.e57");
+    std::fs::write(&p, b"ASTM-E57....").unwrap();
     let e = io::read(&p).unwrap_err();
     assert!(matches!(e.kind, IoErrorKind::Unsupported(_)));
     assert!(
-        e.to_string().contains("scan.las") && e.to_string().contains("LAS"),
+        e.to_string().contains("scan.e57") && e.to_string().contains("E57"),
         "{e}"
     );
+    // A LAS file cut after its signature is malformed, not unsupported.
+    let p = tmp("scan.las");
+    std::fs::write(&p, b"LASF....").unwrap();
+    let e = io::read(&p).unwrap_err();
+    assert!(matches!(e.kind, IoErrorKind::Malformed(_)), "{e}");
+    assert!(e.to_string().contains("scan.las"), "{e}");
 
     let p = tmp("does-not-exist.ply");
     let e = io::read(&p).unwrap_err();
@@ -509,7 +538,11 @@ WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n"
     };
     let out = io::write_bytes(&c, Format::Pcd, &single).unwrap();
     let text = String::from_utf8_lossy(&out);
-    assert!(text.contains("TYPE F F F U\n"), "{text}");
+    // PCL's PointXYZRGB: rgb is a 4-byte float holding the packed bits.
+    assert!(
+        text.contains("FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\n"),
+        "{text}"
+    );
     assert_eq!(&out[out.len() - 16 + 12..], &0x00102030u32.to_le_bytes());
     assert_eq!(
         &out[out.len() - 32 + 12..out.len() - 16],
@@ -529,8 +562,31 @@ WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n"
     ] {
         let bytes = io::write_bytes(&c, format, &opts).unwrap();
         let back = io::read_bytes(&bytes, format).unwrap();
-        assert_eq!(back.scalar("rgb"), c.scalar("rgb"), "{format:?}");
+        assert_eq!(back.colors(), c.colors(), "{format:?}");
+        if format == Format::Pcd {
+            // PCD keeps the packed bits, alpha included.
+            assert_eq!(back.scalar("rgb"), c.scalar("rgb"), "{format:?}");
+        } else {
+            // PLY and XYZ: 8-bit red green blue, as MeshLab and CloudCompare read them.
+            assert_eq!(back.field_names(), ["x", "y", "z", "red", "green", "blue"]);
+            let text = String::from_utf8_lossy(&bytes);
+            if format == Format::Ply {
+                assert!(
+                    text.contains(
+                        "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                    ),
+                    "{text}"
+                );
+            }
+        }
     }
+    // Colours given as channels go to PCD as 0x00RRGGBB.
+    let mut ch = PointCloud::from_positions(vec![[0.0; 3]]);
+    ch.set_scalar("red", vec![1.0]).unwrap();
+    ch.set_scalar("green", vec![2.0]).unwrap();
+    ch.set_scalar("blue", vec![255.0]).unwrap();
+    let out = io::write_bytes(&ch, Format::Pcd, &WriteOptions::ascii()).unwrap();
+    assert!(String::from_utf8_lossy(&out).ends_with("\n0 0 0 66303\n"));
     // PCL's ascii form: the float printed as a number.
     let f = f32::from_bits(0x00102030);
     let t = format!("FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nWIDTH 1\nPOINTS 1\nDATA ascii\n0 0 0 {f:e}\n");
@@ -549,4 +605,183 @@ fn real_office_scan_has_colours() {
     let bytes = io::write_bytes(&c, Format::Pcd, &WriteOptions::default()).unwrap();
     let back = io::read_bytes(&bytes, Format::Pcd).unwrap();
     assert_eq!(back.scalar("rgb"), c.scalar("rgb"));
+}
+
+/// Issue 16, item 2: header counts are never trusted. Each of these files once aborted
+/// (allocation failure, capacity overflow), hung or read as empty with success; each must be an
+/// error naming the header line, quickly.
+#[test]
+fn hostile_header_counts_are_errors_naming_the_line() {
+    let ply_xyz = |fmt: &str, count: &str| {
+        format!(
+            "ply\nformat {fmt} 1.0\nelement vertex {count}\nproperty float x\nproperty float y\n\
+             property float z\nend_header\n"
+        )
+        .into_bytes()
+    };
+    let pcd = |fields: &str, count: &str, points: &str, data: &str| {
+        format!(
+            "VERSION 0.7\nFIELDS {fields}\nSIZE 4 4 4\nTYPE F F F\nCOUNT {count}\nWIDTH {points}\n\
+             HEIGHT 1\nPOINTS {points}\nDATA {data}\n"
+        )
+        .into_bytes()
+    };
+    let start = std::time::Instant::now();
+    let mut cases: Vec<(&str, Vec<u8>, Format, usize)> = Vec::new();
+
+    // A 148-byte binary PLY declaring 4e9 vertices, and 2^64 - 1 vertices.
+    let mut b = ply_xyz("binary_little_endian", "4000000000");
+    b.resize(148, 0);
+    cases.push(("PLY 4e9 vertices", b, Format::Ply, 3));
+    let mut b = ply_xyz("binary_little_endian", &u64::MAX.to_string());
+    b.extend([0u8; 24]);
+    cases.push(("PLY 2^64-1 vertices", b, Format::Ply, 3));
+    let mut b = ply_xyz("ascii", &u64::MAX.to_string());
+    b.extend(b"0 0 0\n1 1 1\n");
+    cases.push(("ascii PLY 2^64-1 vertices", b, Format::Ply, 0));
+    // An element without properties and 2^64 - 1 records before the vertices (once a hang).
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement nothing {}\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\nend_header\n",
+        u64::MAX,
+        u64::MAX
+    )
+    .into_bytes();
+    b.extend([0u8; 12]);
+    cases.push(("PLY empty element 2^64-1 then vertices", b, Format::Ply, 4));
+    // An element with properties and a huge count before the vertices.
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement face {}\nproperty list uchar int v\n\
+         element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
+        u64::MAX / 2
+    )
+    .into_bytes();
+    b.extend([0u8; 12]);
+    cases.push(("PLY huge face element", b, Format::Ply, 3));
+
+    // PCD: POINTS 10^12 in binary, ascii and binary_compressed.
+    let tera = "1000000000000";
+    let mut b = pcd("x y z", "1 1 1", tera, "binary");
+    b.extend([0u8; 24]);
+    cases.push(("PCD binary POINTS 1e12", b, Format::Pcd, 8));
+    let mut b = pcd("x y z", "1 1 1", tera, "ascii");
+    b.extend(b"0 0 0\n");
+    cases.push(("PCD ascii POINTS 1e12", b, Format::Pcd, 8));
+    let mut b = pcd("x y z", "1 1 1", tera, "binary_compressed");
+    b.extend([0u8; 16]);
+    cases.push(("PCD compressed POINTS 1e12", b, Format::Pcd, 8));
+    // COUNT 1 1 10^12.
+    let mut b = pcd("x y z", &format!("1 1 {tera}"), "1", "binary");
+    b.extend([0u8; 24]);
+    cases.push(("PCD COUNT 1 1 1e12", b, Format::Pcd, 5));
+    // COUNT that overflows the sum.
+    let mut b = pcd(
+        "x y z",
+        &format!("1 {} {}", usize::MAX, usize::MAX),
+        "1",
+        "ascii",
+    );
+    b.extend(b"0 0 0\n");
+    cases.push(("PCD COUNT overflow", b, Format::Pcd, 5));
+    // WIDTH x HEIGHT overflows (once 0 points with success).
+    let b = b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n\
+WIDTH 4294967296\nHEIGHT 4294967296\nDATA binary\n"
+        .to_vec();
+    cases.push(("PCD WIDTH x HEIGHT overflow", b, Format::Pcd, 7));
+
+    for (what, data, format, line) in &cases {
+        let e = err_of(data, *format);
+        assert!(matches!(e.kind, IoErrorKind::Malformed(_)), "{what}: {e:?}");
+        if *line > 0 {
+            assert_eq!(e.location, Some(Location::Line(*line)), "{what}: {e}");
+        }
+        println!("{what}: {e}");
+    }
+
+    // binary_compressed declaring 357,913,941 points (about 4 GiB) in a few bytes of LZF.
+    let mut b = pcd("x y z", "1 1 1", "357913941", "binary_compressed");
+    let at = b.len();
+    b.extend(16u32.to_le_bytes());
+    b.extend((357_913_941u32 * 12).to_le_bytes());
+    b.extend([0u8; 16]);
+    let e = err_of(&b, Format::Pcd);
+    assert_eq!(e.location, Some(Location::Byte((at + 4) as u64)), "{e}");
+    assert!(e.to_string().contains("cannot come from 16 bytes"), "{e}");
+
+    assert!(
+        start.elapsed().as_secs_f64() < 5.0,
+        "hostile headers took {:?}",
+        start.elapsed()
+    );
+}
+
+/// Issue 13, item 5: text headers are recognised, colours are not taken for normals, and the
+/// reader says what it read.
+#[test]
+fn text_columns_by_header_option_or_values_and_said() {
+    let read = |data: &[u8], cols: Option<&[&str]>| {
+        let opts = io::ReadOptions {
+            columns: cols.map(|c| c.iter().map(|s| s.to_string()).collect()),
+            ..Default::default()
+        };
+        io::read_bytes_with(data, Format::Xyz, &opts).unwrap()
+    };
+    // Header lines without a comment marker, with commas, and CloudCompare's.
+    for (data, names) in [
+        (&b"x y z\n1 2 3\n"[..], vec!["x", "y", "z"]),
+        (
+            b"x,y,z,intensity\n1,2,3,7\n",
+            vec!["x", "y", "z", "intensity"],
+        ),
+        (
+            b"//X,Y,Z,R,G,B\n1,2,3,255,0,10\n",
+            vec!["x", "y", "z", "red", "green", "blue"],
+        ),
+        (
+            b"# x y z nx ny nz\n1 2 3 0 0.6 0.8\n",
+            vec!["x", "y", "z", "nx", "ny", "nz"],
+        ),
+    ] {
+        let (c, info) = read(data, None);
+        let t = info.text_columns.unwrap();
+        assert_eq!(t.names, names);
+        assert_eq!(t.from, "the header on line 1");
+        assert_eq!(c.positions, vec![[1.0, 2.0, 3.0]]);
+    }
+    let (c, _) = read(b"//X,Y,Z,R,G,B\n1,2,3,255,0,10\n", None);
+    assert_eq!(c.colors().unwrap(), vec![[255, 0, 10]]);
+    assert!(c.normals.is_none());
+
+    // No header, 6 columns of 0..255 integers: a colour, not normals, and said so.
+    let (c, info) = read(b"1 2 3 255 128 0\n4 5 6 0 0 1\n", None);
+    assert!(c.normals.is_none());
+    assert_eq!(c.colors().unwrap(), vec![[255, 128, 0], [0, 0, 1]]);
+    let t = info.text_columns.unwrap();
+    assert_eq!(t.names, ["x", "y", "z", "red", "green", "blue"]);
+    assert!(t.from.contains("0..255"), "{}", t.from);
+    // Unit vectors: normals.
+    let (c, info) = read(b"1 2 3 0 0 1\n4 5 6 0.6 0.8 0\n", None);
+    assert_eq!(c.normals.unwrap()[1], [0.6, 0.8, 0.0]);
+    assert!(info.text_columns.unwrap().from.contains("unit vectors"));
+    // Neither: scalars.
+    let (c, _) = read(b"1 2 3 0.5 7 1000\n", None);
+    assert!(c.normals.is_none() && c.colors().is_none());
+    assert_eq!(c.scalar("field5").unwrap(), [1000.0]);
+    // The caller's names win over the header and the values.
+    let (c, info) = read(
+        b"x y z a b c\n1 2 3 0 0 1\n",
+        Some(&["x", "y", "z", "r", "g", "b"]),
+    );
+    assert_eq!(c.colors().unwrap(), vec![[0, 0, 1]]);
+    assert_eq!(info.text_columns.unwrap().from, "the column names given");
+    // Counts that disagree are errors naming the line.
+    let e = io::read_bytes_with(b"x y z nx ny nz\n1 2 3\n", Format::Xyz, &Default::default())
+        .unwrap_err();
+    assert_eq!(e.location, Some(Location::Line(1)), "{e}");
+    let opts = io::ReadOptions {
+        columns: Some(vec!["x".into(), "y".into()]),
+        ..Default::default()
+    };
+    let e = io::read_bytes_with(b"\n1 2 3\n", Format::Xyz, &opts).unwrap_err();
+    assert_eq!(e.location, Some(Location::Line(2)), "{e}");
 }

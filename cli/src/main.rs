@@ -55,6 +55,12 @@ struct Cli {
     #[arg(long, global = true)]
     threads: Option<usize>,
 
+    /// Names of the columns of a text (XYZ) input, e.g. x,y,z,r,g,b or x,y,z,nx,ny,nz; without
+    /// it a header line names them (x y z / x,y,z / //X,Y,Z,R,G,B), else they are guessed from
+    /// the values, and what was read is printed
+    #[arg(long, global = true, value_delimiter = ',')]
+    columns: Option<Vec<String>>,
+
     /// What to do [default: demo]
     #[command(subcommand)]
     command: Option<Command>,
@@ -72,14 +78,15 @@ enum Command {
     Neighbors(commands::neighbors::NeighborsArgs),
     /// PCA normals of every point over its ε-k neighbourhood (thesis eq. 2.8–2.10)
     ///
-    /// Writes the input with normals (nx ny nz) and the surface variation λ0/(λ0+λ1+λ2) of
-    /// the covariance as a scalar property.
+    /// Writes the input with normals (nx ny nz; normal_x normal_y normal_z in PCD) and curvature,
+    /// PCL's surface variation λ0/(λ0+λ1+λ2) of the covariance, as float32 (--precision).
     Normals(commands::geometry::Args),
     /// Normals and curvatures of every point over its ε-k neighbourhood (thesis Section 2.2)
     ///
-    /// Writes the input with normals and the scalar properties curvature (max(|k1|,|k2|),
-    /// 'Max Princ'), mean_curvature ((k1+k2)/2), k1, k2 (Weingarten estimate, eq. 2.25, signed
-    /// against the normal) and surface_variation, which MeshLab and CloudCompare colour by.
+    /// Writes the input with normals and the scalar properties curvature (PCL's surface
+    /// variation λ0/(λ0+λ1+λ2)), k1, k2 (principal curvatures, Weingarten estimate eq. 2.25,
+    /// signed against the normal), mean_curvature ((k1+k2)/2) and max_abs_curvature
+    /// (max(|k1|,|k2|), 'Max Princ'), which MeshLab and CloudCompare colour by.
     Curvature(commands::geometry::Args),
     Smooth(commands::smooth::Args),
     Bench(commands::bench::Args),
@@ -90,6 +97,7 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), String> {
     let out = Output::new(cli.json, cli.quiet);
+    commands::set_read_context(out, cli.columns.clone());
     if let Some(t) = cli.threads {
         if t == 0 {
             return Err("--threads must be at least 1".into());

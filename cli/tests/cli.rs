@@ -260,7 +260,7 @@ fn demo_writes_files_pictures_and_a_summary_where_smoothing_reduces_the_error() 
             let cloud = nbhd::io::read(&ply).unwrap();
             assert_eq!(cloud.len(), 3000, "{}", ply.display());
             assert!(cloud.normals.is_some(), "{}", ply.display());
-            for f in ["curvature", "mean_curvature", "surface_variation"] {
+            for f in ["curvature", "mean_curvature", "max_abs_curvature"] {
                 let values = cloud.scalar(f).unwrap();
                 assert!(values.iter().all(|x| x.is_finite()), "{f}");
             }
@@ -340,7 +340,12 @@ fn sphere_file(name: &str) -> (String, Vec<[f64; 3]>) {
     pts[17] = [f64::NAN; 3];
     let path = tmp(name);
     let cloud = nbhd::io::PointCloud::from_positions(pts.clone());
-    nbhd::io::write(&path, &cloud, &nbhd::io::WriteOptions::ascii()).unwrap();
+    // Every digit: the brute-force answers are computed on these f64 points.
+    let double = nbhd::io::WriteOptions {
+        precision: nbhd::io::Precision::Double,
+        ..nbhd::io::WriteOptions::ascii()
+    };
+    nbhd::io::write(&path, &cloud, &double).unwrap();
     (path, pts)
 }
 
@@ -566,7 +571,11 @@ fn noisy_sphere_file(name: &str) -> (String, Vec<DVec3>) {
     let path = tmp(name);
     let cloud =
         nbhd::io::PointCloud::from_positions(ns.points.iter().map(|p| p.to_array()).collect());
-    nbhd::io::write(&path, &cloud, &nbhd::io::WriteOptions::default()).unwrap();
+    let double = nbhd::io::WriteOptions {
+        precision: nbhd::io::Precision::Double,
+        ..Default::default()
+    };
+    nbhd::io::write(&path, &cloud, &double).unwrap();
     (path, ns.points)
 }
 
@@ -585,8 +594,11 @@ fn normals_and_curvature_match_the_library_and_point_outward() {
         "5h",
         "--png",
         &png,
+        "--precision",
+        "keep",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("(float64)"), "{}", stdout(&o));
     let cloud = nbhd::io::read(&out).unwrap();
     assert_eq!(
         cloud.field_names(),
@@ -598,10 +610,10 @@ fn normals_and_curvature_match_the_library_and_point_outward() {
             "ny",
             "nz",
             "curvature",
-            "mean_curvature",
             "k1",
             "k2",
-            "surface_variation"
+            "mean_curvature",
+            "max_abs_curvature"
         ]
     );
     let lib = nbhd::smooth::analyze(
@@ -618,8 +630,10 @@ fn normals_and_curvature_match_the_library_and_point_outward() {
     for (i, o) in lib.outputs.iter().enumerate() {
         assert_eq!(normals[i], o.normal.to_array(), "normal {i}");
         assert_eq!(cloud.scalar("k1").unwrap()[i], o.principal.k1);
+        // curvature is PCL's: the surface variation.
+        assert_eq!(cloud.scalar("curvature").unwrap()[i], o.covariance_quotient);
         assert_eq!(
-            cloud.scalar("curvature").unwrap()[i],
+            cloud.scalar("max_abs_curvature").unwrap()[i],
             o.max_principal_curvature
         );
         // Propagated orientation is outward on a sphere.
@@ -632,18 +646,21 @@ fn normals_and_curvature_match_the_library_and_point_outward() {
     let (w, h, _) = read_png(std::path::Path::new(&png));
     assert_eq!((w, h), (800, 600));
 
-    // normals: normals and the surface variation only.
+    // normals: normals and the surface variation as PCL's curvature, float32 by default
+    // (what pcl::PointNormal loads).
     let out = tmp("nsphere-normals.pcd");
     let o = nbhd(&["--json", "normals", &file, &out, "--orient", "none"]);
     let v = json_of(&o);
     assert_eq!(v["points"], 2000);
+    assert_eq!(v["precision"], "float32");
     let cloud = nbhd::io::read(&out).unwrap();
     assert_eq!(
         cloud.field_names(),
-        ["x", "y", "z", "nx", "ny", "nz", "surface_variation"]
+        ["x", "y", "z", "nx", "ny", "nz", "curvature"]
     );
     let head = std::fs::read(&out).unwrap();
-    let fields = b"FIELDS x y z normal_x normal_y normal_z surface_variation";
+    let fields = b"FIELDS x y z normal_x normal_y normal_z curvature\nSIZE 4 4 4 4 4 4 4\n\
+TYPE F F F F F F F\n";
     assert!(head.windows(fields.len()).any(|w| w == fields));
 }
 
@@ -716,7 +733,16 @@ fn smooth_matches_the_library_and_brings_points_closer_to_the_surface() {
     ] {
         let out = tmp("nsphere-smooth.ply");
         let png = tmp("nsphere-smooth.png");
-        let mut a = vec!["--json", "smooth", &file, &out, "--png", &png];
+        let mut a = vec![
+            "--json",
+            "smooth",
+            &file,
+            &out,
+            "--png",
+            &png,
+            "--precision",
+            "keep",
+        ];
         a.extend(&args);
         let v = json_of(&nbhd(&a));
         let lib = nbhd::smooth::smooth(&pts, &opts).unwrap();
@@ -1004,4 +1030,55 @@ fn an_absurd_thread_count_is_refused_at_once() {
     );
     // Refused before any thread is made, not after spawning until failure.
     assert!(start.elapsed() < std::time::Duration::from_secs(10));
+}
+
+/// Issue 13, items 5 and 6: text columns are said, `--columns` overrides, LAS in and out.
+#[test]
+fn text_columns_are_reported_and_las_converts() {
+    let txt = tmp("colours.txt");
+    std::fs::write(&txt, "1 2 3 255 0 0\n2 2 3 0 255 0\n3 1 0 0 0 255\n").unwrap();
+    let o = nbhd(&["info", &txt]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("read as    columns x y z red green blue (no header: columns 4-6"),
+        "{}",
+        stdout(&o)
+    );
+    let v = json_of(&nbhd(&[
+        "--json",
+        "info",
+        &txt,
+        "--columns",
+        "x,y,z,nx,ny,nz",
+    ]));
+    assert_eq!(v["columns"]["from"], "the column names given");
+    assert_eq!(v["normals"], true);
+
+    // XYZ -> LAZ -> PLY: the colour survives, and what LAS cannot hold is named.
+    let laz = tmp("colours.laz");
+    let v = json_of(&nbhd(&["--json", "convert", &txt, &laz]));
+    assert_eq!(v["to"], "LAS");
+    assert!(std::fs::read(&laz).unwrap().starts_with(b"LASF"));
+    let ply = tmp("colours-from-laz.ply");
+    let o = nbhd(&["convert", &laz, &ply]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let c = nbhd::io::read(&ply).unwrap();
+    assert_eq!(
+        c.colors().unwrap(),
+        vec![[255, 0, 0], [0, 255, 0], [0, 0, 255]]
+    );
+    let head = String::from_utf8_lossy(&std::fs::read(&ply).unwrap()[..200]).to_string();
+    assert!(head.contains("property uchar red\n"), "{head}");
+    let (file, _) = noisy_sphere_file("nsphere-las.ply");
+    let normals = tmp("nsphere-las-normals.ply");
+    assert!(nbhd(&["normals", &file, &normals, "--orient", "none"])
+        .status
+        .success());
+    let o = nbhd(&["convert", &normals, &tmp("nsphere.las")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("note: LAS cannot hold normals, curvature; not written"),
+        "{}",
+        stdout(&o)
+    );
 }

@@ -1,4 +1,5 @@
-//! Point-cloud files: read PLY, PCD, OBJ (vertices) and XYZ text; write PLY, PCD and XYZ.
+//! Point-cloud files: read PLY, PCD, LAS/LAZ, OBJ (vertices) and XYZ text; write PLY, PCD,
+//! LAS/LAZ and XYZ.
 //!
 //! ```no_run
 //! use nbhd::io::{self, WriteOptions};
@@ -11,14 +12,49 @@
 //! Points with NaN coordinates (holes of organized scans) are kept as read, so indices stay
 //! the file's; the tree skips or rejects them by its `NonFinitePolicy`.
 //!
-//! The parsers are written here rather than taken from crates so that every error can name
-//! the line or byte where a file went wrong, and the `io` feature adds no dependency:
-//! `pcd-rs` (which reads `binary_compressed` since 0.13) reports no byte offsets in binary data
-//! and brings `regex` and a derive macro; the `lzf` crate is deprecated; `tobj` re-indexes
-//! vertices per object and drops unreferenced ones, whereas here an OBJ's `v` lines are the
-//! points, in file order.
+//! # What is written, and for whom
+//!
+//! Files are written so that PCL, MeshLab, CloudCompare and lidar tools read them back (the
+//! ctest `pcl_loads_nbhd_files` in cpp_examples/ loads each with PCL's own loaders):
+//!
+//! | | PLY | PCD | XYZ | LAS/LAZ |
+//! |---|---|---|---|---|
+//! | x y z | `float` (default) or `double` | `F 4` or `F 8` | text | scaled `i32` |
+//! | normals | `nx ny nz` | `normal_x normal_y normal_z` | `nx ny nz` | not stored |
+//! | colour | `uchar red green blue` | `rgb`: `F 4` holding `0x00RRGGBB` (ascii: `U 4`, the integer) | `red green blue` 0–255 | RGB ×257 |
+//! | scalars | `float`/`double` | `F 4`/`F 8` | text | `intensity`, `classification` only |
+//!
+//! - [`Precision::Single`] is the default, because PCL's point types are `float` and its
+//!   loaders skip a `double` field; [`Precision::Double`] writes exact doubles;
+//!   [`Precision::Keep`] follows [`PointCloud::source_precision`].
+//! - Field names are the tools' own: a `curvature` field is read by PCL as
+//!   `PointNormal::curvature`, which is the surface variation λ0/(λ0+λ1+λ2); the command-line
+//!   tool writes that meaning under that name, and principal curvatures as `k1`, `k2`.
+//! - PCD `binary_compressed` is LZF field by field, as PCL writes it; the encoder (`lzf.rs`)
+//!   matches greedily over a hash table as liblzf does.
+//! - LAS/LAZ go through the `las` crate (feature `las`, on by default); see [`not_written`]
+//!   for what LAS cannot hold.
+//! - Text (XYZ) columns are named by [`ReadOptions::columns`], a header line or a guess from the
+//!   values, and [`ReadInfo::text_columns`] says which.
+//!
+//! # Hostile files
+//!
+//! Readers never trust a count in a header: element, point, field and LZF sizes are checked
+//! for overflow and against the bytes that follow before anything is reserved or looped over,
+//! and a malformed file is an [`IoError`] naming the line or byte. LAS/LAZ headers are checked
+//! the same way before the `las`/`laz` crates see them, and a panic inside those crates is
+//! caught and returned as an error. The readers are fuzzed (fuzz/, scripts/fuzz.sh).
+//!
+//! The PLY, PCD, OBJ and XYZ parsers are written here rather than taken from crates so that
+//! every error can name the line or byte where a file went wrong, and the `io` feature alone
+//! adds no dependency: `pcd-rs` (which reads `binary_compressed` since 0.13) reports no byte
+//! offsets in binary data and brings `regex` and a derive macro; the `lzf` crate is
+//! deprecated; `tobj` re-indexes vertices per object and drops unreferenced ones, whereas here
+//! an OBJ's `v` lines are the points, in file order.
 
 mod error;
+#[cfg(feature = "las")]
+mod las;
 mod lzf;
 mod obj;
 mod pcd;
@@ -83,6 +119,11 @@ pub struct PointCloud {
     pub scalars: Vec<ScalarField>,
     /// Width and height of an organized cloud (PCD with `HEIGHT` > 1).
     pub grid: Option<Grid>,
+    /// How precisely the file read held the coordinates: [`Precision::Double`] for PLY
+    /// `double`/`int`/`uint`, PCD `F 8`/`I 4`/`U 4`/64-bit, LAS (scaled 32-bit integers), and
+    /// text with a coordinate that a `float` does not hold exactly; [`Precision::Single`]
+    /// otherwise; `None` for a cloud made in memory. [`Precision::Keep`] writes by it.
+    pub source_precision: Option<Precision>,
 }
 
 impl PointCloud {
@@ -148,7 +189,7 @@ impl PointCloud {
     /// Per-point colours, if the cloud has them: a packed `rgb`/`rgba` field (as PCL writes
     /// them) or `red`, `green`, `blue` fields (as PLY files have them, 0..255).
     pub fn colors(&self) -> Option<Vec<[u8; 3]>> {
-        if let Some(v) = self.scalar("rgb").or_else(|| self.scalar("rgba")) {
+        if let Some(v) = self.packed_color_field() {
             return Some(
                 v.iter()
                     .map(|&c| {
@@ -169,6 +210,17 @@ impl PointCloud {
                 .map(|i| [ch(r[i]), ch(g[i]), ch(b[i])])
                 .collect(),
         )
+    }
+
+    /// The packed colour field (`rgb`, else `rgba`) if it holds 32-bit unsigned integers.
+    fn packed_color_field(&self) -> Option<&[f64]> {
+        ["rgb", "rgba"]
+            .iter()
+            .filter_map(|n| self.scalar(n))
+            .find(|v| {
+                v.iter()
+                    .all(|&x| (0.0..=u32::MAX as f64).contains(&x) && x.fract() == 0.0)
+            })
     }
 
     /// Number of points with a NaN or infinite coordinate.
@@ -255,8 +307,13 @@ pub enum Format {
     Pcd,
     /// Wavefront OBJ (`.obj`): the `v` lines are the points. Read only.
     Obj,
-    /// Text, one point per line: `x y z [nx ny nz] [scalars...]` (`.xyz`, `.txt`, `.pts`,
-    /// `.asc`, `.csv`).
+    /// ASPRS LAS lidar format (`.las`, and `.laz` compressed): points, intensity,
+    /// classification, colour (needs the `las` feature, on by default).
+    Las,
+    /// Text, one point per line (`.xyz`, `.txt`, `.pts`, `.asc`, `.csv`): `x y z` and more
+    /// columns, named by [`ReadOptions::columns`], by a header line (`x y z`, `x,y,z`,
+    /// `//X,Y,Z,R,G,B`), or else guessed from the values and reported in [`TextColumns`]
+    /// (6 columns: colour if 0..255 integers, normals if unit vectors, scalars otherwise).
     Xyz,
 }
 
@@ -268,25 +325,30 @@ impl Format {
             "ply" => Format::Ply,
             "pcd" => Format::Pcd,
             "obj" => Format::Obj,
+            "las" | "laz" => Format::Las,
             "xyz" | "txt" | "pts" | "asc" | "csv" | "xyzn" => Format::Xyz,
             _ => return None,
         })
     }
 
-    /// Short name (`PLY`, `PCD`, `OBJ`, `XYZ`).
+    /// Short name (`PLY`, `PCD`, `OBJ`, `LAS`, `XYZ`).
     pub fn name(self) -> &'static str {
         match self {
             Format::Ply => "PLY",
             Format::Pcd => "PCD",
             Format::Obj => "OBJ",
+            Format::Las => "LAS",
             Format::Xyz => "XYZ",
         }
     }
 
-    /// Recognises PLY and PCD by their first bytes.
+    /// Recognises PLY, PCD and LAS/LAZ by their first bytes.
     pub fn sniff(data: &[u8]) -> Option<Format> {
         if data.starts_with(b"ply\n") || data.starts_with(b"ply\r\n") {
             return Some(Format::Ply);
+        }
+        if data.starts_with(b"LASF") {
+            return Some(Format::Las);
         }
         let head = &data[..data.len().min(4096)];
         let text = String::from_utf8_lossy(head);
@@ -317,14 +379,52 @@ pub enum Encoding {
     BinaryCompressed,
 }
 
-/// Width of the stored floating-point values.
+/// Width of the stored floating-point values (coordinates, normals, scalar fields).
+///
+/// The default is [`Single`](Precision::Single), because that is what other tools load:
+/// PCL's `PointXYZ`, `PointNormal`, `PointXYZRGB` are `float` types and its loaders match a
+/// field only if its type is `float` (a `double` x is "Failed to find match for field 'x'"
+/// and the point stays 0); MeshLab and CloudCompare read both.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Precision {
-    /// 32-bit `float` (PLY `float`, PCD `F 4`): half the size, about 7 digits.
+    /// 32-bit `float` (PLY `float`, PCD `F 4`): what PCL's point types hold, about 7 digits.
+    #[default]
     Single,
     /// 64-bit `double` (PLY `double`, PCD `F 8`): exact for nbhd's `f64` values.
-    #[default]
     Double,
+    /// As the cloud was read ([`PointCloud::source_precision`]): double if the file held
+    /// the coordinates more precisely than a `float` does, single otherwise.
+    Keep,
+}
+
+impl Precision {
+    /// Whether `cloud` is written in single precision.
+    pub fn is_single_for(self, cloud: &PointCloud) -> bool {
+        match self {
+            Precision::Single => true,
+            Precision::Double => false,
+            Precision::Keep => cloud.source_precision != Some(Precision::Double),
+        }
+    }
+
+    /// The precision a file's coordinate type holds.
+    pub(crate) fn of_type(ty: value::Ty) -> Precision {
+        use value::Ty;
+        match ty {
+            Ty::F64 | Ty::I32 | Ty::U32 | Ty::I64 | Ty::U64 => Precision::Double,
+            _ => Precision::Single,
+        }
+    }
+
+    /// The precision text coordinates need: double if one is not exactly a `float`.
+    pub(crate) fn of_text(positions: &[[f64; 3]]) -> Precision {
+        let exact = |v: f64| !v.is_finite() || v as f32 as f64 == v;
+        if positions.iter().all(|p| p.iter().all(|&v| exact(v))) {
+            Precision::Single
+        } else {
+            Precision::Double
+        }
+    }
 }
 
 /// Options of [`write()`].
@@ -334,12 +434,13 @@ pub struct WriteOptions {
     pub format: Option<Format>,
     /// Encoding; `None` is binary for PLY and PCD, text for XYZ.
     pub encoding: Option<Encoding>,
-    /// Width of positions, normals and scalar fields.
+    /// Width of positions, normals and scalar fields (colours are always 8-bit channels or
+    /// PCL's packed `rgb`).
     pub precision: Precision,
 }
 
 impl WriteOptions {
-    /// Text output, double precision.
+    /// Text output, single precision.
     pub fn ascii() -> Self {
         Self {
             encoding: Some(Encoding::Ascii),
@@ -352,7 +453,6 @@ impl WriteOptions {
 fn unsupported_extension(path: &Path) -> Option<String> {
     let ext = path.extension()?.to_str()?.to_ascii_lowercase();
     let what = match ext.as_str() {
-        "las" | "laz" => "LAS/LAZ lidar files",
         "e57" => "E57 scanner files",
         "stl" => "STL meshes",
         "off" => "OFF meshes",
@@ -360,7 +460,7 @@ fn unsupported_extension(path: &Path) -> Option<String> {
         _ => return None,
     };
     Some(format!(
-        "{what} are not read by nbhd; convert to PLY, PCD, OBJ or XYZ first (e.g. with CloudCompare)"
+        "{what} are not read by nbhd; convert to PLY, PCD, LAS, OBJ or XYZ first (e.g. with CloudCompare)"
     ))
 }
 
@@ -375,39 +475,121 @@ pub fn read_as(
     path: impl AsRef<Path>,
     format: Option<Format>,
 ) -> Result<(PointCloud, Format), IoError> {
+    let opts = ReadOptions {
+        format,
+        ..ReadOptions::default()
+    };
+    read_with(path, &opts).map(|(c, info)| (c, info.format))
+}
+
+#[cfg(not(feature = "las"))]
+const NO_LAS: &str = "LAS/LAZ needs nbhd's `las` feature, which this build leaves out";
+
+/// The fields of `cloud` that writing it as `format` leaves out: for LAS, normals and scalar
+/// fields other than integer `intensity` and `classification` and the colour (PLY, PCD and
+/// XYZ write every field).
+pub fn not_written(cloud: &PointCloud, format: Format) -> Vec<String> {
+    match format {
+        #[cfg(feature = "las")]
+        Format::Las => las::not_written(cloud),
+        _ => Vec::new(),
+    }
+}
+
+/// Options of [`read_with`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// Format; `None` recognises it by content, then by extension.
+    pub format: Option<Format>,
+    /// Names of the columns of a text (XYZ) file, e.g. `x y z red green blue` or
+    /// `x y z nx ny nz`: they override a header line and the guess from the values (see
+    /// [`Format::Xyz`]). Ignored for the other formats.
+    pub columns: Option<Vec<String>>,
+}
+
+/// What the columns of a text file were read as, and what decided it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TextColumns {
+    /// Column names as read (`x y z red green blue`, `x y z nx ny nz`, ...).
+    pub names: Vec<String>,
+    /// What decided them, in words: "the header on line 1", "the column names given", or
+    /// the guess from the values and why.
+    pub from: String,
+}
+
+/// What [`read_with`] read.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReadInfo {
+    /// The format read.
+    pub format: Format,
+    /// For text (XYZ) files: the columns and what decided them.
+    pub text_columns: Option<TextColumns>,
+}
+
+/// Reads a point cloud with options, and tells what was read.
+pub fn read_with(
+    path: impl AsRef<Path>,
+    options: &ReadOptions,
+) -> Result<(PointCloud, ReadInfo), IoError> {
     let path = path.as_ref();
     let data = std::fs::read(path).map_err(|e| IoError::new(path, IoErrorKind::Io(e)))?;
-    let format = match format
+    let format = match options
+        .format
         .or_else(|| Format::sniff(&data))
         .or_else(|| Format::from_path(path))
     {
         Some(f) => f,
         None => {
             let msg = unsupported_extension(path).unwrap_or_else(|| {
-                "unknown point-cloud format: not a PLY or PCD file, and the extension is none of \
-                 .ply .pcd .obj .xyz .txt .pts .asc .csv"
+                "unknown point-cloud format: not a PLY, PCD or LAS file, and the extension is \
+                 none of .ply .pcd .las .laz .obj .xyz .txt .pts .asc .csv"
                     .to_string()
             });
             return Err(IoError::new(path, IoErrorKind::Unsupported(msg)));
         }
     };
-    parse(&data, format)
-        .map(|c| (c, format))
-        .map_err(|f| f.with_path(path))
+    parse(&data, format, options).map_err(|f| f.with_path(path))
 }
 
 /// Reads a point cloud of the given format from memory; errors name the path `<memory>`.
 pub fn read_bytes(data: &[u8], format: Format) -> Result<PointCloud, IoError> {
-    parse(data, format).map_err(|f| f.with_path(Path::new("<memory>")))
+    let opts = ReadOptions::default();
+    read_bytes_with(data, format, &opts).map(|(c, _)| c)
 }
 
-fn parse(data: &[u8], format: Format) -> PResult<PointCloud> {
-    match format {
-        Format::Ply => ply::read(data),
-        Format::Pcd => pcd::read(data),
-        Format::Obj => obj::read(data),
-        Format::Xyz => xyz::read(data),
-    }
+/// Reads a point cloud of the given format from memory with options (`options.format` is
+/// ignored); errors name the path `<memory>`.
+pub fn read_bytes_with(
+    data: &[u8],
+    format: Format,
+    options: &ReadOptions,
+) -> Result<(PointCloud, ReadInfo), IoError> {
+    parse(data, format, options).map_err(|f| f.with_path(Path::new("<memory>")))
+}
+
+fn parse(data: &[u8], format: Format, options: &ReadOptions) -> PResult<(PointCloud, ReadInfo)> {
+    let mut text_columns = None;
+    let cloud = match format {
+        Format::Ply => ply::read(data)?,
+        Format::Pcd => pcd::read(data)?,
+        Format::Obj => obj::read(data)?,
+        #[cfg(feature = "las")]
+        Format::Las => las::read(data)?,
+        #[cfg(not(feature = "las"))]
+        Format::Las => return Err(Fail::unsupported(NO_LAS)),
+        Format::Xyz => {
+            let (c, t) = xyz::read(data, options.columns.as_deref())?;
+            text_columns = Some(t);
+            c
+        }
+    };
+    Ok((
+        cloud,
+        ReadInfo {
+            format,
+            text_columns,
+        },
+    ))
 }
 
 /// Writes a point cloud: PLY (ascii, binary little or big endian), PCD (ascii, binary,
@@ -426,11 +608,21 @@ pub fn write(
             None => return Err(IoError::new(
                 path,
                 IoErrorKind::Unsupported(
-                    "cannot tell the format to write from the extension; use .ply, .pcd or .xyz"
+                    "cannot tell the format to write from the extension; use .ply, .pcd, .las, .laz or .xyz"
                         .into(),
                 ),
             )),
         };
+    // `.laz` is LAS compressed.
+    let laz = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
+    let mut options = *options;
+    if format == Format::Las && laz && options.encoding.is_none() {
+        options.encoding = Some(Encoding::BinaryCompressed);
+    }
+    let options = &options;
     // Check before creating the file, so that a refused write leaves nothing behind.
     check_writable(cloud, format, options).map_err(|f| f.with_path(path))?;
     let file = std::fs::File::create(path).map_err(|e| IoError::new(path, IoErrorKind::Io(e)))?;
@@ -469,6 +661,23 @@ fn check_writable(cloud: &PointCloud, format: Format, options: &WriteOptions) ->
         (Format::Xyz, Some(e)) if e != Encoding::Ascii => Err(Fail::unsupported(
             "XYZ is a text format; it has no binary encoding",
         )),
+        (Format::Las, Some(Encoding::Ascii | Encoding::BinaryBigEndian)) => Err(Fail::unsupported(
+            "LAS is binary little endian: write it as binary (LAS) or compressed (LAZ)",
+        )),
+        #[cfg(not(feature = "las"))]
+        (Format::Las, _) => Err(Fail::unsupported(NO_LAS)),
+        (Format::Las, _) => match cloud
+            .positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            Some(i) => Err(Fail::invalid(format!(
+                "LAS cannot store non-finite coordinates: point {i} (and {} in all) has NaN or \
+                 infinite coordinates",
+                cloud.non_finite_count()
+            ))),
+            None => Ok(()),
+        },
         _ => Ok(()),
     }
 }
@@ -479,7 +688,7 @@ fn write_to(
     format: Format,
     options: &WriteOptions,
 ) -> PResult<()> {
-    let single = options.precision == Precision::Single;
+    let single = options.precision.is_single_for(cloud);
     match format {
         Format::Ply => ply::write(
             w,
@@ -494,6 +703,13 @@ fn write_to(
             single,
         ),
         Format::Xyz => xyz::write(w, cloud, single),
+        #[cfg(feature = "las")]
+        Format::Las => {
+            let compressed = options.encoding == Some(Encoding::BinaryCompressed);
+            Ok(w.write_all(&las::write(cloud, compressed)?)?)
+        }
+        #[cfg(not(feature = "las"))]
+        Format::Las => unreachable!("refused by check_writable"),
         Format::Obj => unreachable!("refused by check_writable"),
     }
 }
@@ -575,6 +791,10 @@ pub(crate) fn assign_columns(
     Ok((dest, scalars, normals))
 }
 
+/// Most points reserved from a file's declared count before they are read: the readers check
+/// counts against the bytes left, and this bounds what a hint can allocate in any case.
+pub(crate) const MAX_RESERVE: usize = 1 << 20;
+
 /// Builds a cloud point by point from column values.
 pub(crate) struct Builder {
     dest: Vec<Dest>,
@@ -584,7 +804,10 @@ pub(crate) struct Builder {
 }
 
 impl Builder {
+    /// `n` is the number of points the file declares: a hint only, never trusted for more
+    /// than [`MAX_RESERVE`] points (the vectors grow as points are pushed).
     pub fn new(dest: Vec<Dest>, scalar_names: Vec<String>, has_normals: bool, n: usize) -> Self {
+        let n = n.min(MAX_RESERVE);
         let scalars = scalar_names
             .into_iter()
             .map(|name| ScalarField {
@@ -599,6 +822,7 @@ impl Builder {
                 normals: None,
                 scalars,
                 grid: None,
+                source_precision: None,
             },
             normals: Vec::with_capacity(if has_normals { n } else { 0 }),
             has_normals,
@@ -631,64 +855,183 @@ impl Builder {
     }
 }
 
-/// The columns a writer emits: names and a getter per point.
-pub(crate) fn out_columns<'a>(
-    cloud: &'a PointCloud,
-    normal_names: [&str; 3],
-) -> Vec<(String, Col<'a>)> {
-    let mut cols: Vec<(String, Col<'a>)> = ["x", "y", "z"]
-        .iter()
-        .enumerate()
-        .map(|(j, n)| (n.to_string(), Col::Pos(j)))
-        .collect();
-    if cloud.normals.is_some() {
-        for (j, n) in normal_names.iter().enumerate() {
-            cols.push((n.to_string(), Col::Normal(j)));
-        }
-    }
-    for s in &cloud.scalars {
-        let col = if is_packed_color(&s.name, &s.values) {
-            Col::Packed(&s.values)
-        } else {
-            Col::Scalar(&s.values)
-        };
-        cols.push((header_name(&s.name), col));
-    }
-    cols
+/// How a writer lays out colours.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ColorStyle {
+    /// `red green blue` as 8-bit unsigned integers (PLY `uchar`, XYZ integers): what MeshLab,
+    /// CloudCompare and PCL's PLY reader take as colour.
+    Channels,
+    /// One `rgb` field holding `0x00RRGGBB` in the bits of a 32-bit float (PCD `F 4`), as
+    /// PCL's `PointXYZRGB` stores it.
+    PackedFloat,
 }
 
-/// One output column.
+/// How a column is stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Store {
+    /// `float` or `double` by the precision asked for.
+    Float,
+    /// 8-bit unsigned integer (colour channels).
+    U8,
+    /// A packed colour: the 32 bits of a PCD `F 4` field (text: the unsigned integer).
+    RgbBits,
+}
+
 #[derive(Clone, Copy)]
-pub(crate) enum Col<'a> {
+enum Col<'a> {
     Pos(usize),
     Normal(usize),
     Scalar(&'a [f64]),
-    /// A packed colour (`rgb`, `rgba`): written as a 32-bit unsigned integer.
-    Packed(&'a [f64]),
+    Channel(usize),
+    Rgb,
 }
 
-impl Col<'_> {
-    pub fn get(&self, cloud: &PointCloud, i: usize) -> f64 {
-        match *self {
-            Col::Pos(j) => cloud.positions[i][j],
-            Col::Normal(j) => cloud.normals.as_ref().map_or(0.0, |n| n[i][j]),
-            Col::Scalar(v) | Col::Packed(v) => v[i],
+/// The columns a writer emits, with their names and storage.
+pub(crate) struct Columns<'a> {
+    cloud: &'a PointCloud,
+    names: Vec<String>,
+    cols: Vec<Col<'a>>,
+    colors: Vec<[u8; 3]>,
+    packed: Vec<u32>,
+}
+
+impl<'a> Columns<'a> {
+    /// `x y z`, the normals under `normal_names`, the colour (if the cloud has one, in
+    /// `style`), then the other scalar fields in order.
+    pub fn new(cloud: &'a PointCloud, normal_names: [&str; 3], style: ColorStyle) -> Self {
+        let mut c = Columns {
+            cloud,
+            names: Vec::new(),
+            cols: Vec::new(),
+            colors: Vec::new(),
+            packed: Vec::new(),
+        };
+        for (j, n) in ["x", "y", "z"].iter().enumerate() {
+            c.push(n, Col::Pos(j));
+        }
+        if cloud.normals.is_some() {
+            for (j, n) in normal_names.iter().enumerate() {
+                c.push(n, Col::Normal(j));
+            }
+        }
+        let colors = cloud.colors();
+        if let Some(colors) = colors.clone() {
+            match style {
+                ColorStyle::Channels => {
+                    for (k, n) in ["red", "green", "blue"].iter().enumerate() {
+                        c.push(n, Col::Channel(k));
+                    }
+                    c.colors = colors;
+                }
+                ColorStyle::PackedFloat => {
+                    // A packed field read from a file keeps its 32 bits (alpha included);
+                    // channels are packed as 0x00RRGGBB.
+                    c.packed = match cloud.packed_color_field() {
+                        Some(v) => v.iter().map(|&x| x as u32).collect(),
+                        None => colors
+                            .iter()
+                            .map(|[r, g, b]| (*r as u32) << 16 | (*g as u32) << 8 | *b as u32)
+                            .collect(),
+                    };
+                    c.push("rgb", Col::Rgb);
+                }
+            }
+        }
+        for s in &cloud.scalars {
+            if colors.is_some() && is_color_name(&s.name) {
+                continue;
+            }
+            c.push(&header_name(&s.name), Col::Scalar(&s.values));
+        }
+        c
+    }
+
+    fn push(&mut self, name: &str, col: Col<'a>) {
+        self.names.push(name.to_string());
+        self.cols.push(col);
+    }
+
+    /// Column names, in order.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Number of columns.
+    pub fn len(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// How column `c` is stored.
+    pub fn store(&self, c: usize) -> Store {
+        match self.cols[c] {
+            Col::Channel(_) => Store::U8,
+            Col::Rgb => Store::RgbBits,
+            _ => Store::Float,
         }
     }
 
-    /// The value of point `i` as text (packed colours as integers).
-    pub fn text(&self, cloud: &PointCloud, i: usize, single: bool) -> String {
-        let v = self.get(cloud, i);
-        if self.packed() {
-            (v as u32).to_string()
-        } else {
-            value::fmt_num(v, single)
+    /// The value of column `c` at point `i`.
+    pub fn get(&self, c: usize, i: usize) -> f64 {
+        match self.cols[c] {
+            Col::Pos(j) => self.cloud.positions[i][j],
+            Col::Normal(j) => self.cloud.normals.as_ref().map_or(0.0, |n| n[i][j]),
+            Col::Scalar(v) => v[i],
+            Col::Channel(k) => self.colors[i][k] as f64,
+            Col::Rgb => self.packed[i] as f64,
         }
     }
 
-    pub fn packed(&self) -> bool {
-        matches!(self, Col::Packed(_))
+    /// Column `c` of point `i` as text: floats as the shortest form that reads back exactly
+    /// at the precision, colours as unsigned integers (PCL writes `rgb` so in ascii PCD).
+    pub fn text(&self, c: usize, i: usize, single: bool) -> String {
+        match self.cols[c] {
+            Col::Channel(k) => self.colors[i][k].to_string(),
+            Col::Rgb => self.packed[i].to_string(),
+            _ => value::fmt_num(self.get(c, i), single),
+        }
     }
+
+    /// Appends column `c` of point `i` in binary.
+    pub fn put(&self, buf: &mut Vec<u8>, c: usize, i: usize, single: bool, big_endian: bool) {
+        macro_rules! put {
+            ($v:expr) => {
+                if big_endian {
+                    buf.extend_from_slice(&$v.to_be_bytes())
+                } else {
+                    buf.extend_from_slice(&$v.to_le_bytes())
+                }
+            };
+        }
+        match self.cols[c] {
+            Col::Channel(k) => buf.push(self.colors[i][k]),
+            Col::Rgb => put!(self.packed[i]),
+            _ => {
+                let v = self.get(c, i);
+                if single {
+                    put!(v as f32)
+                } else {
+                    put!(v)
+                }
+            }
+        }
+    }
+
+    /// One text line of point `i`, columns separated by a space.
+    pub fn line(&self, out: &mut String, i: usize, single: bool) {
+        out.clear();
+        for c in 0..self.len() {
+            if c > 0 {
+                out.push(' ');
+            }
+            out.push_str(&self.text(c, i, single));
+        }
+        out.push('\n');
+    }
+}
+
+/// Scalar fields that hold a colour: a packed `rgb`/`rgba`, or `red`/`green`/`blue`.
+fn is_color_name(name: &str) -> bool {
+    matches!(name, "rgb" | "rgba" | "red" | "green" | "blue")
 }
 
 /// `rgb` and `rgba` fields hold a colour packed as `0xAARRGGBB`: PCL stores it as the bits of
@@ -696,11 +1039,4 @@ impl Col<'_> {
 /// integer, which is bit-identical to PCL's float.
 pub(crate) fn is_packed_name(name: &str) -> bool {
     name == "rgb" || name == "rgba"
-}
-
-fn is_packed_color(name: &str, values: &[f64]) -> bool {
-    is_packed_name(name)
-        && values
-            .iter()
-            .all(|&v| v >= 0.0 && v <= u32::MAX as f64 && v.fract() == 0.0)
 }

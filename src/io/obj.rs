@@ -34,5 +34,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         }
         positions.push(p);
     }
-    Ok(PointCloud::from_positions(positions))
+    let mut cloud = PointCloud::from_positions(positions);
+    cloud.source_precision = Some(super::Precision::of_text(&cloud.positions));
+    Ok(cloud)
 }

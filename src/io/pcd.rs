@@ -3,7 +3,7 @@
 use super::error::{Fail, PResult};
 use super::lzf;
 use super::value::{parse_num, tokens, Lines, Ty};
-use super::{assign_columns, out_columns, Builder, Col, Encoding, Grid, PointCloud};
+use super::{assign_columns, Builder, ColorStyle, Columns, Encoding, Grid, PointCloud, Store};
 use std::io::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -79,8 +79,8 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             "SIZE" => sizes = Some((ln, nums("SIZE")?)),
             "TYPE" => kinds = Some((ln, rest.iter().map(|s| s.to_ascii_uppercase()).collect())),
             "COUNT" => counts = Some((ln, nums("COUNT")?)),
-            "WIDTH" => width = Some(one("WIDTH")?),
-            "HEIGHT" => height = Some(one("HEIGHT")?),
+            "WIDTH" => width = Some((ln, one("WIDTH")?)),
+            "HEIGHT" => height = Some((ln, one("HEIGHT")?)),
             "POINTS" => points = Some((ln, one("POINTS")?)),
             "DATA" => {
                 kind = Some(
@@ -154,16 +154,27 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             count: counts[i],
         });
     }
-    let n = match (points, width, height) {
-        (Some((pl, p)), Some(w), Some(h)) if w * h != p => {
+    // WIDTH x HEIGHT, checked for overflow.
+    let grid_points = match (width, height) {
+        (Some((_, w)), Some((hl, h))) => Some(w.checked_mul(h).ok_or_else(|| {
+            Fail::line(
+                hl,
+                format!("WIDTH x HEIGHT = {w} x {h} overflows: no file holds that many points"),
+            )
+        })?),
+        _ => None,
+    };
+    let (n, n_line) = match (points, width, grid_points) {
+        (Some((pl, p)), Some((_, w)), Some(wh)) if wh != p => {
+            let h = height.map_or(0, |h| h.1);
             return Err(Fail::line(
                 pl,
                 format!("POINTS {p} differs from WIDTH x HEIGHT = {w} x {h}"),
-            ))
+            ));
         }
-        (Some((_, p)), _, _) => p,
-        (None, Some(w), Some(h)) => w * h,
-        (None, Some(w), None) => w,
+        (Some((pl, p)), _, _) => (p, pl),
+        (None, Some((wl, _)), Some(wh)) => (wh, wl),
+        (None, Some((wl, w)), None) => (w, wl),
         _ => {
             return Err(Fail::line(
                 data_line,
@@ -171,6 +182,70 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             ))
         }
     };
+    // Values per point and bytes per point, checked for overflow and against the file: a
+    // point cannot have more values than the file has bytes.
+    let mut values_per_point = 0usize;
+    let mut rec = 0usize;
+    for f in &fields {
+        values_per_point = values_per_point
+            .checked_add(f.count)
+            .filter(|&v| v <= data.len())
+            .ok_or_else(|| {
+                Fail::line(
+                    cl,
+                    format!(
+                        "COUNT {} of field '{}' gives more values per point than the file has \
+                         bytes ({})",
+                        f.count,
+                        f.name,
+                        data.len()
+                    ),
+                )
+            })?;
+        // Cannot overflow: count <= data.len() and size <= 8.
+        rec += f.ty.size() * f.count;
+    }
+    let body_len = data.len() - header_end;
+    match kind {
+        Data::Binary => {
+            if n.checked_mul(rec).is_none_or(|need| need > body_len) {
+                return Err(Fail::line(
+                    n_line,
+                    format!(
+                        "the header declares {n} points of {rec} bytes, but only {body_len} \
+                         bytes follow it"
+                    ),
+                ));
+            }
+        }
+        Data::Compressed => {
+            if n.checked_mul(rec)
+                .is_none_or(|need| need > u32::MAX as usize)
+            {
+                return Err(Fail::line(
+                    n_line,
+                    format!(
+                        "the header declares {n} points of {rec} bytes, more than \
+                         binary_compressed data can hold (4 GiB)"
+                    ),
+                ));
+            }
+        }
+        // A point takes at least 2 bytes of text per value ("0 ").
+        Data::Ascii => {
+            if n.checked_mul(values_per_point.max(1))
+                .is_none_or(|need| need > body_len)
+            {
+                return Err(Fail::line(
+                    n_line,
+                    format!(
+                        "the header declares {n} points of {values_per_point} values, but only \
+                         {body_len} bytes of text follow it"
+                    ),
+                ));
+            }
+        }
+    }
     // Columns: fields expanded by COUNT; padding fields ('_') skipped.
     // A packed colour stored as the bits of a float is read as those bits (a 32-bit
     // unsigned integer): converting it as a float would change NaN-pattern colours.
@@ -192,7 +267,6 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
     let (dest, scalar_names, has_normals) =
         assign_columns(&col_names).map_err(|m| Fail::line(fl, m))?;
     let mut b = Builder::new(dest, scalar_names, has_normals, n);
-    let rec: usize = fields.iter().map(|f| f.ty.size() * f.count).sum();
     match kind {
         Data::Ascii => {
             let mut got = 0;
@@ -208,9 +282,24 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                 }
                 vals.clear();
                 for tok in tokens(t) {
-                    vals.push(parse_num(tok).ok_or_else(|| {
-                        Fail::line(ln, format!("'{tok}' is not a number (point {got})"))
-                    })?);
+                    let c = vals.len();
+                    // A packed colour in text: PCL (1.7 on) writes the unsigned integer of its
+                    // bits; older writers printed the float.
+                    let packed = packed_float.get(c) == Some(&true);
+                    let v = match tok.parse::<u32>() {
+                        Ok(u) if packed => u as f64,
+                        _ => {
+                            let v = parse_num(tok).ok_or_else(|| {
+                                Fail::line(ln, format!("'{tok}' is not a number (point {got})"))
+                            })?;
+                            match (packed, col_ty.get(c)) {
+                                (true, _) => (v as f32).to_bits() as f64,
+                                (false, Some(t)) => t.round_text(v),
+                                (false, None) => v,
+                            }
+                        }
+                    };
+                    vals.push(v);
                 }
                 if vals.len() != col_ty.len() {
                     return Err(Fail::line(
@@ -222,18 +311,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                         ),
                     ));
                 }
-                b.push(
-                    vals.iter()
-                        .zip(&col_ty)
-                        .zip(&packed_float)
-                        .map(|((v, t), p)| {
-                            if *p {
-                                (*v as f32).to_bits() as f64
-                            } else {
-                                t.round_text(*v)
-                            }
-                        }),
-                );
+                b.push(vals.iter().copied());
                 got += 1;
             }
             if got < n {
@@ -276,6 +354,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             let csize = u32::from_le_bytes(body[0..4].try_into().unwrap()) as usize;
             let usize_ = u32::from_le_bytes(body[4..8].try_into().unwrap()) as usize;
             if usize_ != n * rec {
+                // n * rec was checked above.
                 return Err(Fail::byte(
                     header_end + 4,
                     format!(
@@ -290,6 +369,14 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                     format!(
                         "compressed size {csize} exceeds the {} bytes left in the file",
                         body.len() - 8
+                    ),
+                ));
+            }
+            if usize_ > lzf::max_decompressed(csize) {
+                return Err(Fail::byte(
+                    header_end + 4,
+                    format!(
+                        "uncompressed size {usize_} cannot come from {csize} bytes of LZF data"
                     ),
                 ));
             }
@@ -320,8 +407,12 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         }
     }
     let mut cloud = b.finish();
-    if let (Some(w), Some(h)) = (width, height) {
-        if h > 1 && w * h == n {
+    cloud.source_precision = fields
+        .iter()
+        .find(|f| f.name == "x")
+        .map(|f| super::Precision::of_type(f.ty));
+    if let (Some((_, w)), Some((_, h)), Some(wh)) = (width, height, grid_points) {
+        if h > 1 && wh == n {
             cloud.grid = Some(Grid {
                 width: w,
                 height: h,
@@ -337,71 +428,66 @@ pub(crate) fn write(
     enc: Encoding,
     single: bool,
 ) -> PResult<()> {
-    let cols = out_columns(cloud, ["normal_x", "normal_y", "normal_z"]);
+    let cols = Columns::new(
+        cloud,
+        ["normal_x", "normal_y", "normal_z"],
+        ColorStyle::PackedFloat,
+    );
     let n = cloud.len();
     let (width, height) = cloud.grid.map_or((n, 1), |g| (g.width, g.height));
-    let size = if single { 4 } else { 8 };
-    let names: Vec<&str> = cols.iter().map(|(s, _)| s.as_str()).collect();
     let data = match enc {
         Encoding::Ascii => "ascii",
         Encoding::Binary => "binary",
         Encoding::BinaryCompressed => "binary_compressed",
         Encoding::BinaryBigEndian => unreachable!("refused by check_writable"),
     };
-    let per_col = |packed: &str, float: &str| {
-        cols.iter()
-            .map(|(_, c)| if c.packed() { packed } else { float })
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
+    let float_size = if single { "4" } else { "8" };
+    let (mut size, mut ty) = (Vec::new(), Vec::new());
+    for c in 0..cols.len() {
+        let (s, t) = match cols.store(c) {
+            Store::Float => (float_size, "F"),
+            Store::U8 => ("1", "U"),
+            // PCL's PointXYZRGB: rgb is a float field holding the packed bits; in ascii PCL
+            // (1.13) writes it as the unsigned integer of those bits, typed U, and reads it so.
+            Store::RgbBits if enc == Encoding::Ascii => ("4", "U"),
+            Store::RgbBits => ("4", "F"),
+        };
+        size.push(s);
+        ty.push(t);
+    }
     write!(
         w,
         "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\n\
          COUNT {}\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n",
-        names.join(" "),
-        per_col("4", &size.to_string()),
-        per_col("U", "F"),
-        per_col("1", "1"),
+        cols.names().join(" "),
+        size.join(" "),
+        ty.join(" "),
+        vec!["1"; cols.len()].join(" "),
     )?;
-    let put = |buf: &mut Vec<u8>, col: &Col<'_>, v: f64| {
-        if col.packed() {
-            buf.extend_from_slice(&(v as u32).to_le_bytes())
-        } else if single {
-            buf.extend_from_slice(&(v as f32).to_le_bytes())
-        } else {
-            buf.extend_from_slice(&v.to_le_bytes())
-        }
-    };
     match enc {
         Encoding::Ascii => {
             let mut line = String::new();
             for i in 0..n {
-                line.clear();
-                for (c, (_, col)) in cols.iter().enumerate() {
-                    if c > 0 {
-                        line.push(' ');
-                    }
-                    line.push_str(&col.text(cloud, i, single));
-                }
-                line.push('\n');
+                cols.line(&mut line, i, single);
                 w.write_all(line.as_bytes())?;
             }
         }
         Encoding::Binary => {
-            let mut buf = Vec::with_capacity(cols.len() * size);
+            let mut buf = Vec::new();
             for i in 0..n {
                 buf.clear();
-                for (_, col) in &cols {
-                    put(&mut buf, col, col.get(cloud, i));
+                for c in 0..cols.len() {
+                    cols.put(&mut buf, c, i, single, false);
                 }
                 w.write_all(&buf)?;
             }
         }
         Encoding::BinaryCompressed => {
-            let mut raw = Vec::with_capacity(n * cols.len() * size);
-            for (_, col) in &cols {
+            // Field by field, as PCL stores it: all points' x, then all y, ...
+            let mut raw = Vec::new();
+            for c in 0..cols.len() {
                 for i in 0..n {
-                    put(&mut raw, col, col.get(cloud, i));
+                    cols.put(&mut raw, c, i, single, false);
                 }
             }
             if raw.len() > u32::MAX as usize {
@@ -409,7 +495,7 @@ pub(crate) fn write(
                     "binary_compressed PCD holds at most 4 GiB of data; write binary",
                 ));
             }
-            let c = lzf::compress_literal(&raw);
+            let c = lzf::compress(&raw);
             w.write_all(&(c.len() as u32).to_le_bytes())?;
             w.write_all(&(raw.len() as u32).to_le_bytes())?;
             w.write_all(&c)?;

@@ -3,7 +3,7 @@
 
 use super::error::{Fail, PResult};
 use super::value::{parse_num, tokens, Lines, Ty};
-use super::{assign_columns, out_columns, Builder, Encoding, PointCloud};
+use super::{assign_columns, Builder, ColorStyle, Columns, Encoding, PointCloud, Store};
 use std::io::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -22,6 +22,21 @@ struct Element {
     name: String,
     count: usize,
     props: Vec<(String, Prop)>,
+    /// Header line of the `element` entry, for errors about its count.
+    line: usize,
+}
+
+impl Element {
+    /// Fewest bytes one binary record can take: the scalars plus each list's length field.
+    fn min_record(&self) -> usize {
+        self.props
+            .iter()
+            .map(|(_, p)| match p {
+                Prop::Scalar(t) => t.size(),
+                Prop::List(ct, _) => ct.size(),
+            })
+            .sum()
+    }
 }
 
 fn ty_of(s: &str) -> Option<Ty> {
@@ -87,6 +102,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
                     name: name.to_string(),
                     count,
                     props: Vec::new(),
+                    line: ln,
                 });
             }
             "property" => {
@@ -220,6 +236,30 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         };
         for (ei, el) in elements[..=vi].iter().enumerate() {
             let is_vertex = ei == vi;
+            // Never trust the count: the records must fit in the bytes that are left.
+            let left = data.len() - pos;
+            let min = el.min_record();
+            match el.count.checked_mul(min) {
+                Some(need) if need <= left => {}
+                _ => {
+                    return Err(Fail::line(
+                        el.line,
+                        format!(
+                            "element '{}' declares {} records of at least {min} bytes, but only \
+                             {left} bytes follow the header",
+                            el.name, el.count
+                        ),
+                    ))
+                }
+            }
+            if min == 0 {
+                // No properties: the records take no bytes (and are not looped over).
+                continue;
+            }
+            if !is_vertex && el.props.iter().all(|(_, p)| matches!(p, Prop::Scalar(_))) {
+                pos += el.count * min;
+                continue;
+            }
             for i in 0..el.count {
                 let what = || format!("element '{}' {i} of {}", el.name, el.count);
                 let start = pos;
@@ -257,7 +297,12 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
             }
         }
     }
-    Ok(b.finish())
+    let mut cloud = b.finish();
+    cloud.source_precision = vertex.props.iter().find_map(|(name, p)| match p {
+        Prop::Scalar(t) if name == "x" => Some(super::Precision::of_type(*t)),
+        _ => None,
+    });
+    Ok(cloud)
 }
 
 pub(crate) fn write(
@@ -266,59 +311,42 @@ pub(crate) fn write(
     enc: Encoding,
     single: bool,
 ) -> PResult<()> {
-    let cols = out_columns(cloud, ["nx", "ny", "nz"]);
+    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels);
     let fmt = match enc {
         Encoding::Ascii => "ascii",
         Encoding::Binary => "binary_little_endian",
         Encoding::BinaryBigEndian => "binary_big_endian",
         Encoding::BinaryCompressed => unreachable!("refused by check_writable"),
     };
-    let ty = if single { "float" } else { "double" };
+    let float = if single { "float" } else { "double" };
     let mut h = format!(
         "ply\nformat {fmt} 1.0\ncomment written by nbhd {}\nelement vertex {}\n",
         env!("CARGO_PKG_VERSION"),
         cloud.len()
     );
-    for (name, col) in &cols {
-        let ty = if col.packed() { "uint" } else { ty };
+    for (c, name) in cols.names().iter().enumerate() {
+        let ty = match cols.store(c) {
+            Store::Float => float,
+            Store::U8 => "uchar",
+            Store::RgbBits => "uint",
+        };
         h.push_str(&format!("property {ty} {name}\n"));
     }
     h.push_str("end_header\n");
     w.write_all(h.as_bytes())?;
     let mut buf = Vec::new();
     let mut line = String::new();
+    let be = enc == Encoding::BinaryBigEndian;
     for i in 0..cloud.len() {
-        match enc {
-            Encoding::Ascii => {
-                line.clear();
-                for (c, (_, col)) in cols.iter().enumerate() {
-                    if c > 0 {
-                        line.push(' ');
-                    }
-                    line.push_str(&col.text(cloud, i, single));
-                }
-                line.push('\n');
-                w.write_all(line.as_bytes())?;
+        if enc == Encoding::Ascii {
+            cols.line(&mut line, i, single);
+            w.write_all(line.as_bytes())?;
+        } else {
+            buf.clear();
+            for c in 0..cols.len() {
+                cols.put(&mut buf, c, i, single, be);
             }
-            _ => {
-                buf.clear();
-                let be = enc == Encoding::BinaryBigEndian;
-                for (_, col) in &cols {
-                    let v = col.get(cloud, i);
-                    if col.packed() {
-                        let c = v as u32;
-                        buf.extend_from_slice(&if be { c.to_be_bytes() } else { c.to_le_bytes() });
-                        continue;
-                    }
-                    match (single, be) {
-                        (true, false) => buf.extend_from_slice(&(v as f32).to_le_bytes()),
-                        (true, true) => buf.extend_from_slice(&(v as f32).to_be_bytes()),
-                        (false, false) => buf.extend_from_slice(&v.to_le_bytes()),
-                        (false, true) => buf.extend_from_slice(&v.to_be_bytes()),
-                    }
-                }
-                w.write_all(&buf)?;
-            }
+            w.write_all(&buf)?;
         }
     }
     Ok(())

@@ -1,6 +1,6 @@
 //! `nbhd convert IN OUT`: from one point-cloud format to another.
 
-use crate::commands::FormatArg;
+use crate::commands::{precision_text, FormatArg, PrecisionArgs};
 use crate::output::Output;
 use nbhd::io::{self, Encoding, Format, Precision, WriteOptions};
 use serde_json::json;
@@ -15,48 +15,44 @@ pub enum EncodingArg {
     Binary,
     /// Binary big endian (PLY only)
     BinaryBigEndian,
-    /// LZF-compressed, field by field (PCD binary_compressed only)
+    /// LZF-compressed, field by field (PCD binary_compressed), or LAZ
     Compressed,
-}
-
-/// Width of the stored numbers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum PrecisionArg {
-    /// 32-bit float: half the size, about 7 significant digits
-    Single,
-    /// 64-bit double: exact
-    Double,
 }
 
 /// Convert a point cloud between formats, keeping normals and scalar fields
 ///
-/// The output format is taken from OUT's extension: .ply, .pcd or .xyz (OBJ is read only).
-/// Normals are written as nx ny nz (PLY, XYZ) or normal_x normal_y normal_z (PCD); scalar
-/// fields such as curvature as float properties, which MeshLab and CloudCompare offer for
-/// colouring. NaN points are kept, and an organized PCD stays organized when written as PCD.
+/// The output format is taken from OUT's extension: .ply, .pcd, .las, .laz or .xyz (OBJ is
+/// read only). Coordinates, normals and scalar fields are float32 unless --precision says
+/// otherwise (PCL's point types load float only). Normals are written as nx ny nz (PLY, XYZ)
+/// or normal_x normal_y normal_z (PCD); colour as uchar red green blue (PLY, XYZ) or PCL's
+/// packed float rgb (PCD); scalar fields such as curvature as float properties, which
+/// MeshLab and CloudCompare offer for colouring. LAS keeps intensity, classification and
+/// colour, and the command names what it cannot hold. NaN points are kept, and an organized
+/// PCD stays organized when written as PCD.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv)
+    /// Input file (.ply, .pcd, .las/.laz, .obj, .xyz/.txt/.pts/.asc/.csv)
     pub input: PathBuf,
 
-    /// Output file (.ply, .pcd, .xyz)
+    /// Output file (.ply, .pcd, .las, .laz, .xyz)
     pub output: PathBuf,
 
     /// Read the input as this format instead of recognising it
     #[arg(long, value_enum)]
     pub from: Option<FormatArg>,
 
-    /// Encoding of the output [default: binary for PLY and PCD, text for XYZ]
+    /// Encoding of the output [default: binary for PLY, PCD and LAS, compressed for .laz,
+    /// text for XYZ]
     #[arg(long, short, value_enum)]
     pub encoding: Option<EncodingArg>,
 
-    /// Width of the stored numbers
-    #[arg(long, short, value_enum, default_value = "double")]
-    pub precision: PrecisionArg,
+    #[command(flatten)]
+    pub precision: PrecisionArgs,
 }
 
 pub fn run(a: Args, out: &Output) -> Result<(), String> {
-    let (cloud, from) = io::read_as(&a.input, a.from.map(Into::into)).map_err(|e| e.to_string())?;
+    let (cloud, info) = crate::commands::read_cloud_info(&a.input, a.from)?;
+    let from = info.format;
     let opts = WriteOptions {
         format: None,
         encoding: a.encoding.map(|e| match e {
@@ -65,11 +61,15 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
             EncodingArg::BinaryBigEndian => Encoding::BinaryBigEndian,
             EncodingArg::Compressed => Encoding::BinaryCompressed,
         }),
-        precision: match a.precision {
-            PrecisionArg::Single => Precision::Single,
-            PrecisionArg::Double => Precision::Double,
-        },
+        precision: a.precision.get(),
     };
+    let to_format = Format::from_path(&a.output);
+    let stored = if to_format == Some(Format::Las) {
+        "LAS scaled integers"
+    } else {
+        precision_text(opts.precision, &cloud)
+    };
+    let dropped = to_format.map_or_else(Vec::new, |f| io::not_written(&cloud, f));
     io::write(&a.output, &cloud, &opts).map_err(|e| e.to_string())?;
     let to = Format::from_path(&a.output).map_or("?", |f| f.name());
     out.json(&json!({
@@ -80,9 +80,17 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         "points": cloud.len(),
         "non_finite": cloud.non_finite_count(),
         "fields": cloud.field_names(),
+        "columns": info.text_columns.as_ref().map(|t| json!({"names": t.names, "from": t.from})),
+        "precision": stored,
+        "not_written": dropped,
+        "input_precision": match cloud.source_precision {
+            Some(Precision::Double) => "float64",
+            Some(_) => "float32",
+            None => "unknown",
+        },
     }));
     out.text(format!(
-        "{} -> {}: {} points ({} -> {}), fields {}",
+        "{} -> {}: {} points ({} -> {}), fields {} ({stored})",
         a.input.display(),
         a.output.display(),
         cloud.len(),
@@ -90,5 +98,21 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         to,
         cloud.field_names().join(" ")
     ));
+    if !dropped.is_empty() {
+        out.text(format!(
+            "note: {} cannot hold {}; not written",
+            to_format.map_or("?", |f| f.name()),
+            dropped.join(", ")
+        ));
+    }
+    if let Some(note) = crate::commands::columns_note(&info) {
+        out.text(format!("{}: {note}", a.input.display()));
+    }
+    if stored == "float32" && cloud.source_precision == Some(Precision::Double) {
+        out.text(
+            "note: the input held double-precision coordinates; they were written as float32 \
+             (what PCL's point types load). Use --precision keep or double to keep them.",
+        );
+    }
     Ok(())
 }

@@ -3,14 +3,15 @@
 //! normals and scalar properties that MeshLab and CloudCompare colour by.
 
 use crate::commands::{
-    finite_points, length_text, parse_length, parse_vec3, read_cloud, FormatArg,
+    finite_points, length_text, parse_length, parse_vec3, precision_text, read_cloud, FormatArg,
+    PrecisionArgs,
 };
 use crate::output::{num, Output};
 use crate::progress::Progress;
 use crate::render::{render_cloud, ColorMap, RenderOptions};
 use glam::DVec3;
 use nbhd::geometry::Orientation;
-use nbhd::io::{self, PointCloud, Precision, WriteOptions};
+use nbhd::io::{self, PointCloud, WriteOptions};
 use nbhd::smooth::{Length, PointOutput, SmoothOptions, SmoothResult};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -62,9 +63,8 @@ pub struct Args {
     #[arg(long)]
     pub png: Option<PathBuf>,
 
-    /// Store single-precision floats (half the file size)
-    #[arg(long)]
-    pub single: bool,
+    #[command(flatten)]
+    pub precision: PrecisionArgs,
 }
 
 /// Which command runs.
@@ -96,8 +96,13 @@ pub fn orientation(
 }
 
 /// Adds normals and per-point fields of `outputs` (computed on the finite points `index` of
-/// `cloud`, in that order) to `cloud`; NaN for skipped points. `all` adds every curvature,
-/// otherwise only the surface variation.
+/// `cloud`, in that order) to `cloud`; NaN for skipped points.
+///
+/// `curvature` is what PCL's `PointNormal::curvature` holds, the surface variation
+/// λ0/(λ0+λ1+λ2) of the neighbourhood's covariance (thesis eq. 2.8; 0 on a plane, at most 1/3).
+/// `all` adds the principal curvatures `k1`, `k2` (Weingarten estimate, eq. 2.25, signed
+/// against the normal), `mean_curvature` (k1+k2)/2 and `max_abs_curvature` max(|k1|,|k2|)
+/// ('Max Princ').
 pub fn add_outputs(
     cloud: &mut PointCloud,
     index: &[usize],
@@ -117,30 +122,32 @@ pub fn add_outputs(
         }
         cloud.set_scalar(name, v).map_err(|e| e.to_string())
     };
+    field("curvature", &|o| o.covariance_quotient)?;
     if all {
-        field("curvature", &|o| o.max_principal_curvature)?;
-        field("mean_curvature", &|o| o.mean_curvature)?;
         field("k1", &|o| o.principal.k1)?;
         field("k2", &|o| o.principal.k2)?;
+        field("mean_curvature", &|o| o.mean_curvature)?;
+        field("max_abs_curvature", &|o| o.max_principal_curvature)?;
     }
-    field("surface_variation", &|o| o.covariance_quotient)?;
     Ok(())
 }
 
-/// Writes `cloud` to `path` (format from the extension); errors name the file.
-pub fn write_cloud(path: &Path, cloud: &PointCloud, single: bool) -> Result<(), String> {
+/// Writes `cloud` to `path` (format from the extension) at the precision asked for; errors
+/// name the file. Returns `float32` or `float64`, what was written.
+pub fn write_cloud(
+    path: &Path,
+    cloud: &PointCloud,
+    precision: &PrecisionArgs,
+) -> Result<&'static str, String> {
     let opts = WriteOptions {
-        precision: if single {
-            Precision::Single
-        } else {
-            Precision::Double
-        },
+        precision: precision.get(),
         ..WriteOptions::default()
     };
-    io::write(path, cloud, &opts).map_err(|e| e.to_string())
+    io::write(path, cloud, &opts).map_err(|e| e.to_string())?;
+    Ok(precision_text(opts.precision, cloud))
 }
 
-/// Draws `cloud` coloured by its `surface_variation` field on the demo's fixed scale (flat pale,
+/// Draws `cloud` coloured by its `curvature` (surface variation) field on the demo's fixed scale (flat pale,
 /// edges and noise in orange to red) into `path`.
 pub fn write_png(
     path: &Path,
@@ -155,7 +162,7 @@ pub fn write_png(
         range: Some((0.0, crate::commands::demo::SURFACE_VARIATION_RANGE)),
         ..RenderOptions::default()
     };
-    let img = render_cloud(cloud, Some("surface_variation"), &opts)
+    let img = render_cloud(cloud, Some("curvature"), &opts)
         .map_err(|e| format!("{}: {e}", path.display()))?;
     img.save_png(path)
         .map_err(|e| format!("{}: {e}", path.display()))
@@ -189,7 +196,7 @@ pub fn run(a: Args, what: What, out: &Output) -> Result<(), String> {
     };
     let secs = t.elapsed().as_secs_f64();
     add_outputs(&mut cloud, &index, &res.outputs, what == What::Curvature)?;
-    write_cloud(&a.output, &cloud, a.single)?;
+    let stored = write_cloud(&a.output, &cloud, &a.precision)?;
     if let Some(png) = &a.png {
         write_png(png, &cloud, [-1.0, -1.0, -1.0], [0.0, 1.0, 0.0])?;
     }
@@ -214,12 +221,13 @@ pub fn run(a: Args, what: What, out: &Output) -> Result<(), String> {
         "degenerate_normals": irregular,
         "mean_abs_max_curvature": num(mean_curv),
         "fields": cloud.field_names(),
+        "precision": stored,
         "seconds": num(secs),
     }));
     out.text(format!(
         "{} -> {}: {} points ({} skipped as non-finite), {label} over the {} nearest within \
          ε = {:.6} ({}; h = {:.6}), smallest neighbourhood {}, {} degenerate normals, {:.2} s\n\
-         fields {}{}",
+         fields {} ({stored}){}",
         a.input.display(),
         a.output.display(),
         cloud.len(),

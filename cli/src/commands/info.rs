@@ -22,8 +22,8 @@ pub struct Args {
 }
 
 pub fn run(a: Args, out: &Output) -> Result<(), String> {
-    let (cloud, format) =
-        io::read_as(&a.file, a.format.map(Into::into)).map_err(|e| e.to_string())?;
+    let (cloud, info) = crate::commands::read_cloud_info(&a.file, a.format)?;
+    let format = info.format;
     let n = cloud.len();
     let bad = cloud.non_finite_count();
     let bbox = cloud.bounding_box();
@@ -49,10 +49,19 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         "normals": cloud.normals.is_some(),
         "fields": cloud.field_names(),
         "scalars": scalars,
+        "precision": match cloud.source_precision {
+            Some(io::Precision::Double) => "float64",
+            Some(_) => "float32",
+            None => "unknown",
+        },
+        "columns": info.text_columns.as_ref().map(|t| json!({"names": t.names, "from": t.from})),
     }));
     let mut t = String::new();
     t.push_str(&format!("file       {}\n", a.file.display()));
     t.push_str(&format!("format     {}\n", format.name()));
+    if let Some(note) = crate::commands::columns_note(&info) {
+        t.push_str(&format!("read as    {note}\n"));
+    }
     t.push_str(&format!("points     {n}\n"));
     t.push_str(&format!(
         "non-finite {bad}{}\n",

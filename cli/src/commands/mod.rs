@@ -21,6 +21,8 @@ pub enum FormatArg {
     Ply,
     Pcd,
     Obj,
+    /// LAS or LAZ
+    Las,
     Xyz,
 }
 
@@ -30,8 +32,59 @@ impl From<FormatArg> for Format {
             FormatArg::Ply => Format::Ply,
             FormatArg::Pcd => Format::Pcd,
             FormatArg::Obj => Format::Obj,
+            FormatArg::Las => Format::Las,
             FormatArg::Xyz => Format::Xyz,
         }
+    }
+}
+
+/// Width of the stored floats of an output file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrecisionArg {
+    /// 32-bit float: what PCL's point types (PointXYZ, PointNormal, ...) load; ~7 digits
+    Single,
+    /// 64-bit double: exact, but PCL's float point types do not load it
+    Double,
+    /// Double if the input held its coordinates more precisely than float (PLY double, PCD
+    /// F 8, LAS, text with more digits), float otherwise
+    Keep,
+}
+
+impl From<PrecisionArg> for nbhd::io::Precision {
+    fn from(p: PrecisionArg) -> Self {
+        match p {
+            PrecisionArg::Single => nbhd::io::Precision::Single,
+            PrecisionArg::Double => nbhd::io::Precision::Double,
+            PrecisionArg::Keep => nbhd::io::Precision::Keep,
+        }
+    }
+}
+
+/// The `--precision` option of the commands that write a point-cloud file.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct PrecisionArgs {
+    /// Width of the stored coordinates, normals and scalar fields (colours are always 8-bit)
+    #[arg(long, short = 'p', value_enum, default_value = "single")]
+    pub precision: PrecisionArg,
+
+    /// The same as --precision single, the default (kept for older scripts)
+    #[arg(long, hide = true)]
+    pub single: bool,
+}
+
+impl PrecisionArgs {
+    /// The library's precision.
+    pub fn get(&self) -> nbhd::io::Precision {
+        self.precision.into()
+    }
+}
+
+/// `float32` or `float64`: what `precision` writes for `cloud`.
+pub fn precision_text(precision: nbhd::io::Precision, cloud: &PointCloud) -> &'static str {
+    if precision.is_single_for(cloud) {
+        "float32"
+    } else {
+        "float64"
     }
 }
 
@@ -164,11 +217,43 @@ impl TreeArgs {
     }
 }
 
-/// Reads a cloud; errors name the file.
+/// What every command reads input files with: the output mode (for the note on text
+/// columns) and the global `--columns`.
+static READ_CONTEXT: std::sync::OnceLock<(crate::output::Output, Option<Vec<String>>)> =
+    std::sync::OnceLock::new();
+
+/// Sets the output mode and `--columns` for [`read_cloud`] (once, from `main`).
+pub fn set_read_context(out: crate::output::Output, columns: Option<Vec<String>>) {
+    let _ = READ_CONTEXT.set((out, columns));
+}
+
+/// Reads a cloud with the global `--columns`, and tells what was read; errors name the file.
+pub fn read_cloud_info(
+    path: &Path,
+    format: Option<FormatArg>,
+) -> Result<(PointCloud, nbhd::io::ReadInfo), String> {
+    let opts = nbhd::io::ReadOptions {
+        format: format.map(Into::into),
+        columns: READ_CONTEXT.get().and_then(|c| c.1.clone()),
+    };
+    nbhd::io::read_with(path, &opts).map_err(|e| e.to_string())
+}
+
+/// `columns x y z red green blue (the header on line 1)` for a text input.
+pub fn columns_note(info: &nbhd::io::ReadInfo) -> Option<String> {
+    info.text_columns
+        .as_ref()
+        .map(|t| format!("columns {} ({})", t.names.join(" "), t.from))
+}
+
+/// Reads a cloud; errors name the file. For a text input, says on standard error what its
+/// columns were read as (unless --quiet or --json).
 pub fn read_cloud(path: &Path, format: Option<FormatArg>) -> Result<PointCloud, String> {
-    nbhd::io::read_as(path, format.map(Into::into))
-        .map(|(c, _)| c)
-        .map_err(|e| e.to_string())
+    let (cloud, info) = read_cloud_info(path, format)?;
+    if let (Some(note), Some((out, _))) = (columns_note(&info), READ_CONTEXT.get()) {
+        out.note(format!("{}: {note}", path.display()));
+    }
+    Ok(cloud)
 }
 
 /// The finite points of a cloud as `DVec3` and their indices in the file.

@@ -189,9 +189,8 @@ pub struct Args {
     #[arg(long, default_value = "0,1,0", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub up: [f64; 3],
 
-    /// Store single-precision floats (half the file size)
-    #[arg(long)]
-    pub single: bool,
+    #[command(flatten)]
+    pub precision: crate::commands::PrecisionArgs,
 }
 
 impl Args {
@@ -416,7 +415,7 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         cloud.positions[i] = p.to_array();
     }
     add_outputs(&mut cloud, &index, &res.outputs, true)?;
-    write_cloud(&a.output, &cloud, a.single)?;
+    write_cloud(&a.output, &cloud, &a.precision)?;
     if let Some(png) = &a.png {
         write_png(png, &cloud, a.view, a.up)?;
     }
