@@ -143,7 +143,10 @@ fn bad_queries() {
                 &mut out
             )
             .unwrap_err(),
-            NbhdError::NonFiniteQuery { coordinate: 1 }
+            NbhdError::NonFiniteQuery {
+                query: None,
+                coordinate: 1
+            }
         );
         assert_eq!(
             s.search(Query::stored(2), Neighborhood::Knn { k: 1 }, &mut out)

@@ -88,10 +88,10 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods(
         };
         let table = match &tree.inner {
             super::tree::AnyTree::F32(t) => {
-                AnyTable::F32(t.neighborhoods(nbhd.to_core(), &options)?)
+                AnyTable::F32(t.neighborhoods(nbhd.to_core()?, &options)?)
             }
             super::tree::AnyTree::F64(t) => {
-                AnyTable::F64(t.neighborhoods(nbhd.to_core(), &options)?)
+                AnyTable::F64(t.neighborhoods(nbhd.to_core()?, &options)?)
             }
         };
         // SAFETY: `out` was checked by `init_out`.
@@ -140,10 +140,10 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods_of(
         let view = unsafe { queries.view() }?;
         let table = match &tree.inner {
             super::tree::AnyTree::F32(t) => {
-                AnyTable::F32(t.neighborhoods_of(&view, nbhd.to_core(), &options)?)
+                AnyTable::F32(t.neighborhoods_of(&view, nbhd.to_core()?, &options)?)
             }
             super::tree::AnyTree::F64(t) => {
-                AnyTable::F64(t.neighborhoods_of(&view, nbhd.to_core(), &options)?)
+                AnyTable::F64(t.neighborhoods_of(&view, nbhd.to_core()?, &options)?)
             }
         };
         // SAFETY: `out` was checked by `init_out`.

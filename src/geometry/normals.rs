@@ -17,6 +17,9 @@ pub const FLAG_COLLINEAR: u8 = 2;
 /// Flag: the two smallest eigenvalues coincide (relative to the largest), so the normal is not
 /// unique (e.g. an isotropic blob).
 pub const FLAG_AMBIGUOUS: u8 = 4;
+/// Flag: the point was skipped for a NaN or infinite coordinate (non-finite policy skip); its
+/// normal and geometry are NaN.
+pub const FLAG_SKIPPED: u8 = 8;
 
 /// Relative tolerance below which an eigenvalue (or eigenvalue gap) counts as zero.
 const DEGENERATE_TOL: f64 = 1e-10;

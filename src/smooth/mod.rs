@@ -28,6 +28,7 @@ use crate::geometry::normals::{
 };
 use crate::query::Neighborhood;
 use crate::table::NeighborTable;
+use crate::NonFinitePolicy;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -168,6 +169,12 @@ pub struct SmoothOptions {
     pub orientation: Orientation,
     /// Compute the per-point outputs of the result.
     pub outputs: bool,
+    /// Points with a NaN or infinite coordinate (the holes of organized scans):
+    /// [`NonFinitePolicy::Reject`] refuses them ([`NbhdError::NonFinite`] names the first),
+    /// [`NonFinitePolicy::Skip`] computes on the finite points only; a skipped point keeps its
+    /// index, is left unmoved, and its outputs are NaN with
+    /// [`crate::geometry::normals::FLAG_SKIPPED`].
+    pub non_finite: NonFinitePolicy,
 }
 
 impl Default for SmoothOptions {
@@ -186,6 +193,7 @@ impl Default for SmoothOptions {
             formula: PrincipalFormula::Eq225,
             orientation: Orientation::Unoriented,
             outputs: true,
+            non_finite: NonFinitePolicy::Reject,
         }
     }
 }
@@ -309,6 +317,111 @@ struct Resolved {
     feature: FeatureCriterion,
 }
 
+/// The finite points of `points` as `policy` asks: `None` when every point is finite (use
+/// `points` as they are), otherwise the original index of every finite point and the finite
+/// points themselves. [`NonFinitePolicy::Reject`] names the first non-finite point
+/// ([`NbhdError::NonFinite`]); an empty set, or one without finite points, is
+/// [`NbhdError::EmptyInput`].
+pub(crate) fn finite_subset(
+    points: &[DVec3],
+    policy: NonFinitePolicy,
+) -> Result<Option<(Vec<usize>, Vec<DVec3>)>> {
+    if points.is_empty() {
+        return Err(NbhdError::EmptyInput);
+    }
+    if points.iter().all(|p| p.is_finite()) {
+        return Ok(None);
+    }
+    match policy {
+        NonFinitePolicy::Reject => check_points(points).map(|_| None),
+        NonFinitePolicy::Skip => {
+            let index: Vec<usize> = (0..points.len())
+                .filter(|&i| points[i].is_finite())
+                .collect();
+            if index.is_empty() {
+                return Err(NbhdError::EmptyInput);
+            }
+            let finite = index.iter().map(|&i| points[i]).collect();
+            Ok(Some((index, finite)))
+        }
+    }
+}
+
+impl PointOutput {
+    /// The outputs of a point skipped for its non-finite coordinates: NaN everywhere, flagged
+    /// [`crate::geometry::normals::FLAG_SKIPPED`].
+    pub fn skipped() -> Self {
+        let nan3 = DVec3::splat(f64::NAN);
+        Self {
+            normal: nan3,
+            mean_curvature: f64::NAN,
+            max_principal_curvature: f64::NAN,
+            covariance_quotient: f64::NAN,
+            anisotropic_mean_curvature: f64::NAN,
+            principal_curvature_quotient: f64::NAN,
+            max_covariance: f64::NAN,
+            principal: PrincipalCurvatures {
+                k1: f64::NAN,
+                k2: f64::NAN,
+                dir1: nan3,
+                dir2: nan3,
+            },
+            normal_flags: crate::geometry::normals::FLAG_SKIPPED,
+            feature: false,
+            interior: false,
+        }
+    }
+}
+
+/// The result computed on the finite points `index` of `points` placed back at the original
+/// indices: skipped points unmoved, with [`PointOutput::skipped`] outputs.
+pub(crate) fn scatter_result(
+    mut result: SmoothResult,
+    points: &[DVec3],
+    index: &[usize],
+) -> SmoothResult {
+    let mut all = points.to_vec();
+    for (&i, &p) in index.iter().zip(&result.points) {
+        all[i] = p;
+    }
+    result.points = all;
+    if !result.outputs.is_empty() {
+        let mut outputs = vec![PointOutput::skipped(); points.len()];
+        for (&i, o) in index.iter().zip(&result.outputs) {
+            outputs[i] = *o;
+        }
+        result.outputs = outputs;
+    }
+    result
+}
+
+/// Refuses results in which every neighbourhood is degenerate ([`NbhdError::Degenerate`]):
+/// when no row of `table` reaches 3 points with the point itself, or (`flagged`, for
+/// estimates of the geometry alone) when every one of the `outputs` carries a degeneracy
+/// flag. `epsilon` (resolved) and `h` go into the message, with whether ε was relative.
+pub(crate) fn check_not_degenerate(
+    table: &NeighborTable<f64>,
+    outputs: Option<&[PointOutput]>,
+    epsilon: f64,
+    h: f64,
+    relative: bool,
+) -> Result<()> {
+    let largest = table.max_row_len() + 1;
+    let flagged = outputs.map_or(0, |o| o.iter().filter(|o| o.normal_flags != 0).count());
+    let all_flagged = outputs.is_some_and(|o| !o.is_empty() && flagged == o.len());
+    if largest < 3 || all_flagged {
+        return Err(NbhdError::Degenerate {
+            points: table.len(),
+            largest,
+            flagged,
+            epsilon,
+            spacing: h,
+            relative,
+        });
+    }
+    Ok(())
+}
+
 /// Refuses an empty set ([`NbhdError::EmptyInput`]) and names the first point with a NaN or
 /// infinite coordinate ([`NbhdError::NonFinite`]).
 pub(crate) fn check_points(points: &[DVec3]) -> Result<()> {
@@ -349,12 +462,34 @@ pub fn smooth(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult>
 
 /// [`smooth`] with a progress callback, called on the calling thread with the fraction done
 /// (0 to 1) and the stage; returning `false` stops the run with [`NbhdError::Cancelled`].
+///
+/// Errors besides the options' own: [`NbhdError::NonFinite`] (unless
+/// `options.non_finite` skips such points), [`NbhdError::EmptyInput`],
+/// [`NbhdError::Degenerate`] when no neighbourhood reaches 3 points — or, with `steps == 0`
+/// (an estimate of the geometry alone), when every normal is flagged degenerate —
+/// [`NbhdError::OutOfMemory`] when the neighbourhoods of `k` do not fit in memory.
 pub fn smooth_with_progress(
     points: &[DVec3],
     options: &SmoothOptions,
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<SmoothResult> {
     options.validate()?;
+    match finite_subset(points, options.non_finite)? {
+        None => smooth_finite(points, options, progress),
+        Some((index, finite)) => Ok(scatter_result(
+            smooth_finite(&finite, options, progress)?,
+            points,
+            &index,
+        )),
+    }
+}
+
+/// [`smooth_with_progress`] on finite points.
+fn smooth_finite(
+    points: &[DVec3],
+    options: &SmoothOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+) -> Result<SmoothResult> {
     check_points(points)?;
     let total = options.steps as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
@@ -382,6 +517,8 @@ pub fn smooth_with_progress(
         },
     };
     let mut table = cut_to(knn, eps);
+    let relative_eps = matches!(options.epsilon, Length::Relative(_));
+    check_not_degenerate(&table, None, eps, h, relative_eps)?;
     let min_neighbors = table.min_row_len();
     let mut cur = points.to_vec();
     if options.steps > 0 {
@@ -416,7 +553,11 @@ pub fn smooth_with_progress(
                 eps,
             );
         }
-        point_outputs_with(&cur, &table, options, &res)?
+        let outputs = point_outputs_with(&cur, &table, options, &res)?;
+        if options.steps == 0 {
+            check_not_degenerate(&table, Some(&outputs), eps, h, relative_eps)?;
+        }
+        outputs
     } else {
         Vec::new()
     };

@@ -110,6 +110,9 @@ pub struct RobustOptions {
     /// Compute the per-point outputs of the result (as [`super::smooth`] does, with the robust
     /// normals in place of the covariance normals).
     pub outputs: bool,
+    /// Points with a NaN or infinite coordinate: rejected, or skipped (left unmoved, NaN
+    /// outputs and normals), as [`SmoothOptions::non_finite`].
+    pub non_finite: crate::NonFinitePolicy,
 }
 
 impl Default for RobustOptions {
@@ -125,6 +128,7 @@ impl Default for RobustOptions {
             tau: 1.0,
             orientation: Orientation::Unoriented,
             outputs: true,
+            non_finite: crate::NonFinitePolicy::Reject,
         }
     }
 }
@@ -208,12 +212,39 @@ pub fn smooth_robust_with_progress(
 
 /// [`smooth_robust_with_progress`] that also returns the normals, the noise estimates and the
 /// displacement of each iteration.
+///
+/// Non-finite points are refused or skipped as `options.non_finite` says (skipped points keep
+/// their index, are left unmoved and get NaN outputs and normals);
+/// [`NbhdError::Degenerate`] when no neighbourhood reaches 3 points.
 pub fn smooth_robust_report(
     points: &[DVec3],
     options: &RobustOptions,
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<RobustReport> {
     options.validate()?;
+    match super::finite_subset(points, options.non_finite)? {
+        None => robust_finite(points, options, progress),
+        Some((index, finite)) => {
+            let r = robust_finite(&finite, options, progress)?;
+            let mut normals = vec![DVec3::splat(f64::NAN); points.len()];
+            for (&i, &n) in index.iter().zip(&r.normals) {
+                normals[i] = n;
+            }
+            Ok(RobustReport {
+                result: super::scatter_result(r.result, points, &index),
+                normals,
+                ..r
+            })
+        }
+    }
+}
+
+/// [`smooth_robust_report`] on finite points.
+fn robust_finite(
+    points: &[DVec3],
+    options: &RobustOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+) -> Result<RobustReport> {
     check_points(points)?;
     let total = options.max_iterations as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
@@ -233,6 +264,7 @@ pub fn smooth_robust_report(
     }
     let eps = options.epsilon.resolve(h);
     let mut wide = within(&knn, eps);
+    super::check_not_degenerate(&wide, None, eps, h, relative)?;
     let min_neighbors = truncate(&wide, options.k).min_row_len();
     let mut cur = points.to_vec();
     let mut normals: Vec<DVec3> = Vec::new();
