@@ -197,10 +197,14 @@ impl fmt::Display for NbhdError {
             InvalidOption { name, reason } => write!(f, "option {name}: {reason}"),
             Cancelled => write!(f, "cancelled by the progress callback"),
             ThreadPool(m) => write!(f, "could not create the thread pool: {m}"),
-            RadiusOutOfRange { radius, scalar, max } => write!(
+            RadiusOutOfRange {
+                radius,
+                scalar,
+                max,
+            } => write!(
                 f,
-                "radius {radius} is too large for a tree of {scalar}: squared distances are \
-                 compared in {scalar}, and radii above {max:e} overflow it"
+                "radius {radius:e} is too large for a tree of {scalar}: squared distances are \
+                 compared in {scalar}, and radii above {max:.4e} overflow it"
             ),
             SizeOverflow { what } => write!(f, "{what} overflows the address space"),
             OutOfMemory { what, bytes } => write!(

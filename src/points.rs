@@ -76,15 +76,15 @@ impl<'a> PointsView<'a> {
         if dim == 0 {
             return Err(NbhdError::ZeroDimension);
         }
-        let point_bytes = dim
-            .checked_mul(scalar.size())
-            .ok_or_else(|| NbhdError::SizeOverflow {
-                what: format!(
-                    "dim {dim} times {} bytes per coordinate ({:?})",
-                    scalar.size(),
-                    scalar
-                ),
-            })?;
+        let point_bytes =
+            dim.checked_mul(scalar.size())
+                .ok_or_else(|| NbhdError::SizeOverflow {
+                    what: format!(
+                        "dim {dim} times {} bytes per coordinate ({:?})",
+                        scalar.size(),
+                        scalar
+                    ),
+                })?;
         if stride < point_bytes {
             return Err(NbhdError::StrideTooSmall {
                 stride,

@@ -443,11 +443,10 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
 /// `what` and the bytes when the memory cannot be had.
 pub(crate) fn try_filled<V: Clone>(n: usize, value: V, what: &'static str) -> Result<Vec<V>> {
     let mut v = Vec::new();
-    v.try_reserve_exact(n)
-        .map_err(|_| NbhdError::OutOfMemory {
-            what,
-            bytes: n as u128 * std::mem::size_of::<V>() as u128,
-        })?;
+    v.try_reserve_exact(n).map_err(|_| NbhdError::OutOfMemory {
+        what,
+        bytes: n as u128 * std::mem::size_of::<V>() as u128,
+    })?;
     v.resize(n, value);
     Ok(v)
 }
@@ -456,11 +455,10 @@ pub(crate) fn try_filled<V: Clone>(n: usize, value: V, what: &'static str) -> Re
 /// touched (and placed) by the threads that write the table next.
 fn try_filled_par<V: Copy + Send + Sync>(n: usize, value: V, what: &'static str) -> Result<Vec<V>> {
     let mut v = Vec::new();
-    v.try_reserve_exact(n)
-        .map_err(|_| NbhdError::OutOfMemory {
-            what,
-            bytes: n as u128 * std::mem::size_of::<V>() as u128,
-        })?;
+    v.try_reserve_exact(n).map_err(|_| NbhdError::OutOfMemory {
+        what,
+        bytes: n as u128 * std::mem::size_of::<V>() as u128,
+    })?;
     v.par_extend(rayon::iter::repeat_n(value, n));
     Ok(v)
 }

@@ -13,11 +13,11 @@ use super::smooth::{
     read_points, run_with_progress, units_of_length,
 };
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::types::{c_enum_field, c_field, nbhd_non_finite_policy, nbhd_points, nbhd_scalar_type};
 use super::types::read_enum;
+use super::types::{c_enum_field, c_field, nbhd_non_finite_policy, nbhd_points, nbhd_scalar_type};
 use crate::error::NbhdError;
 use crate::scalar::ScalarType;
-use crate::smooth::{self, SmoothOptions};
+use crate::smooth::{self, Curvature, SmoothOptions};
 
 /// Options of nbhd_estimate_normals. Start from nbhd_normal_options_default() and change
 /// what you need.
@@ -153,6 +153,8 @@ unsafe fn read_options(options: *const nbhd_normal_options) -> Result<NormalArgs
         k: c_field!(o, k),
         epsilon,
         steps: 0,
+        // the normals do not read λ; absolute, it needs no spacing (coincident points)
+        lambda: Curvature::Absolute(1.0),
         orientation,
         non_finite: c_enum_field!(o, non_finite, nbhd_non_finite_policy).into(),
         outputs: true,
@@ -332,6 +334,7 @@ mod tests {
         let d = SmoothOptions::default();
         assert_eq!((a.core.k, a.core.epsilon), (d.k, d.epsilon));
         assert_eq!(a.core.non_finite, d.non_finite);
+        assert_eq!((a.core.steps, a.core.outputs), (0, true));
         let c = nbhd_normal_options_default();
         // SAFETY: a live, initialised options struct.
         let b = unsafe { read_options(&c) }.unwrap();

@@ -9,8 +9,8 @@ use glam::DVec3;
 
 use super::args::{check_aligned, check_optional, check_ptr};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::types::{nbhd_non_finite_policy, nbhd_points};
 use super::types::{c_bool_field, c_enum, c_enum_field, c_field, CEnum, PointsArg};
+use super::types::{nbhd_non_finite_policy, nbhd_points};
 use crate::geometry::Orientation;
 use crate::points::PointsView;
 use crate::scalar::ScalarType;
