@@ -24,7 +24,7 @@ use crate::geometry::curvature::{
 };
 use crate::geometry::neighbors::{mean_spacing_of, neighbor_table, neighbor_table_and_order};
 use crate::geometry::normals::{
-    local_frames, offsets_frame, offsets_normal, orient, LocalFrame, Orientation,
+    local_frames, offsets_frame, offsets_normal, orient_with_progress, LocalFrame, Orientation,
 };
 use crate::query::Neighborhood;
 use crate::table::NeighborTable;
@@ -553,7 +553,10 @@ fn smooth_finite(
                 eps,
             );
         }
-        let outputs = point_outputs_with(&cur, &table, options, &res)?;
+        let base = options.steps as f64 + 0.2;
+        let outputs = point_outputs_reporting(&cur, &table, options, &res, &mut |f| {
+            report(base + 0.7 * f, Stage::Outputs).is_ok()
+        })?;
         if options.steps == 0 {
             check_not_degenerate(&table, Some(&outputs), eps, h, relative_eps)?;
         }
@@ -826,8 +829,25 @@ fn point_outputs_with(
     options: &SmoothOptions,
     res: &Resolved,
 ) -> Result<Vec<PointOutput>> {
+    point_outputs_reporting(points, table, options, res, &mut |_| true)
+}
+
+/// [`point_outputs_with`] that reports the progress of the orientation (the part that can take
+/// long, see [`orient_with_progress`]) as a fraction of the outputs' work.
+fn point_outputs_reporting(
+    points: &[DVec3],
+    table: &NeighborTable<f64>,
+    options: &SmoothOptions,
+    res: &Resolved,
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Result<Vec<PointOutput>> {
     let mut frames = local_frames(points, table)?;
-    orient(points, table, &mut frames, options.orientation)?;
+    if !progress(0.3) {
+        return Err(NbhdError::Cancelled);
+    }
+    orient_with_progress(points, table, &mut frames, options.orientation, &mut |f| {
+        progress(0.3 + 0.5 * f)
+    })?;
     let principal =
         all_principal_curvatures(points, table, &frames, options.density, options.formula)?;
     let geo = Geometry {
