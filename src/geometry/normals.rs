@@ -61,10 +61,29 @@ pub(crate) fn offsets_frame(offsets: &[DVec3]) -> LocalFrame {
     frame_of(offsets.iter().copied(), offsets.len() + 1)
 }
 
+/// The power of two `f` that brings the largest coordinate of `offsets` near 1 (1 if they
+/// are all 0 or not finite): the covariance is taken of the offsets times `f` (thesis eq. 2.8
+/// in a scaled frame), so neither the squares of tiny offsets underflow nor those of huge
+/// ones overflow, over the whole finite range of f64; a power of two scales exactly.
+#[inline]
+pub(crate) fn unit_scale(offsets: impl Iterator<Item = DVec3>) -> f64 {
+    let m = offsets.fold(0.0f64, |m, d| m.max(d.abs().max_element()));
+    if m > 0.0 && m.is_finite() {
+        // 2^-e with 2^e <= m < 2^(e+1), built from the exponent bits (exact, no overflow)
+        let e = ((m.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+        let e = e.clamp(-1022, 1023);
+        f64::from_bits(((1023 - e) as u64) << 52)
+    } else {
+        1.0
+    }
+}
+
 fn frame_of(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> LocalFrame {
-    let m = covariance(offsets, count);
+    let f = unit_scale(offsets.clone());
+    let m = covariance(offsets.map(|d| d * f), count);
     let (values, vectors) = super::eigen::sym_eigen3_fast(m);
     let (values, flags) = checked_eigenvalues(values, count);
+    let values = values / (f * f);
     LocalFrame {
         normal: vectors[0],
         minor: vectors[1],
@@ -84,13 +103,14 @@ fn frame_of(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> Local
 /// the same flags as there. Allocation-free.
 pub(crate) fn offsets_normal(offsets: &[DVec3], sum: DVec3) -> (DVec3, DVec3, u8) {
     let count = offsets.len() + 1;
-    let m = covariance_about(offsets.iter().copied(), sum / count as f64);
+    let f = unit_scale(offsets.iter().copied());
+    let m = covariance_about(offsets.iter().map(|&d| d * f), sum * f / count as f64);
     let (values, normal) = super::eigen::sym_eigen3_smallest(m).unwrap_or_else(|| {
         let (values, vectors) = super::eigen::sym_eigen3_fast(m);
         (values, vectors[0])
     });
     let (values, flags) = checked_eigenvalues(values, count);
-    (normal, values, flags)
+    (normal, values / (f * f), flags)
 }
 
 /// The covariance matrix `M_i` of eq. 2.8 (a sum over `N_i ∪ {p_i}`, not divided by the count)

@@ -690,3 +690,36 @@ fn a_relative_epsilon_meant_as_absolute_is_refused_with_its_value() {
     };
     assert!(analyze(&s.points, &abs).is_ok());
 }
+
+#[test]
+fn extreme_magnitudes_give_scaled_geometry_not_nan() {
+    // a unit sphere scaled by 1e-150 ... 1e150: the same normals, curvatures scaled by 1/s,
+    // all finite (geometry is computed in a frame scaled to unit size)
+    let s = sample(&Sphere::new(1.0), 1500, 12);
+    let unit = analyze(&s.points, &SmoothOptions::default()).unwrap();
+    for e in [-150, -120, -90, -77, 80, 100, 150] {
+        let scale = 10f64.powi(e);
+        let pts: Vec<DVec3> = s.points.iter().map(|&p| p * scale).collect();
+        let r = analyze(&pts, &SmoothOptions::default()).unwrap();
+        for (a, b) in r.outputs.iter().zip(&unit.outputs) {
+            assert!(
+                a.normal.is_finite() && a.normal.dot(b.normal).abs() > 1.0 - 1e-9,
+                "1e{e}"
+            );
+            assert_eq!(a.normal_flags, b.normal_flags, "1e{e}");
+            let (ka, kb) = (a.principal.k1 * scale, b.principal.k1);
+            assert!(
+                a.principal.k1.is_finite() && a.mean_curvature.is_finite(),
+                "1e{e}"
+            );
+            assert!(
+                (ka - kb).abs() <= 1e-6 * kb.abs().max(1.0),
+                "1e{e}: {ka} vs {kb}"
+            );
+            assert!(
+                (a.covariance_quotient - b.covariance_quotient).abs() < 1e-9,
+                "1e{e}"
+            );
+        }
+    }
+}
