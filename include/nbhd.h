@@ -34,6 +34,20 @@
  *   - A radius is a plain Euclidean radius (not squared), passed as a double, inclusive:
  *     |x - q| <= radius, evaluated as squared distance <= radius * radius in the tree's type.
  *   - Distances come back squared.
+ *   - Range: squared distances must be finite in the tree's type. A radius whose square is not
+ *     (float: above about 1.8e19) is refused with NBHD_STATUS_INVALID_RADIUS; keep a float
+ *     tree's coordinates below about 5e18 in magnitude (double: 3e153), or distances between
+ *     far-apart points overflow. Normals and curvatures are computed in a frame scaled to each
+ *     neighbourhood, correct from the smallest to the largest magnitudes within that range.
+ *   - SMOOTHING AND NORMAL LENGTHS ARE RELATIVE BY DEFAULT: `epsilon` (and `lambda`) in
+ *     nbhd_smooth_options, nbhd_normal_options and nbhd_robust_options are multiples of the mean
+ *     spacing h of the points (or of 1/h), not lengths in the points' units, unless their
+ *     `*_units` field is NBHD_UNITS_ABSOLUTE. An epsilon so small that no neighbourhood reaches
+ *     3 points is refused with NBHD_STATUS_DEGENERATE, whose message gives it in the points'
+ *     units; nbhd_smooth_summary reports h and the epsilon used.
+ *   - Memory: a result that does not fit (a table with a radius covering every point, k =
+ *     SIZE_MAX) is NBHD_STATUS_OUT_OF_MEMORY with the bytes needed, never an abort. k never
+ *     usefully exceeds the number of points.
  *   - Results are ordered by (squared distance, index): ties are deterministic, and tables are
  *     identical for any number of threads.
  *
@@ -984,10 +998,12 @@ nbhd_build_options nbhd_build_options_default(void);
  * nothing needs freeing.
  *
  * Errors: NULL_POINTER (`points`, `points->data`, `out_tree`), MISALIGNED_POINTER,
- * INVALID_ARGUMENT (`points->scalar_type` not a value of the enum), EMPTY_INPUT (count 0, or
- * every point skipped), ZERO_DIMENSION, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (the
- * message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum field
- * out of range), THREAD_POOL.
+ * INVALID_ARGUMENT (`points->scalar_type` not a value of the enum; `points->dim * sizeof
+ * (scalar)` or `(count - 1) * stride` overflowing the address space — the message gives the
+ * values passed), EMPTY_INPUT (count 0, or every point skipped), ZERO_DIMENSION,
+ * STRIDE_TOO_SMALL (a stride below one point, with both sizes), TOO_MANY_POINTS, NON_FINITE
+ * (the message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum
+ * field out of range), THREAD_POOL. No other status is returned.
  *
  * Ownership: the caller owns `*out_tree` and frees it with nbhd_tree_free.
  *
@@ -1161,7 +1177,11 @@ nbhd_table_options nbhd_table_options_default(void);
  * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
  *
  * Errors: NULL_POINTER (`tree`, `spec`, `out_table`), MISALIGNED_POINTER, INVALID_ARGUMENT
- * (`spec->kind` out of range), INVALID_K, INVALID_RADIUS, THREAD_POOL.
+ * (`spec->kind` out of range), INVALID_K, INVALID_RADIUS (also a radius whose square
+ * overflows the tree's type, e.g. 1e20 on a float tree; the message gives the value passed),
+ * OUT_OF_MEMORY (the table does not fit: a radius covering every point of a large set, k =
+ * SIZE_MAX with KNN; the message gives the bytes needed — a KNN table's size is checked
+ * before any search), THREAD_POOL.
  *
  * Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
  *
@@ -1184,7 +1204,8 @@ nbhd_status nbhd_tree_neighborhoods(const nbhd_tree *tree,
  * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
  *
  * Errors: as nbhd_tree_neighborhoods, plus those of a points description (see
- * nbhd_tree_build), DIMENSION_MISMATCH and NON_FINITE_QUERY.
+ * nbhd_tree_build), DIMENSION_MISMATCH and NON_FINITE_QUERY (the message names the query's
+ * index and coordinate).
  *
  * Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
  *

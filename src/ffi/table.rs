@@ -61,7 +61,11 @@ unsafe fn hand_out(out: *mut *mut nbhd_neighborhoods, table: AnyTable) {
 /// On any error `*out_table` is set to NULL (if `out_table` is not NULL).
 ///
 /// Errors: NULL_POINTER (`tree`, `spec`, `out_table`), MISALIGNED_POINTER, INVALID_ARGUMENT
-/// (`spec->kind` out of range), INVALID_K, INVALID_RADIUS, THREAD_POOL.
+/// (`spec->kind` out of range), INVALID_K, INVALID_RADIUS (also a radius whose square
+/// overflows the tree's type, e.g. 1e20 on a float tree; the message gives the value passed),
+/// OUT_OF_MEMORY (the table does not fit: a radius covering every point of a large set, k =
+/// SIZE_MAX with KNN; the message gives the bytes needed — a KNN table's size is checked
+/// before any search), THREAD_POOL.
 ///
 /// Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
 ///
@@ -109,7 +113,8 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods(
 /// On any error `*out_table` is set to NULL (if `out_table` is not NULL).
 ///
 /// Errors: as nbhd_tree_neighborhoods, plus those of a points description (see
-/// nbhd_tree_build), DIMENSION_MISMATCH and NON_FINITE_QUERY.
+/// nbhd_tree_build), DIMENSION_MISMATCH and NON_FINITE_QUERY (the message names the query's
+/// index and coordinate).
 ///
 /// Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
 ///
