@@ -393,8 +393,8 @@ fn propagate(
         (i as u32, table.indices()[p])
     };
     components -= join(&best, &mut parent, &mut tree, &row_of_place);
-    for i in 0..n {
-        comp[i] = find(&mut parent, comp[i]);
+    for c in comp.iter_mut() {
+        *c = find(&mut parent, *c);
     }
     // the edges between components, in table order, with their weights
     let mut live: Vec<(u32, u32, f32)> = {
@@ -432,8 +432,8 @@ fn propagate(
         if added == 0 {
             break;
         }
-        for i in 0..n {
-            comp[i] = find(&mut parent, comp[i]);
+        for c in comp.iter_mut() {
+            *c = find(&mut parent, *c);
         }
         components -= added;
         let comp = &comp;
