@@ -34,6 +34,20 @@
  *   - A radius is a plain Euclidean radius (not squared), passed as a double, inclusive:
  *     |x - q| <= radius, evaluated as squared distance <= radius * radius in the tree's type.
  *   - Distances come back squared.
+ *   - Range: squared distances must be finite in the tree's type. A radius whose square is not
+ *     (float: above about 1.8e19) is refused with NBHD_STATUS_INVALID_RADIUS; keep a float
+ *     tree's coordinates below about 5e18 in magnitude (double: 3e153), or distances between
+ *     far-apart points overflow. Normals and curvatures are computed in a frame scaled to each
+ *     neighbourhood, correct from the smallest to the largest magnitudes within that range.
+ *   - SMOOTHING AND NORMAL LENGTHS ARE RELATIVE BY DEFAULT: `epsilon` (and `lambda`) in
+ *     nbhd_smooth_options, nbhd_normal_options and nbhd_robust_options are multiples of the mean
+ *     spacing h of the points (or of 1/h), not lengths in the points' units, unless their
+ *     `*_units` field is NBHD_UNITS_ABSOLUTE. An epsilon so small that no neighbourhood reaches
+ *     3 points is refused with NBHD_STATUS_DEGENERATE, whose message gives it in the points'
+ *     units; nbhd_smooth_summary reports h and the epsilon used.
+ *   - Memory: a result that does not fit (a table with a radius covering every point, k =
+ *     SIZE_MAX) is NBHD_STATUS_OUT_OF_MEMORY with the bytes needed, never an abort. k never
+ *     usefully exceeds the number of points.
  *   - Results are ordered by (squared distance, index): ties are deterministic, and tables are
  *     identical for any number of threads.
  *
@@ -213,7 +227,9 @@ typedef enum {
     NBHD_STATUS_MISALIGNED_POINTER = 2,
     /**
      * An argument has a value outside its range: an enum field holding no value of its
-     * enum, a row or index beyond its range.
+     * enum, a row or index beyond its range, or a points description whose byte size
+     * overflows the address space (`dim * sizeof(scalar)` or `(count - 1) * stride`; the
+     * message names the argument and the values passed).
      */
     NBHD_STATUS_INVALID_ARGUMENT = 3,
     /**
@@ -250,7 +266,9 @@ typedef enum {
      */
     NBHD_STATUS_INVALID_K = 11,
     /**
-     * The radius is negative, NaN or infinite (in the tree's scalar type).
+     * The radius is negative, NaN or infinite, or too large for the tree's scalar type: its
+     * square must be finite there (for a float tree, at most about 1.8e19; the message gives
+     * the value passed and the limit).
      */
     NBHD_STATUS_INVALID_RADIUS = 12,
     /**
@@ -282,6 +300,21 @@ typedef enum {
      * The objects passed to the call are unchanged and may still be used and freed.
      */
     NBHD_STATUS_INTERNAL = 19,
+    /**
+     * Every neighbourhood is degenerate, so the normals (and curvatures) would be
+     * meaningless: no neighbourhood reached 3 points (the point and two neighbours), or every
+     * normal is flagged degenerate. The usual cause is an ε far below the spacing of the
+     * points — for example `epsilon = 0.01` meant as 1 cm but left in the default RELATIVE
+     * units (0.01 × the mean spacing). The message gives ε resolved to the points' units and
+     * the mean spacing h. Nothing is written.
+     */
+    NBHD_STATUS_DEGENERATE = 20,
+    /**
+     * The result does not fit in memory: an allocation whose size comes from the input
+     * (a table with very many neighbours, a huge k) failed. The message says how many bytes
+     * were needed. Nothing is written and the process is unharmed.
+     */
+    NBHD_STATUS_OUT_OF_MEMORY = 21,
 } nbhd_status;
 
 /**
@@ -590,8 +623,14 @@ typedef struct {
 typedef bool (*nbhd_progress_fn)(double fraction, nbhd_stage stage, void *user_data);
 
 /**
- * Options of nbhd_smooth, nbhd_estimate_normals and nbhd_estimate_curvatures. Start from
- * nbhd_smooth_options_default() and change what you need.
+ * Options of nbhd_smooth and nbhd_estimate_curvatures (nbhd_estimate_normals has its own,
+ * nbhd_normal_options). Start from nbhd_smooth_options_default() and change what you need.
+ *
+ * UNITS: `epsilon`, `lambda` and a curvature `feature_threshold` are RELATIVE by default —
+ * multiples of the mean spacing h of the points (or of 1/h) — not lengths in the points'
+ * units. `epsilon = 0.01` means 0.01 h, far below any neighbour, and is refused with
+ * NBHD_STATUS_DEGENERATE; for 1 cm in metre coordinates set `epsilon = 0.01` AND
+ * `epsilon_units = NBHD_UNITS_ABSOLUTE`. nbhd_smooth_summary reports h and ε resolved.
  *
  * Neighbourhoods are the thesis' ε-k-neighbourhoods (Section 2.1.1): the `k` nearest other
  * points within `epsilon`, computed once on the input and cached (Section 2.1.3) unless
@@ -682,6 +721,14 @@ typedef struct {
      * Passed to `progress` unchanged. Default NULL.
      */
     void *progress_user_data;
+    /**
+     * Points with a NaN or infinite coordinate (the holes of organized scans), as in
+     * nbhd_build_options: REJECT (the default) refuses the input with NON_FINITE; SKIP
+     * computes on the finite points only, and a skipped point keeps its index, is left
+     * unmoved (its coordinates are copied to `out_coords` as they are) and gets NaN geometry
+     * with `normal_flags` 8.
+     */
+    nbhd_non_finite_policy non_finite;
 } nbhd_smooth_options;
 
 /**
@@ -735,7 +782,8 @@ typedef struct {
     double max_covariance;
     /**
      * Why the normal is not to be trusted, 0 if it is: 1 fewer than 3 points, 2 collinear or
-     * coincident points, 4 the normal is not unique (isotropic neighbourhood).
+     * coincident points, 4 the normal is not unique (isotropic neighbourhood), 8 the point
+     * was skipped for a NaN or infinite coordinate (everything else is NaN then).
      */
     uint8_t normal_flags;
     /**
@@ -769,6 +817,108 @@ typedef struct {
      */
     size_t min_neighbors;
 } nbhd_smooth_summary;
+
+/**
+ * Options of nbhd_estimate_normals. Start from nbhd_normal_options_default() and change
+ * what you need.
+ *
+ * The neighbourhood of a point is the thesis' ε-k-neighbourhood (Section 2.1.1): its `k`
+ * nearest other points within `epsilon`; the normal is the eigenvector of the smallest
+ * eigenvalue of the covariance of the point and its neighbourhood (eq. 2.8–2.10), as PCL's
+ * NormalEstimation computes it.
+ *
+ * UNITS: `epsilon` is RELATIVE by default — a multiple of the mean spacing h of the points
+ * (the mean distance of a point to its nearest other point), NOT a length in the points'
+ * units. The default `epsilon = 6` means 6 h. For a radius in the points' units (say 1 cm in
+ * metre coordinates) set BOTH `epsilon = 0.01` and `epsilon_units = NBHD_UNITS_ABSOLUTE`;
+ * a relative `epsilon = 0.01` (0.01 h, below any neighbour) is refused with
+ * NBHD_STATUS_DEGENERATE, whose message gives ε resolved to the points' units.
+ */
+typedef struct {
+    /**
+     * Maximum valence k (>= 1): at most the k nearest other points. Default 15.
+     */
+    size_t k;
+    /**
+     * Influence radius ε (> 0), plain (not squared), inclusive; in `epsilon_units`.
+     * Default 6 (relative: 6 h).
+     */
+    double epsilon;
+    /**
+     * Units of `epsilon`: NBHD_UNITS_RELATIVE (multiples of h, the default) or
+     * NBHD_UNITS_ABSOLUTE (the points' own units).
+     */
+    nbhd_units epsilon_units;
+    /**
+     * Orientation of the normals. Default unoriented. NBHD_ORIENTATION_TOWARD_POINT with the
+     * sensor position is PCL's flipNormalTowardsViewpoint: dot(viewpoint − p, n) >= 0.
+     */
+    nbhd_orientation orientation;
+    /**
+     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+     */
+    double orientation_point[3];
+    /**
+     * Points with a NaN or infinite coordinate: REJECT (the default) refuses the input with
+     * NON_FINITE; SKIP leaves them out — they keep their index and get a NaN normal (and
+     * curvature) and flag 8.
+     */
+    nbhd_non_finite_policy non_finite;
+    /**
+     * Worker threads: 0 the shared pool, n >= 1 a pool of n threads made for this call.
+     * Results are identical for every value. Default 0.
+     */
+    size_t threads;
+    /**
+     * Called with the progress of the run; NULL for none. Default NULL.
+     */
+    nbhd_progress_fn progress;
+    /**
+     * Passed to `progress` unchanged. Default NULL.
+     */
+    void *progress_user_data;
+} nbhd_normal_options;
+
+/**
+ * Where nbhd_estimate_normals writes, in the caller's layout: point i's normal (x, y, z) at
+ * byte `i * normals_stride` from `normals`, its curvature at byte `i * curvature_stride`
+ * from `curvature`, all of `scalar_type`; only these values are written, other bytes of a
+ * strided layout are left alone. Strides of 0 mean packed (3 values, 1 value).
+ *
+ * For `pcl::PointCloud<pcl::Normal> cloud` (float normal_x/y/z, then curvature, 32 bytes):
+ * `{&cloud[0].normal_x, sizeof(pcl::Normal), NBHD_SCALAR_TYPE_F32, &cloud[0].curvature,
+ * sizeof(pcl::Normal), NULL}`; for `pcl::PointNormal` use `&cloud[0].normal_x`,
+ * `&cloud[0].curvature` and `sizeof(pcl::PointNormal)`.
+ */
+typedef struct {
+    /**
+     * First byte of point 0's normal. Must not be NULL.
+     */
+    void *normals;
+    /**
+     * Bytes from one point's normal to the next: 0 (packed) or at least 3 values.
+     */
+    size_t normals_stride;
+    /**
+     * Type of every value written (normals and curvature).
+     */
+    nbhd_scalar_type scalar_type;
+    /**
+     * First byte of point 0's curvature, or NULL for none. The curvature is PCL's: the
+     * surface variation λ0 / (λ0 + λ1 + λ2) of the covariance eigenvalues (0 on a plane, at
+     * most 1/3), as pcl::NormalEstimation writes to `curvature`.
+     */
+    void *curvature;
+    /**
+     * Bytes from one point's curvature to the next: 0 (packed) or at least one value.
+     */
+    size_t curvature_stride;
+    /**
+     * `points->count` bytes (packed), or NULL: 0 for a well-defined normal, otherwise the
+     * bits of nbhd_point_geometry.normal_flags (8: the point was skipped).
+     */
+    uint8_t *flags;
+} nbhd_normals_output;
 
 /**
  * Options of nbhd_smooth_robust. Start from nbhd_robust_options_default(); the defaults are
@@ -837,6 +987,11 @@ typedef struct {
      * Passed to `progress` unchanged. Default NULL.
      */
     void *progress_user_data;
+    /**
+     * Points with a NaN or infinite coordinate: REJECT (the default) or SKIP (left unmoved,
+     * NaN geometry with `normal_flags` 8), as nbhd_smooth_options.non_finite.
+     */
+    nbhd_non_finite_policy non_finite;
 } nbhd_robust_options;
 
 #ifdef __cplusplus
@@ -888,10 +1043,12 @@ nbhd_build_options nbhd_build_options_default(void);
  * nothing needs freeing.
  *
  * Errors: NULL_POINTER (`points`, `points->data`, `out_tree`), MISALIGNED_POINTER,
- * INVALID_ARGUMENT (`points->scalar_type` not a value of the enum), EMPTY_INPUT (count 0, or
- * every point skipped), ZERO_DIMENSION, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (the
- * message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum field
- * out of range), THREAD_POOL.
+ * INVALID_ARGUMENT (`points->scalar_type` not a value of the enum; `points->dim * sizeof
+ * (scalar)` or `(count - 1) * stride` overflowing the address space — the message gives the
+ * values passed), EMPTY_INPUT (count 0, or every point skipped), ZERO_DIMENSION,
+ * STRIDE_TOO_SMALL (a stride below one point, with both sizes), TOO_MANY_POINTS, NON_FINITE
+ * (the message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum
+ * field out of range), THREAD_POOL. No other status is returned.
  *
  * Ownership: the caller owns `*out_tree` and frees it with nbhd_tree_free.
  *
@@ -1065,7 +1222,11 @@ nbhd_table_options nbhd_table_options_default(void);
  * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
  *
  * Errors: NULL_POINTER (`tree`, `spec`, `out_table`), MISALIGNED_POINTER, INVALID_ARGUMENT
- * (`spec->kind` out of range), INVALID_K, INVALID_RADIUS, THREAD_POOL.
+ * (`spec->kind` out of range), INVALID_K, INVALID_RADIUS (also a radius whose square
+ * overflows the tree's type, e.g. 1e20 on a float tree; the message gives the value passed),
+ * OUT_OF_MEMORY (the table does not fit: a radius covering every point of a large set, k =
+ * SIZE_MAX with KNN; the message gives the bytes needed — a KNN table's size is checked
+ * before any search), THREAD_POOL.
  *
  * Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
  *
@@ -1088,7 +1249,8 @@ nbhd_status nbhd_tree_neighborhoods(const nbhd_tree *tree,
  * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
  *
  * Errors: as nbhd_tree_neighborhoods, plus those of a points description (see
- * nbhd_tree_build), DIMENSION_MISMATCH and NON_FINITE_QUERY.
+ * nbhd_tree_build), DIMENSION_MISMATCH and NON_FINITE_QUERY (the message names the query's
+ * index and coordinate).
  *
  * Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
  *
@@ -1198,10 +1360,14 @@ nbhd_smooth_options nbhd_smooth_options_default(void);
  * threads.
  *
  * Errors: NULL_POINTER (`points`, `points->data`, `out_coords`), MISALIGNED_POINTER,
- * INVALID_ARGUMENT (dimension other than 3, an enum field out of range), EMPTY_INPUT,
- * STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (the message names the point), INVALID_K,
- * INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two distinct
- * points, ...), THREAD_POOL, CANCELLED (the progress callback returned false).
+ * INVALID_ARGUMENT (dimension other than 3, an enum field out of range, a buffer size that
+ * overflows), EMPTY_INPUT (also: no finite point left to SKIP), STRIDE_TOO_SMALL,
+ * TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT; the message names the point),
+ * INVALID_K, INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two
+ * distinct points, ...), DEGENERATE (no neighbourhood reached 3 points: ε far below the
+ * spacing — check `epsilon_units`; the message gives ε in the points' units), OUT_OF_MEMORY
+ * (the neighbourhoods of `k` do not fit in memory, e.g. k = SIZE_MAX on a large set),
+ * THREAD_POOL, CANCELLED (the progress callback returned false).
  *
  * # Safety
  * `points` must describe readable memory (see nbhd_points); `out_coords` must be writable
@@ -1215,34 +1381,13 @@ nbhd_status nbhd_smooth(const nbhd_points *points,
                         nbhd_smooth_summary *out_summary);
 
 /**
- * Estimates the normal of every point (thesis eq. 2.8–2.10: the eigenvector of the smallest
- * eigenvalue of the covariance of the point and its ε-k-neighbourhood), oriented as
- * `options->orientation` asks. `out_normals` receives `3 * points->count` doubles (x, y, z
- * per point); `out_flags` (may be NULL) one byte per point, 0 for a well-defined normal and
- * otherwise the bits of nbhd_point_geometry.normal_flags. Degenerate neighbourhoods give a
- * finite unit vector and a flag, never NaN. Only the neighbourhood options (`k`, `epsilon`,
- * `epsilon_units`), `orientation` and `threads`/`progress` apply.
- *
- * Errors: as nbhd_smooth.
- *
- * # Safety
- * `points` must describe readable memory; `out_normals` must be writable for
- * `3 * points->count` doubles; `out_flags` NULL or writable for `points->count` bytes;
- * `options` NULL or readable.
- */
-nbhd_status nbhd_estimate_normals(const nbhd_points *points,
-                                  const nbhd_smooth_options *options,
-                                  double *out_normals,
-                                  uint8_t *out_flags);
-
-/**
  * Estimates normals and curvatures of every point without moving it: the normal, the
  * principal curvatures and directions of the Weingarten estimate (thesis eq. 2.26–2.29 with
  * 2.25) and the other per-point values of nbhd_point_geometry, over the ε-k-neighbourhoods
  * of `options`. `out_geometry` receives `points->count` elements; `out_summary` (may be NULL)
  * the spacing and thresholds used.
  *
- * Errors: as nbhd_smooth.
+ * Errors: as nbhd_smooth; DEGENERATE also when every normal is flagged degenerate.
  *
  * # Safety
  * `points` must describe readable memory; `out_geometry` must be writable for
@@ -1252,6 +1397,42 @@ nbhd_status nbhd_estimate_curvatures(const nbhd_points *points,
                                      const nbhd_smooth_options *options,
                                      nbhd_point_geometry *out_geometry,
                                      nbhd_smooth_summary *out_summary);
+
+/**
+ * The default normal options: the 15 nearest other points within 6 h (RELATIVE units: h is
+ * the mean spacing), unoriented, non-finite points rejected, the shared thread pool, no
+ * progress callback.
+ */
+nbhd_normal_options nbhd_normal_options_default(void);
+
+/**
+ * Estimates the normal of every point (thesis eq. 2.8–2.10: the eigenvector of the smallest
+ * eigenvalue of the covariance of the point and its ε-k-neighbourhood), oriented as
+ * `options->orientation` asks, and writes it into the caller's layout `*out` (see
+ * nbhd_normals_output: a packed `double[3 * count]`, or the fields of `pcl::Normal` /
+ * `pcl::PointNormal` in place), with PCL's curvature (the surface variation) and the
+ * degeneracy flags if asked. Degenerate neighbourhoods give a finite unit vector and a flag,
+ * never NaN; skipped points (NBHD_NON_FINITE_POLICY_SKIP) a NaN normal and curvature.
+ * `options` may be NULL for the defaults (NOTE: ε is then 6 × the mean spacing, RELATIVE
+ * units). Nothing is written unless the call succeeds.
+ *
+ * Errors: NULL_POINTER (`points`, `points->data`, `out`, `out->normals`),
+ * MISALIGNED_POINTER, INVALID_ARGUMENT (dimension other than 3, an enum field out of range,
+ * an output stride smaller than its values or one that overflows), EMPTY_INPUT,
+ * STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite REJECT), INVALID_K,
+ * INVALID_OPTION (ε not > 0, relative units on a set without two distinct points, a
+ * non-finite orientation point), DEGENERATE (no neighbourhood reached 3 points, or every
+ * normal is flagged: usually ε far too small — check `epsilon_units`; the message gives ε in
+ * the points' units), OUT_OF_MEMORY, THREAD_POOL, CANCELLED.
+ *
+ * # Safety
+ * `points` must describe readable memory; `out` must point to a readable
+ * nbhd_normals_output whose arrays are writable for `points->count` points in the layout it
+ * describes; `options` NULL or readable.
+ */
+nbhd_status nbhd_estimate_normals(const nbhd_points *points,
+                                  const nbhd_normal_options *options,
+                                  const nbhd_normals_output *out);
 
 /**
  * The default robust options: 24 neighbours within 12h, planes scored on 48, at most 10

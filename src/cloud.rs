@@ -111,7 +111,10 @@ pub(crate) fn resolve_query<'q, T: Scalar>(
                 });
             }
             if let Some(j) = coords.iter().position(|c| !c.is_finite()) {
-                return Err(NbhdError::NonFiniteQuery { coordinate: j });
+                return Err(NbhdError::NonFiniteQuery {
+                    query: None,
+                    coordinate: j,
+                });
             }
             Ok((coords, exclude))
         }

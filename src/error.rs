@@ -35,6 +35,8 @@ pub enum NbhdError {
     },
     /// A query point has a NaN or infinite coordinate.
     NonFiniteQuery {
+        /// Which query of a batch (`None` for a single query).
+        query: Option<usize>,
         /// Which coordinate.
         coordinate: usize,
     },
@@ -79,6 +81,62 @@ pub enum NbhdError {
     Cancelled,
     /// A worker thread pool could not be created.
     ThreadPool(String),
+    /// The radius is finite in the caller's type but not in the tree's scalar type, or its
+    /// square (the squared distances are compared in that type) overflows it.
+    RadiusOutOfRange {
+        /// The radius the caller passed.
+        radius: f64,
+        /// The tree's scalar type (`"f32"` or `"f64"`).
+        scalar: &'static str,
+        /// The largest radius whose square is finite in that type.
+        max: f64,
+    },
+    /// A size computed from the caller's description overflows the address space (for
+    /// example `dim × sizeof(scalar)` or `(count − 1) × stride`).
+    SizeOverflow {
+        /// Which argument and how the size was computed, with the values passed.
+        what: String,
+    },
+    /// The output does not fit in memory: an allocation of this size failed (or exceeds what
+    /// the address space can hold). Nothing was changed.
+    OutOfMemory {
+        /// What was being allocated.
+        what: &'static str,
+        /// Bytes needed (saturated at `u128::MAX` never reached in practice).
+        bytes: u128,
+    },
+    /// Every neighbourhood is degenerate: none reached 3 points (the point and two
+    /// neighbours), or every normal is flagged degenerate — usually because ε is far smaller
+    /// than the spacing of the points (a relative ε meant as an absolute length, or the
+    /// reverse). The result would be meaningless, so it is refused.
+    Degenerate {
+        /// Number of points (finite points, if others were skipped).
+        points: usize,
+        /// Size of the largest neighbourhood `|N_i| + 1`, with the point itself.
+        largest: usize,
+        /// Number of normals flagged degenerate.
+        flagged: usize,
+        /// ε resolved to the points' units.
+        epsilon: f64,
+        /// The mean spacing `h` of the points (relative lengths are multiples of it).
+        spacing: f64,
+        /// Whether ε was given relative to `h`.
+        relative: bool,
+    },
+}
+
+/// Bytes as a short human-readable size, e.g. "7.2 GB".
+fn human_bytes(b: u128) -> String {
+    let v = b as f64;
+    if v >= 1e12 {
+        format!("{:.1} TB", v / 1e12)
+    } else if v >= 1e9 {
+        format!("{:.1} GB", v / 1e9)
+    } else if v >= 1e6 {
+        format!("{:.1} MB", v / 1e6)
+    } else {
+        format!("{b} bytes")
+    }
 }
 
 impl fmt::Display for NbhdError {
@@ -101,12 +159,22 @@ impl fmt::Display for NbhdError {
                 f,
                 "point {index} has a NaN or infinite coordinate (coordinate {coordinate})"
             ),
-            NonFiniteQuery { coordinate } => {
+            NonFiniteQuery {
+                query: None,
+                coordinate,
+            } => {
                 write!(
                     f,
-                    "query point has a NaN or infinite coordinate ({coordinate})"
+                    "query point has a NaN or infinite coordinate (coordinate {coordinate})"
                 )
             }
+            NonFiniteQuery {
+                query: Some(q),
+                coordinate,
+            } => write!(
+                f,
+                "query point {q} has a NaN or infinite coordinate (coordinate {coordinate})"
+            ),
             TooManyPoints { count, max } => {
                 write!(f, "{count} points exceed the supported maximum of {max}")
             }
@@ -129,11 +197,75 @@ impl fmt::Display for NbhdError {
             InvalidOption { name, reason } => write!(f, "option {name}: {reason}"),
             Cancelled => write!(f, "cancelled by the progress callback"),
             ThreadPool(m) => write!(f, "could not create the thread pool: {m}"),
+            RadiusOutOfRange {
+                radius,
+                scalar,
+                max,
+            } => write!(
+                f,
+                "radius {radius:e} is too large for a tree of {scalar}: squared distances are \
+                 compared in {scalar}, and radii above {max:.4e} overflow it"
+            ),
+            SizeOverflow { what } => write!(f, "{what} overflows the address space"),
+            OutOfMemory { what, bytes } => write!(
+                f,
+                "out of memory: {what} needs {bytes} bytes ({}), which could not be allocated",
+                human_bytes(*bytes)
+            ),
+            Degenerate {
+                points,
+                largest,
+                flagged,
+                epsilon,
+                spacing,
+                relative,
+            } => {
+                if *largest < 3 {
+                    write!(
+                        f,
+                        "no neighbourhood reached 3 points (the largest has {largest} with the \
+                         point itself), so no normal is defined"
+                    )?;
+                } else {
+                    write!(
+                        f,
+                        "all {flagged} of {points} normals are degenerate (too few, collinear \
+                         or coincident neighbours)"
+                    )?;
+                }
+                write!(
+                    f,
+                    ": epsilon resolved to {epsilon:e} in the points' units (mean spacing h = \
+                     {spacing:e})"
+                )?;
+                if *relative {
+                    write!(
+                        f,
+                        "; epsilon was taken relative to h (epsilon_units RELATIVE): for a \
+                         length in the points' units set epsilon_units to ABSOLUTE"
+                    )
+                } else {
+                    write!(f, "; epsilon was taken in the points' units (ABSOLUTE)")
+                }
+            }
         }
     }
 }
 
 impl std::error::Error for NbhdError {}
+
+impl NbhdError {
+    /// The error of query `index` of a batch: a non-finite query names it.
+    pub(crate) fn for_query(self, index: usize) -> Self {
+        match self {
+            NbhdError::NonFiniteQuery { coordinate, .. } => NbhdError::NonFiniteQuery {
+                query: Some(index),
+                coordinate,
+            },
+            e => e,
+        }
+    }
+}
 
 /// Result alias used throughout nbhd.
 pub type Result<T> = std::result::Result<T, NbhdError>;

@@ -65,8 +65,8 @@ impl<'a> PointsView<'a> {
     ///
     /// Errors: [`NbhdError::ZeroDimension`], [`NbhdError::StrideTooSmall`],
     /// [`NbhdError::EmptyInput`], [`NbhdError::TooManyPoints`], and
-    /// [`NbhdError::BufferTooSmall`] (with `len` 0 and `needed` `usize::MAX`) when the size
-    /// overflows the address space.
+    /// [`NbhdError::SizeOverflow`] when `dim × scalar size` or the buffer size overflows the
+    /// address space.
     pub fn required_bytes(
         count: usize,
         dim: usize,
@@ -76,9 +76,15 @@ impl<'a> PointsView<'a> {
         if dim == 0 {
             return Err(NbhdError::ZeroDimension);
         }
-        let point_bytes = dim
-            .checked_mul(scalar.size())
-            .ok_or(NbhdError::ZeroDimension)?;
+        let point_bytes =
+            dim.checked_mul(scalar.size())
+                .ok_or_else(|| NbhdError::SizeOverflow {
+                    what: format!(
+                        "dim {dim} times {} bytes per coordinate ({:?})",
+                        scalar.size(),
+                        scalar
+                    ),
+                })?;
         if stride < point_bytes {
             return Err(NbhdError::StrideTooSmall {
                 stride,
@@ -98,10 +104,11 @@ impl<'a> PointsView<'a> {
             .checked_mul(stride)
             .and_then(|b| b.checked_add(point_bytes))
             .filter(|&b| b <= isize::MAX as usize)
-            .ok_or(NbhdError::BufferTooSmall {
-                what: "point buffer (bytes)",
-                len: 0,
-                needed: usize::MAX,
+            .ok_or_else(|| NbhdError::SizeOverflow {
+                what: format!(
+                    "the point buffer of count {count} and stride {stride} \
+                     ((count - 1) * stride + {point_bytes} bytes)"
+                ),
             })
     }
 
@@ -270,8 +277,14 @@ mod tests {
         ));
         assert!(matches!(
             PointsView::required_bytes(1 << 31, 1, usize::MAX / 4, ScalarType::F32),
-            Err(NbhdError::BufferTooSmall { .. })
+            Err(NbhdError::SizeOverflow { .. })
         ));
+        let e = PointsView::required_bytes(2, usize::MAX / 2, 0, ScalarType::F64).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with(&format!("dim {} times 8 bytes", usize::MAX / 2)),
+            "{e}"
+        );
     }
 
     #[test]

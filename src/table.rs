@@ -2,10 +2,12 @@
 //! tree) as compressed rows, `offsets` + caller `indices` + `sq_dists`, row `i` belonging to
 //! query `i` (for a tree's own points: the caller's point `i`; skipped points get empty rows).
 
-use crate::error::Result;
+use crate::error::{NbhdError, Result};
 use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::OnceLock;
 
 /// Compressed rows of neighbours.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -107,8 +109,115 @@ pub(crate) const CHUNK: usize = 1024;
 /// table.
 const ROW_BLOCK: usize = 4096;
 
-/// Row lengths, neighbour indices and squared distances of one chunk of queries.
-pub(crate) type RowsChunk<T> = (Vec<usize>, Vec<u32>, Vec<T>);
+/// Row lengths, neighbour indices and squared distances of one chunk of queries, and the bytes
+/// an allocation for them failed to get (`.3`; the chunk takes no more rows once set).
+///
+/// Rows are appended through [`RowsChunk::reserve_row`], which reserves fallibly: the size of
+/// a table comes from the caller's input (a radius covering every point, a huge `k`), and an
+/// allocation failure must become [`NbhdError::OutOfMemory`], never an abort. The bytes a
+/// chunk holds count against [`IN_CHUNKS`] until it is dropped.
+#[derive(Debug, Default)]
+pub(crate) struct RowsChunk<T>(
+    pub(crate) Vec<usize>,
+    pub(crate) Vec<u32>,
+    pub(crate) Vec<T>,
+    pub(crate) Option<u128>,
+    /// Bytes of this chunk counted in [`IN_CHUNKS`].
+    u64,
+);
+
+impl<T> RowsChunk<T> {
+    /// Makes room for one more row of `len` neighbours; `false` (and the failure recorded)
+    /// if the memory cannot be had — the allocator refuses, or the rows of all tables being
+    /// computed would exceed the machine's memory ([`memory_limit`]) — or if an earlier
+    /// reservation of this chunk failed.
+    #[inline]
+    pub(crate) fn reserve_row(&mut self, len: usize) -> bool {
+        if self.3.is_some() {
+            return false;
+        }
+        let needed = self.1.len() as u128 + len as u128;
+        if needed > self.1.capacity() as u128 {
+            // the buffers grow (at least doubling): count the new capacity
+            let grown = (needed.max(2 * self.1.capacity() as u128) * entry_bytes::<T>())
+                .min(u128::from(u64::MAX)) as u64;
+            let extra = grown.saturating_sub(self.4);
+            let before = IN_CHUNKS.fetch_add(extra, Ordering::Relaxed);
+            self.4 += extra;
+            let fits = u128::from(before) + u128::from(extra) <= memory_limit()
+                && self.1.try_reserve(needed as usize - self.1.len()).is_ok()
+                && self.2.try_reserve(needed as usize - self.2.len()).is_ok();
+            if !fits {
+                self.3 = Some(needed * entry_bytes::<T>());
+                return false;
+            }
+        }
+        if self.0.try_reserve(1).is_err() {
+            self.3 = Some(needed * entry_bytes::<T>());
+            return false;
+        }
+        true
+    }
+}
+
+impl<T> Drop for RowsChunk<T> {
+    fn drop(&mut self) {
+        IN_CHUNKS.fetch_sub(self.4, Ordering::Relaxed);
+    }
+}
+
+/// Bytes held by the rows of tables being computed, in the whole process.
+static IN_CHUNKS: AtomicU64 = AtomicU64::new(0);
+
+/// Bytes of one table entry: an index and a squared distance.
+fn entry_bytes<T>() -> u128 {
+    (std::mem::size_of::<u32>() + std::mem::size_of::<T>()) as u128
+}
+
+/// The most a table may need: the machine's physical memory plus swap, as the system reports
+/// it (`u128::MAX` where it does not). A table's rows are gathered per chunk on several
+/// threads at once, each piece below what the allocator would refuse on its own; their sum
+/// must not run the process into the system's out-of-memory killer, so it is bounded here.
+fn memory_limit() -> u128 {
+    static LIMIT: OnceLock<u128> = OnceLock::new();
+    *LIMIT.get_or_init(|| {
+        #[cfg(target_os = "linux")]
+        {
+            // SAFETY: an all-zero sysinfo is a valid value of the plain C struct.
+            let mut info: libc::sysinfo = unsafe { std::mem::zeroed() };
+            // SAFETY: `info` is a valid, writable sysinfo struct; the call only writes it.
+            if unsafe { libc::sysinfo(&mut info) } == 0 {
+                let unit = u128::from(info.mem_unit.max(1));
+                return (info.totalram as u128 + info.totalswap as u128) * unit;
+            }
+        }
+        u128::MAX
+    })
+}
+
+/// Refuses, before any search, a k-nearest table whose size is known in advance and cannot
+/// fit: every row of a `Knn { k }` table holds `min(k, points − 1)` neighbours (with the point
+/// itself excluded) or `min(k, points)`, so `rows × that` entries are needed
+/// ([`NbhdError::OutOfMemory`] with the bytes). `k` never usefully exceeds the number of points.
+pub(crate) fn check_knn_total<T: Scalar>(
+    rows: usize,
+    points: usize,
+    nbhd: Neighborhood<T>,
+    exclude_self: bool,
+) -> Result<()> {
+    if let Neighborhood::Knn { k } = nbhd {
+        let per_row = k.min(points.saturating_sub(usize::from(exclude_self)));
+        let bytes = rows as u128 * per_row as u128 * entry_bytes::<T>();
+        if bytes > memory_limit() || bytes > isize::MAX as u128 {
+            return Err(NbhdError::OutOfMemory {
+                what: "the k-nearest neighbour table (rows × min(k, points) entries of an index \
+                       and a squared distance)",
+                bytes,
+            });
+        }
+    }
+    Ok(())
+}
 
 /// Options of the all-point neighbourhood table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -137,6 +246,12 @@ pub fn neighborhoods_of_all<T: Scalar, S: NeighborSearch<T> + ?Sized>(
     nbhd: Neighborhood<T>,
     exclude_self: bool,
 ) -> Result<NeighborTable<T>> {
+    check_knn_total(
+        searcher.source_len(),
+        searcher.source_len(),
+        nbhd,
+        exclude_self,
+    )?;
     rows_in_parallel(
         searcher.source_len(),
         |i, row, _| {
@@ -168,13 +283,16 @@ pub fn neighborhoods_of_points<T: Scalar, S: NeighborSearch<T> + ?Sized>(
             got: queries.dim(),
         });
     }
+    check_knn_total(queries.len(), searcher.source_len(), nbhd, false)?;
     let d = queries.dim();
     rows_in_parallel(
         queries.len(),
         |i, row, q| {
             q.resize(d, T::ZERO);
             queries.read_point(i, q);
-            searcher.search(Query::point(q), nbhd, row)
+            searcher
+                .search(Query::point(q), nbhd, row)
+                .map_err(|e| e.for_query(i))
         },
         nbhd,
     )
@@ -206,14 +324,17 @@ pub(crate) fn rows_in_work_order<T: Scalar>(
         .map(|c| c * CHUNK)
         .chain(std::iter::once(work))
         .collect();
-    rows_in_chunks(rows, &bounds, row_of, |c, (lens, ids, dists)| {
+    rows_in_chunks(rows, &bounds, row_of, |c, chunk| {
         let mut row: Vec<Neighbor<T>> = Vec::new();
         let mut scratch: Vec<T> = Vec::new();
         for w in bounds[c]..bounds[c + 1] {
             query(w, &mut row, &mut scratch)?;
-            lens.push(row.len());
-            ids.extend(row.iter().map(|nb| nb.index));
-            dists.extend(row.iter().map(|nb| nb.sq_dist));
+            if !chunk.reserve_row(row.len()) {
+                break;
+            }
+            chunk.0.push(row.len());
+            chunk.1.extend(row.iter().map(|nb| nb.index));
+            chunk.2.extend(row.iter().map(|nb| nb.sq_dist));
         }
         Ok(())
     })
@@ -230,19 +351,38 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
     row_of: impl Fn(usize) -> usize + Sync,
     fill: impl Fn(usize, &mut RowsChunk<T>) -> Result<()> + Sync,
 ) -> Result<NeighborTable<T>> {
+    let out_of_memory = AtomicBool::new(false);
     let chunks: Vec<Result<RowsChunk<T>>> = (0..bounds.len().saturating_sub(1))
         .into_par_iter()
         .map(|c| {
-            let mut chunk = (Vec::new(), Vec::new(), Vec::new());
+            let mut chunk = RowsChunk::default();
+            if out_of_memory.load(Ordering::Relaxed) {
+                // another chunk's rows did not fit: the table is refused, skip the work
+                chunk.3 = Some(0);
+                return Ok(chunk);
+            }
             fill(c, &mut chunk)?;
+            if chunk.3.is_some() {
+                out_of_memory.store(true, Ordering::Relaxed);
+            }
             Ok(chunk)
         })
         .collect();
     let chunks: Vec<RowsChunk<T>> = chunks.into_iter().collect::<Result<_>>()?;
+    if let Some(failed) = chunks.iter().filter_map(|c| c.3).max() {
+        // The rows of one chunk did not fit; the whole table needs about that much for every
+        // chunk (an estimate from the failing chunk's share of the rows).
+        let n_chunks = bounds.len().saturating_sub(1).max(1) as u128;
+        return Err(NbhdError::OutOfMemory {
+            what: "the neighbour table (estimated from the rows of the first chunk that did \
+                   not fit, times the number of chunks)",
+            bytes: failed.saturating_mul(n_chunks),
+        });
+    }
     // Where each row is: its length and its chunk and start in that chunk's buffers.
-    let mut offsets = vec![0usize; rows + 1];
-    let mut source = vec![(0u32, 0usize); rows];
-    for (c, (lens, _, _)) in chunks.iter().enumerate() {
+    let mut offsets = try_zeroed::<usize>(rows + 1, "the table's row offsets")?;
+    let mut source = try_filled(rows, (0u32, 0usize), "the table's row sources")?;
+    for (c, RowsChunk(lens, ..)) in chunks.iter().enumerate() {
         let mut at = 0;
         for (j, &len) in lens.iter().enumerate() {
             let r = row_of(bounds[c] + j);
@@ -255,10 +395,20 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
         offsets[r + 1] += offsets[r];
     }
     let total = offsets[rows];
+    let table_bytes = total as u128 * entry_bytes::<T>();
+    if u128::from(IN_CHUNKS.load(Ordering::Relaxed)) + table_bytes > memory_limit() {
+        return Err(NbhdError::OutOfMemory {
+            what: "the neighbour table",
+            bytes: table_bytes,
+        });
+    }
     // Filled in parallel, by blocks of consecutive rows: each block is one contiguous piece of
-    // the output, gathered from the chunks. (The zeroed buffers come from the allocator as
-    // untouched pages, so they are first written here, by the workers, too.)
-    let (mut indices, mut sq_dists) = (vec![0u32; total], vec![T::ZERO; total]);
+    // the output, gathered from the chunks. (The buffers are reserved fallibly and filled by
+    // the workers, so their pages are first touched in parallel, too.)
+    let (mut indices, mut sq_dists) = (
+        try_filled_par(total, 0u32, "the neighbour table (indices)")?,
+        try_filled_par(total, T::ZERO, "the neighbour table (squared distances)")?,
+    );
     let mut blocks = Vec::with_capacity(rows.div_ceil(ROW_BLOCK));
     let (mut ids_rest, mut dists_rest) = (&mut indices[..], &mut sq_dists[..]);
     for first in (0..rows).step_by(ROW_BLOCK) {
@@ -277,7 +427,7 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
                 continue;
             }
             let (c, at) = source[r];
-            let (_, chunk_ids, chunk_dists) = &chunks[c as usize];
+            let RowsChunk(_, chunk_ids, chunk_dists, ..) = &chunks[c as usize];
             ids[from..to].copy_from_slice(&chunk_ids[at..at + to - from]);
             dists[from..to].copy_from_slice(&chunk_dists[at..at + to - from]);
         }
@@ -287,6 +437,35 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
         indices,
         sq_dists,
     })
+}
+
+/// `n` copies of `value` in a vector allocated fallibly: [`NbhdError::OutOfMemory`] naming
+/// `what` and the bytes when the memory cannot be had.
+pub(crate) fn try_filled<V: Clone>(n: usize, value: V, what: &'static str) -> Result<Vec<V>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| NbhdError::OutOfMemory {
+        what,
+        bytes: n as u128 * std::mem::size_of::<V>() as u128,
+    })?;
+    v.resize(n, value);
+    Ok(v)
+}
+
+/// [`try_filled`] filled by the workers of the current pool, so that the pages are first
+/// touched (and placed) by the threads that write the table next.
+fn try_filled_par<V: Copy + Send + Sync>(n: usize, value: V, what: &'static str) -> Result<Vec<V>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| NbhdError::OutOfMemory {
+        what,
+        bytes: n as u128 * std::mem::size_of::<V>() as u128,
+    })?;
+    v.par_extend(rayon::iter::repeat_n(value, n));
+    Ok(v)
+}
+
+/// [`try_filled`] with zeros (`Default`).
+pub(crate) fn try_zeroed<V: Clone + Default>(n: usize, what: &'static str) -> Result<Vec<V>> {
+    try_filled(n, V::default(), what)
 }
 
 #[cfg(test)]

@@ -143,7 +143,10 @@ fn bad_queries() {
                 &mut out
             )
             .unwrap_err(),
-            NbhdError::NonFiniteQuery { coordinate: 1 }
+            NbhdError::NonFiniteQuery {
+                query: None,
+                coordinate: 1
+            }
         );
         assert_eq!(
             s.search(Query::stored(2), Neighborhood::Knn { k: 1 }, &mut out)
@@ -233,4 +236,193 @@ fn non_finite_points_of_large_clouds_on_several_threads() {
         let serial = KdTree::<f32>::build(&view, &BuildOptions { threads: 1, ..skip }).unwrap();
         assert!(t.same_structure(&serial), "threads={threads}");
     }
+}
+
+/// Sizes that overflow the address space name the argument and the values passed.
+#[test]
+fn size_overflows_name_the_values() {
+    let e = PointsView::required_bytes(4, usize::MAX / 4, 0, ScalarType::F64).unwrap_err();
+    assert!(matches!(e, NbhdError::SizeOverflow { .. }));
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "dim {} times 8 bytes per coordinate (F64) overflows the address space",
+            usize::MAX / 4
+        )
+    );
+    let e = PointsView::required_bytes(3, 3, usize::MAX / 2, ScalarType::F32).unwrap_err();
+    assert!(
+        e.to_string().starts_with(&format!(
+            "the point buffer of count 3 and stride {}",
+            usize::MAX / 2
+        )),
+        "{e}"
+    );
+}
+
+/// A non-finite query of a batch is named by its index; a radius whose square overflows the
+/// tree's type is refused with the value passed.
+#[test]
+fn batch_queries_and_radii_out_of_range_are_named() {
+    let c: Vec<f32> = (0..30).map(|i| i as f32 * 0.1).collect();
+    let t = KdTree::<f32>::from_flat(&c, 3, &BuildOptions::default()).unwrap();
+    let q = [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, f32::NAN, 0.0];
+    let qv = PointsView::from_flat(&q, 3).unwrap();
+    let e = t
+        .neighborhoods_of(
+            &qv,
+            Neighborhood::Knn { k: 2 },
+            &nbhd::TableOptions::default(),
+        )
+        .unwrap_err();
+    assert_eq!(
+        e,
+        NbhdError::NonFiniteQuery {
+            query: Some(2),
+            coordinate: 1
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "query point 2 has a NaN or infinite coordinate (coordinate 1)"
+    );
+    let e = Neighborhood::<f32>::Radius {
+        radius: 1e20,
+        sorted: true,
+    }
+    .validate()
+    .unwrap_err();
+    assert!(
+        matches!(e, NbhdError::RadiusOutOfRange { scalar: "f32", .. }),
+        "{e}"
+    );
+    // 1e20 as an f32 is 1.0000000200408773e20
+    assert!(
+        e.to_string()
+            .starts_with("radius 1.0000000200408773e20 is too large for a tree of f32"),
+        "{e}"
+    );
+    assert!(Neighborhood::<f32>::Radius {
+        radius: 1e19,
+        sorted: true
+    }
+    .validate()
+    .is_ok());
+    assert!(Neighborhood::<f64>::Radius {
+        radius: 1e20,
+        sorted: true
+    }
+    .validate()
+    .is_ok());
+}
+
+/// Tables and smoothing whose output cannot fit in memory return
+/// [`NbhdError::OutOfMemory`] with the bytes needed, never abort: checked in a child process
+/// (this test binary run again) whose address space is limited with `RLIMIT_AS`.
+#[cfg(target_os = "linux")]
+#[test]
+fn output_that_does_not_fit_is_an_error_not_an_abort() {
+    const CHILD: &str = "NBHD_OOM_CHILD";
+    if std::env::var_os(CHILD).is_some() {
+        oom_child();
+        return;
+    }
+    let exe = std::env::current_exe().unwrap();
+    let out = std::process::Command::new(exe)
+        .args([
+            "--exact",
+            "output_that_does_not_fit_is_an_error_not_an_abort",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(CHILD, "1")
+        .output()
+        .unwrap();
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "child failed: {:?}\n{text}",
+        out.status
+    );
+    assert!(text.contains("oom child: all checks passed"), "{text}");
+}
+
+#[cfg(target_os = "linux")]
+fn oom_child() {
+    use nbhd::smooth::{smooth, Length, SmoothOptions};
+    use nbhd::TableOptions;
+    // 300,000 points in the unit cube
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let c: Vec<f32> = (0..900_000).map(|_| next() as f32).collect();
+    let t = KdTree::<f32>::from_flat(&c, 3, &BuildOptions::default()).unwrap();
+    let pts: Vec<glam::DVec3> = c
+        .chunks(3)
+        .map(|p| glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .collect();
+    // the address space now plus 768 MB
+    let statm = std::fs::read_to_string("/proc/self/statm").unwrap();
+    let pages: u64 = statm.split_whitespace().next().unwrap().parse().unwrap();
+    // SAFETY: sysconf has no preconditions.
+    let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) } as u64;
+    let limit = pages * page + (768 << 20);
+    let lim = libc::rlimit {
+        rlim_cur: limit,
+        rlim_max: limit,
+    };
+    // SAFETY: a valid rlimit struct for the calling process.
+    assert_eq!(unsafe { libc::setrlimit(libc::RLIMIT_AS, &lim) }, 0);
+    let opts = TableOptions::default();
+    let oom = |r: nbhd::Result<nbhd::NeighborTable<f32>>| match r {
+        Err(e @ NbhdError::OutOfMemory { .. }) => {
+            assert!(e.to_string().contains(" bytes ("), "{e}");
+        }
+        other => panic!("expected OutOfMemory, got {:?}", other.map(|t| t.total())),
+    };
+    let all = Neighborhood::Radius {
+        radius: 10.0f32,
+        sorted: true,
+    };
+    oom(t.neighborhoods(all, &opts));
+    oom(t.neighborhoods(
+        Neighborhood::KnnRadius {
+            k: 1_000_000_000,
+            radius: 10.0,
+        },
+        &opts,
+    ));
+    oom(t.neighborhoods(
+        Neighborhood::KnnRadius {
+            k: usize::MAX,
+            radius: 10.0,
+        },
+        &opts,
+    ));
+    match t.neighborhoods(Neighborhood::Knn { k: usize::MAX }, &opts) {
+        Err(NbhdError::OutOfMemory { bytes, .. }) => {
+            assert_eq!(bytes, 300_000u128 * 299_999 * 8)
+        }
+        other => panic!("{:?}", other.map(|t| t.total())),
+    }
+    let qv = PointsView::from_flat(&c, 3).unwrap();
+    oom(t.neighborhoods_of(&qv, all, &opts));
+    let so = SmoothOptions {
+        k: usize::MAX,
+        epsilon: Length::Absolute(1e300),
+        ..SmoothOptions::default()
+    };
+    assert!(matches!(
+        smooth(&pts, &so),
+        Err(NbhdError::OutOfMemory { .. })
+    ));
+    // the process is unharmed
+    let ok = t.neighborhoods(Neighborhood::Knn { k: 8 }, &opts).unwrap();
+    assert_eq!(ok.total(), 300_000 * 8);
+    println!("oom child: all checks passed");
 }

@@ -346,10 +346,24 @@ std::map<std::string, double> NbhdFilterPlugin::applyFilter(FilterId id, VertexA
     std::vector<float> normals(3 * n), qual;
     std::size_t degenerate = 0;
     if (id == FP_COMPUTE_NORMALS) {
-        std::vector<double> nd(3 * n);
         std::vector<std::uint8_t> flags(n);
-        fail_if(nbhd_estimate_normals(&pts, &o, nd.data(), flags.data()));
-        for (std::size_t i = 0; i < 3 * n; ++i) normals[i] = float(nd[i]);
+        // The normals' own options: the neighbourhood, orientation and callback chosen above.
+        nbhd_normal_options no = nbhd_normal_options_default();
+        no.k = o.k;
+        no.epsilon = o.epsilon;
+        no.epsilon_units = o.epsilon_units;
+        no.orientation = o.orientation;
+        for (int j = 0; j < 3; ++j) no.orientation_point[j] = o.orientation_point[j];
+        no.threads = o.threads;
+        no.progress = o.progress;
+        no.progress_user_data = o.progress_user_data;
+        // Written as floats straight into `normals` (packed x, y, z).
+        nbhd_normals_output nout{};
+        nout.normals = normals.data();
+        nout.normals_stride = 0;
+        nout.scalar_type = NBHD_SCALAR_TYPE_F32;
+        nout.flags = flags.data();
+        fail_if(nbhd_estimate_normals(&pts, &no, &nout));
         degenerate = std::size_t(std::count_if(flags.begin(), flags.end(), [](std::uint8_t f) { return f != 0; }));
     } else {
         std::vector<nbhd_point_geometry> g(n);

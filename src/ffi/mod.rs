@@ -33,10 +33,13 @@ pub mod table;
 
 pub mod smooth;
 
+pub mod normals;
+
 pub mod robust;
 
 mod args;
 
+pub use normals::*;
 pub use query::*;
 pub use robust::*;
 pub use smooth::*;

@@ -129,7 +129,7 @@ unsafe fn run<T: FfiScalar>(
         },
     };
     T::with_scratch(|found| {
-        tree.search(query, nbhd.to_core(), found)?;
+        tree.search(query, nbhd.to_core()?, found)?;
         // SAFETY: `count` is non-NULL, aligned and writable (checked by the caller of `run`).
         unsafe { count.write(found.len()) };
         if found.len() > out.capacity {

@@ -11,7 +11,7 @@ use super::smooth::{
     units_of_length, write_coords, write_outputs,
 };
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::types::{c_enum_field, c_field, nbhd_points};
+use super::types::{c_enum_field, c_field, nbhd_non_finite_policy, nbhd_points};
 use crate::smooth::{self, RobustOptions};
 
 /// Options of nbhd_smooth_robust. Start from nbhd_robust_options_default(); the defaults are
@@ -53,6 +53,9 @@ pub struct nbhd_robust_options {
     pub progress: nbhd_progress_fn,
     /// Passed to `progress` unchanged. Default NULL.
     pub progress_user_data: *mut c_void,
+    /// Points with a NaN or infinite coordinate: REJECT (the default) or SKIP (left unmoved,
+    /// NaN geometry with `normal_flags` 8), as nbhd_smooth_options.non_finite.
+    pub non_finite: nbhd_non_finite_policy,
 }
 
 fn default_options() -> nbhd_robust_options {
@@ -74,6 +77,7 @@ fn default_options() -> nbhd_robust_options {
         threads: 0,
         progress: None,
         progress_user_data: std::ptr::null_mut(),
+        non_finite: d.non_finite.into(),
     }
 }
 
@@ -120,6 +124,7 @@ unsafe fn read_options(
         feature_angle: c_field!(o, feature_angle),
         tau: c_field!(o, tau),
         orientation,
+        non_finite: c_enum_field!(o, non_finite, nbhd_non_finite_policy).into(),
         ..RobustOptions::default()
     };
     Ok((

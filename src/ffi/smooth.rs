@@ -9,8 +9,8 @@ use glam::DVec3;
 
 use super::args::{check_aligned, check_optional, check_ptr};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::types::nbhd_points;
 use super::types::{c_bool_field, c_enum, c_enum_field, c_field, CEnum, PointsArg};
+use super::types::{nbhd_non_finite_policy, nbhd_points};
 use crate::geometry::Orientation;
 use crate::points::PointsView;
 use crate::scalar::ScalarType;
@@ -125,8 +125,14 @@ impl From<Stage> for nbhd_stage {
 pub type nbhd_progress_fn =
     Option<unsafe extern "C" fn(fraction: f64, stage: nbhd_stage, user_data: *mut c_void) -> bool>;
 
-/// Options of nbhd_smooth, nbhd_estimate_normals and nbhd_estimate_curvatures. Start from
-/// nbhd_smooth_options_default() and change what you need.
+/// Options of nbhd_smooth and nbhd_estimate_curvatures (nbhd_estimate_normals has its own,
+/// nbhd_normal_options). Start from nbhd_smooth_options_default() and change what you need.
+///
+/// UNITS: `epsilon`, `lambda` and a curvature `feature_threshold` are RELATIVE by default —
+/// multiples of the mean spacing h of the points (or of 1/h) — not lengths in the points'
+/// units. `epsilon = 0.01` means 0.01 h, far below any neighbour, and is refused with
+/// NBHD_STATUS_DEGENERATE; for 1 cm in metre coordinates set `epsilon = 0.01` AND
+/// `epsilon_units = NBHD_UNITS_ABSOLUTE`. nbhd_smooth_summary reports h and ε resolved.
 ///
 /// Neighbourhoods are the thesis' ε-k-neighbourhoods (Section 2.1.1): the `k` nearest other
 /// points within `epsilon`, computed once on the input and cached (Section 2.1.3) unless
@@ -180,6 +186,12 @@ pub struct nbhd_smooth_options {
     pub progress: nbhd_progress_fn,
     /// Passed to `progress` unchanged. Default NULL.
     pub progress_user_data: *mut c_void,
+    /// Points with a NaN or infinite coordinate (the holes of organized scans), as in
+    /// nbhd_build_options: REJECT (the default) refuses the input with NON_FINITE; SKIP
+    /// computes on the finite points only, and a skipped point keeps its index, is left
+    /// unmoved (its coordinates are copied to `out_coords` as they are) and gets NaN geometry
+    /// with `normal_flags` 8.
+    pub non_finite: nbhd_non_finite_policy,
 }
 
 /// The per-point geometry the thesis' program colours by (Section 7.3), on the final points.
@@ -210,7 +222,8 @@ pub struct nbhd_point_geometry {
     /// 'MaxCov': the largest covariance eigenvalue over the neighbourhood size.
     pub max_covariance: f64,
     /// Why the normal is not to be trusted, 0 if it is: 1 fewer than 3 points, 2 collinear or
-    /// coincident points, 4 the normal is not unique (isotropic neighbourhood).
+    /// coincident points, 4 the normal is not unique (isotropic neighbourhood), 8 the point
+    /// was skipped for a NaN or infinite coordinate (everything else is NaN then).
     pub normal_flags: u8,
     /// Whether the feature criterion selects the point.
     pub feature: bool,
@@ -310,6 +323,7 @@ fn default_options() -> nbhd_smooth_options {
         threads: 0,
         progress: None,
         progress_user_data: std::ptr::null_mut(),
+        non_finite: d.non_finite.into(),
     }
 }
 
@@ -418,6 +432,7 @@ unsafe fn read_options(options: *const nbhd_smooth_options) -> Result<SmoothArgs
         constrain_interior,
         update_neighbors: c_bool_field!(o, update_neighbors),
         orientation,
+        non_finite: c_enum_field!(o, non_finite, nbhd_non_finite_policy).into(),
         ..SmoothOptions::default()
     };
     Ok(SmoothArgs {
@@ -604,10 +619,14 @@ pub(super) unsafe fn write_outputs(
 /// threads.
 ///
 /// Errors: NULL_POINTER (`points`, `points->data`, `out_coords`), MISALIGNED_POINTER,
-/// INVALID_ARGUMENT (dimension other than 3, an enum field out of range), EMPTY_INPUT,
-/// STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (the message names the point), INVALID_K,
-/// INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two distinct
-/// points, ...), THREAD_POOL, CANCELLED (the progress callback returned false).
+/// INVALID_ARGUMENT (dimension other than 3, an enum field out of range, a buffer size that
+/// overflows), EMPTY_INPUT (also: no finite point left to SKIP), STRIDE_TOO_SMALL,
+/// TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT; the message names the point),
+/// INVALID_K, INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two
+/// distinct points, ...), DEGENERATE (no neighbourhood reached 3 points: ε far below the
+/// spacing — check `epsilon_units`; the message gives ε in the points' units), OUT_OF_MEMORY
+/// (the neighbourhoods of `k` do not fit in memory, e.g. k = SIZE_MAX on a large set),
+/// THREAD_POOL, CANCELLED (the progress callback returned false).
 ///
 /// # Safety
 /// `points` must describe readable memory (see nbhd_points); `out_coords` must be writable
@@ -641,57 +660,13 @@ pub unsafe extern "C" fn nbhd_smooth(
     })
 }
 
-/// Estimates the normal of every point (thesis eq. 2.8–2.10: the eigenvector of the smallest
-/// eigenvalue of the covariance of the point and its ε-k-neighbourhood), oriented as
-/// `options->orientation` asks. `out_normals` receives `3 * points->count` doubles (x, y, z
-/// per point); `out_flags` (may be NULL) one byte per point, 0 for a well-defined normal and
-/// otherwise the bits of nbhd_point_geometry.normal_flags. Degenerate neighbourhoods give a
-/// finite unit vector and a flag, never NaN. Only the neighbourhood options (`k`, `epsilon`,
-/// `epsilon_units`), `orientation` and `threads`/`progress` apply.
-///
-/// Errors: as nbhd_smooth.
-///
-/// # Safety
-/// `points` must describe readable memory; `out_normals` must be writable for
-/// `3 * points->count` doubles; `out_flags` NULL or writable for `points->count` bytes;
-/// `options` NULL or readable.
-#[no_mangle]
-pub unsafe extern "C" fn nbhd_estimate_normals(
-    points: *const nbhd_points,
-    options: *const nbhd_smooth_options,
-    out_normals: *mut f64,
-    out_flags: *mut u8,
-) -> nbhd_status {
-    guard("nbhd_estimate_normals", || {
-        // SAFETY: forwarded from the caller.
-        let (_, pts) = unsafe { read_points(points) }?;
-        check_ptr(out_normals.cast_const(), "out_normals")?;
-        // SAFETY: forwarded from the caller.
-        let args = unsafe { read_options(options) }?;
-        let result = run(&pts, &args, true)?;
-        let normals: Vec<f64> = result
-            .outputs
-            .iter()
-            .flat_map(|o| o.normal.to_array())
-            .collect();
-        // SAFETY: forwarded from the caller.
-        unsafe { write_all(out_normals, &normals, "out_normals") }?;
-        if !out_flags.is_null() {
-            let flags: Vec<u8> = result.outputs.iter().map(|o| o.normal_flags).collect();
-            // SAFETY: forwarded from the caller.
-            unsafe { write_all(out_flags, &flags, "out_flags") }?;
-        }
-        Ok(())
-    })
-}
-
 /// Estimates normals and curvatures of every point without moving it: the normal, the
 /// principal curvatures and directions of the Weingarten estimate (thesis eq. 2.26–2.29 with
 /// 2.25) and the other per-point values of nbhd_point_geometry, over the ε-k-neighbourhoods
 /// of `options`. `out_geometry` receives `points->count` elements; `out_summary` (may be NULL)
 /// the spacing and thresholds used.
 ///
-/// Errors: as nbhd_smooth.
+/// Errors: as nbhd_smooth; DEGENERATE also when every normal is flagged degenerate.
 ///
 /// # Safety
 /// `points` must describe readable memory; `out_geometry` must be writable for
@@ -813,12 +788,12 @@ mod tests {
     #[test]
     fn bad_options_are_named() {
         let data = sphere_points();
-        let mut out = vec![0f64; data.len()];
+        let mut geo = vec![nbhd_point_geometry::default(); data.len() / 3];
         let mut o = nbhd_smooth_options_default();
         o.k = 0;
-        // SAFETY: the descriptor matches `data`; `out` holds 3 doubles per point.
+        // SAFETY: the descriptor matches `data`; `geo` holds one element per point.
         let s = unsafe {
-            nbhd_estimate_normals(&desc(&data), &o, out.as_mut_ptr(), std::ptr::null_mut())
+            nbhd_estimate_curvatures(&desc(&data), &o, geo.as_mut_ptr(), std::ptr::null_mut())
         };
         assert_eq!(s, nbhd_status::InvalidK);
         let mut o = nbhd_smooth_options_default();
@@ -830,7 +805,7 @@ mod tests {
         };
         // SAFETY: as above.
         let s = unsafe {
-            nbhd_estimate_normals(&desc(&data), &o, out.as_mut_ptr(), std::ptr::null_mut())
+            nbhd_estimate_curvatures(&desc(&data), &o, geo.as_mut_ptr(), std::ptr::null_mut())
         };
         assert_eq!(s, nbhd_status::InvalidArgument);
     }

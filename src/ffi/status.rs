@@ -20,7 +20,9 @@ pub enum nbhd_status {
     /// A pointer argument is not aligned for the type it points to (the message names it).
     MisalignedPointer = 2,
     /// An argument has a value outside its range: an enum field holding no value of its
-    /// enum, a row or index beyond its range.
+    /// enum, a row or index beyond its range, or a points description whose byte size
+    /// overflows the address space (`dim * sizeof(scalar)` or `(count - 1) * stride`; the
+    /// message names the argument and the values passed).
     InvalidArgument = 3,
     /// The point set is empty: count 0, or no finite point left after skipping.
     EmptyInput = 4,
@@ -39,7 +41,9 @@ pub enum nbhd_status {
     TooManyPoints = 10,
     /// k is 0.
     InvalidK = 11,
-    /// The radius is negative, NaN or infinite (in the tree's scalar type).
+    /// The radius is negative, NaN or infinite, or too large for the tree's scalar type: its
+    /// square must be finite there (for a float tree, at most about 1.8e19; the message gives
+    /// the value passed and the limit).
     InvalidRadius = 12,
     /// Query points have a different dimension from the tree.
     DimensionMismatch = 13,
@@ -56,10 +60,21 @@ pub enum nbhd_status {
     /// A bug in nbhd: a Rust panic was caught at the ABI boundary (the message has its text).
     /// The objects passed to the call are unchanged and may still be used and freed.
     Internal = 19,
+    /// Every neighbourhood is degenerate, so the normals (and curvatures) would be
+    /// meaningless: no neighbourhood reached 3 points (the point and two neighbours), or every
+    /// normal is flagged degenerate. The usual cause is an ε far below the spacing of the
+    /// points — for example `epsilon = 0.01` meant as 1 cm but left in the default RELATIVE
+    /// units (0.01 × the mean spacing). The message gives ε resolved to the points' units and
+    /// the mean spacing h. Nothing is written.
+    Degenerate = 20,
+    /// The result does not fit in memory: an allocation whose size comes from the input
+    /// (a table with very many neighbours, a huge k) failed. The message says how many bytes
+    /// were needed. Nothing is written and the process is unharmed.
+    OutOfMemory = 21,
 }
 
 impl nbhd_status {
-    const ALL: [nbhd_status; 20] = [
+    const ALL: [nbhd_status; 22] = [
         nbhd_status::Ok,
         nbhd_status::NullPointer,
         nbhd_status::MisalignedPointer,
@@ -80,6 +95,8 @@ impl nbhd_status {
         nbhd_status::ThreadPool,
         nbhd_status::Cancelled,
         nbhd_status::Internal,
+        nbhd_status::Degenerate,
+        nbhd_status::OutOfMemory,
     ];
 
     /// A short, static description.
@@ -106,6 +123,8 @@ impl nbhd_status {
             ThreadPool => c"a thread pool could not be created",
             Cancelled => c"cancelled",
             Internal => c"internal error in nbhd (a bug; please report it)",
+            Degenerate => c"every neighbourhood is degenerate (is epsilon in the right units?)",
+            OutOfMemory => c"out of memory",
         }
     }
 }
@@ -160,6 +179,10 @@ impl FfiError {
                 NbhdError::InvalidOption { .. } => S::InvalidOption,
                 NbhdError::Cancelled => S::Cancelled,
                 NbhdError::ThreadPool(_) => S::ThreadPool,
+                NbhdError::RadiusOutOfRange { .. } => S::InvalidRadius,
+                NbhdError::SizeOverflow { .. } => S::InvalidArgument,
+                NbhdError::OutOfMemory { .. } => S::OutOfMemory,
+                NbhdError::Degenerate { .. } => S::Degenerate,
             },
         }
     }
@@ -370,7 +393,7 @@ mod tests {
             let text = unsafe { CStr::from_ptr(nbhd_status_string(s as c_int)) };
             assert!(!text.to_bytes().is_empty());
         }
-        for bad in [-1, 20, c_int::MAX, c_int::MIN] {
+        for bad in [-1, 22, c_int::MAX, c_int::MIN] {
             // SAFETY: as above.
             let text = unsafe { CStr::from_ptr(nbhd_status_string(bad)) };
             assert_eq!(text.to_str().unwrap(), "unknown status");

@@ -61,7 +61,11 @@ unsafe fn hand_out(out: *mut *mut nbhd_neighborhoods, table: AnyTable) {
 /// On any error `*out_table` is set to NULL (if `out_table` is not NULL).
 ///
 /// Errors: NULL_POINTER (`tree`, `spec`, `out_table`), MISALIGNED_POINTER, INVALID_ARGUMENT
-/// (`spec->kind` out of range), INVALID_K, INVALID_RADIUS, THREAD_POOL.
+/// (`spec->kind` out of range), INVALID_K, INVALID_RADIUS (also a radius whose square
+/// overflows the tree's type, e.g. 1e20 on a float tree; the message gives the value passed),
+/// OUT_OF_MEMORY (the table does not fit: a radius covering every point of a large set, k =
+/// SIZE_MAX with KNN; the message gives the bytes needed — a KNN table's size is checked
+/// before any search), THREAD_POOL.
 ///
 /// Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
 ///
@@ -88,10 +92,10 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods(
         };
         let table = match &tree.inner {
             super::tree::AnyTree::F32(t) => {
-                AnyTable::F32(t.neighborhoods(nbhd.to_core(), &options)?)
+                AnyTable::F32(t.neighborhoods(nbhd.to_core()?, &options)?)
             }
             super::tree::AnyTree::F64(t) => {
-                AnyTable::F64(t.neighborhoods(nbhd.to_core(), &options)?)
+                AnyTable::F64(t.neighborhoods(nbhd.to_core()?, &options)?)
             }
         };
         // SAFETY: `out` was checked by `init_out`.
@@ -109,7 +113,8 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods(
 /// On any error `*out_table` is set to NULL (if `out_table` is not NULL).
 ///
 /// Errors: as nbhd_tree_neighborhoods, plus those of a points description (see
-/// nbhd_tree_build), DIMENSION_MISMATCH and NON_FINITE_QUERY.
+/// nbhd_tree_build), DIMENSION_MISMATCH and NON_FINITE_QUERY (the message names the query's
+/// index and coordinate).
 ///
 /// Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
 ///
@@ -140,10 +145,10 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods_of(
         let view = unsafe { queries.view() }?;
         let table = match &tree.inner {
             super::tree::AnyTree::F32(t) => {
-                AnyTable::F32(t.neighborhoods_of(&view, nbhd.to_core(), &options)?)
+                AnyTable::F32(t.neighborhoods_of(&view, nbhd.to_core()?, &options)?)
             }
             super::tree::AnyTree::F64(t) => {
-                AnyTable::F64(t.neighborhoods_of(&view, nbhd.to_core(), &options)?)
+                AnyTable::F64(t.neighborhoods_of(&view, nbhd.to_core()?, &options)?)
             }
         };
         // SAFETY: `out` was checked by `init_out`.

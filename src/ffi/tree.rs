@@ -56,10 +56,12 @@ pub extern "C" fn nbhd_build_options_default() -> nbhd_build_options {
 /// nothing needs freeing.
 ///
 /// Errors: NULL_POINTER (`points`, `points->data`, `out_tree`), MISALIGNED_POINTER,
-/// INVALID_ARGUMENT (`points->scalar_type` not a value of the enum), EMPTY_INPUT (count 0, or
-/// every point skipped), ZERO_DIMENSION, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (the
-/// message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum field
-/// out of range), THREAD_POOL.
+/// INVALID_ARGUMENT (`points->scalar_type` not a value of the enum; `points->dim * sizeof
+/// (scalar)` or `(count - 1) * stride` overflowing the address space — the message gives the
+/// values passed), EMPTY_INPUT (count 0, or every point skipped), ZERO_DIMENSION,
+/// STRIDE_TOO_SMALL (a stride below one point, with both sizes), TOO_MANY_POINTS, NON_FINITE
+/// (the message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum
+/// field out of range), THREAD_POOL. No other status is returned.
 ///
 /// Ownership: the caller owns `*out_tree` and frees it with nbhd_tree_free.
 ///

@@ -294,6 +294,8 @@ pub struct nbhd_points {
 
 /// A points description read from C and checked: what [`PointsView::new`] needs.
 pub(crate) struct PointsArg {
+    /// The argument's name, for messages.
+    arg: &'static str,
     data: *const u8,
     count: usize,
     dim: usize,
@@ -336,6 +338,7 @@ impl PointsArg {
             stride
         };
         Ok(Self {
+            arg,
             data: data.cast(),
             count,
             dim,
@@ -350,7 +353,13 @@ impl PointsArg {
     /// The description must be true: `(count - 1) * stride + dim * size` bytes readable from
     /// `data`, not written while the view lives.
     pub(crate) unsafe fn view<'a>(&self) -> Result<PointsView<'a>, FfiError> {
-        let len = PointsView::required_bytes(self.count, self.dim, self.stride, self.scalar)?;
+        let len = PointsView::required_bytes(self.count, self.dim, self.stride, self.scalar)
+            .map_err(|e| match e {
+                NbhdError::SizeOverflow { what } => NbhdError::SizeOverflow {
+                    what: format!("{}: {what}", self.arg),
+                },
+                e => e,
+            })?;
         // SAFETY: `data` is non-NULL (checked in `read`), `len` <= isize::MAX (checked by
         // `required_bytes`) and, by the caller's description, `len` bytes from `data` are
         // readable and not mutated while the view is used. u8 has no alignment requirement.
@@ -493,19 +502,29 @@ pub(crate) enum NbhdArg {
 impl NbhdArg {
     /// The core's neighbourhood in scalar type `T` (the radius rounded to `T`; the core
     /// validates `k` and the radius).
-    pub(crate) fn to_core<T: Scalar>(self) -> crate::Neighborhood<T> {
+    /// The core's neighbourhood in the tree's type `T`. A finite radius that overflows `T` (or
+    /// whose square does) is refused here, with the value the caller passed.
+    pub(crate) fn to_core<T: Scalar>(self) -> Result<crate::Neighborhood<T>, FfiError> {
         use crate::Neighborhood;
-        match self {
+        let radius = |r: f64| {
+            let t = T::from_f64(r);
+            if r.is_finite() && r >= 0.0 && !(t * t).is_finite() {
+                Err(crate::query::radius_out_of_range::<T>(r))
+            } else {
+                Ok(t)
+            }
+        };
+        Ok(match self {
             NbhdArg::Knn(k) => Neighborhood::Knn { k },
             NbhdArg::Radius(r) => Neighborhood::Radius {
-                radius: T::from_f64(r),
+                radius: radius(r)?,
                 sorted: true,
             },
             NbhdArg::KnnRadius(k, r) => Neighborhood::KnnRadius {
                 k,
-                radius: T::from_f64(r),
+                radius: radius(r)?,
             },
-        }
+        })
     }
 
     /// Reads `*spec` field by field.

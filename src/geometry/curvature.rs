@@ -135,12 +135,30 @@ pub fn principal_curvatures(
 /// with the same arithmetic (the sign of `p_i − x_j` cancels in every product).
 pub(crate) fn offsets_principal_curvatures(
     frame: &LocalFrame,
+    offsets: impl Iterator<Item = DVec3> + Clone,
+    form: DensityForm,
+    formula: PrincipalFormula,
+) -> PrincipalCurvatures {
+    // in a frame scaled to unit size (see `normals::unit_scale`): curvatures scale as 1/length
+    let f = super::normals::unit_scale(offsets.clone());
+    let pc = scaled_principal_curvatures(frame, offsets.map(|d| d * f), f, form, formula);
+    PrincipalCurvatures {
+        k1: pc.k1 * f,
+        k2: pc.k2 * f,
+        ..pc
+    }
+}
+
+/// [`offsets_principal_curvatures`] of offsets already multiplied by `f`.
+fn scaled_principal_curvatures(
+    frame: &LocalFrame,
     offsets: impl Iterator<Item = DVec3>,
+    f: f64,
     form: DensityForm,
     formula: PrincipalFormula,
 ) -> PrincipalCurvatures {
     let (n, e1, e2) = (frame.normal, frame.major, frame.minor);
-    let (m1, m2) = (frame.eigenvalues.z, frame.eigenvalues.y);
+    let (m1, m2) = (frame.eigenvalues.z * f * f, frame.eigenvalues.y * f * f);
     let floor = 0.01 * (m1 + m2);
     let (d1, d2) = if m1 + m2 > 0.0 {
         ((3.0 * m1 - m2).max(floor), (3.0 * m2 - m1).max(floor))

@@ -11,4 +11,6 @@ pub mod robust_plane;
 pub use curvature::{
     directional_curvature, principal_curvatures, DensityForm, PrincipalCurvatures, PrincipalFormula,
 };
-pub use normals::{local_frame, local_frames, orient, LocalFrame, Orientation};
+pub use normals::{
+    local_frame, local_frames, orient, orient_with_progress, LocalFrame, Orientation,
+};

@@ -70,14 +70,30 @@ pub enum Neighborhood<T> {
     },
 }
 
+/// The error for a radius `r` (as the caller passed it) whose square overflows `T`.
+pub(crate) fn radius_out_of_range<T: Scalar>(r: f64) -> NbhdError {
+    let (scalar, max) = match T::TYPE {
+        crate::ScalarType::F32 => ("f32", (f32::MAX as f64).sqrt()),
+        crate::ScalarType::F64 => ("f64", f64::MAX.sqrt()),
+    };
+    NbhdError::RadiusOutOfRange {
+        radius: r,
+        scalar,
+        max,
+    }
+}
+
 impl<T: Scalar> Neighborhood<T> {
-    /// Checks `k ≥ 1` and a finite radius ≥ 0.
+    /// Checks `k ≥ 1` and a finite radius ≥ 0 whose square is finite in `T` (squared
+    /// distances are compared in `T`): [`NbhdError::RadiusOutOfRange`] above `√T::MAX`.
     pub fn validate(&self) -> Result<()> {
         let check_radius = |r: T| {
-            if r.is_finite() && r >= T::ZERO {
-                Ok(())
-            } else {
+            if !(r.is_finite() && r >= T::ZERO) {
                 Err(NbhdError::InvalidRadius(r.to_f64()))
+            } else if !(r * r).is_finite() {
+                Err(radius_out_of_range::<T>(r.to_f64()))
+            } else {
+                Ok(())
             }
         };
         match *self {

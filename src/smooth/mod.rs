@@ -24,9 +24,10 @@ use crate::geometry::curvature::{
 };
 use crate::geometry::neighbors::mean_spacing_of;
 use crate::geometry::normals::{
-    local_frames, offsets_frame, offsets_normal, orient, LocalFrame, Orientation,
+    local_frames, offsets_frame, offsets_normal, orient_with_progress, LocalFrame, Orientation,
 };
 use crate::table::NeighborTable;
+use crate::NonFinitePolicy;
 use glam::DVec3;
 use rayon::prelude::*;
 use source::knn_rows;
@@ -170,6 +171,12 @@ pub struct SmoothOptions {
     pub orientation: Orientation,
     /// Compute the per-point outputs of the result.
     pub outputs: bool,
+    /// Points with a NaN or infinite coordinate (the holes of organized scans):
+    /// [`NonFinitePolicy::Reject`] refuses them ([`NbhdError::NonFinite`] names the first),
+    /// [`NonFinitePolicy::Skip`] computes on the finite points only; a skipped point keeps its
+    /// index, is left unmoved, and its outputs are NaN with
+    /// [`crate::geometry::normals::FLAG_SKIPPED`].
+    pub non_finite: NonFinitePolicy,
 }
 
 impl Default for SmoothOptions {
@@ -188,6 +195,7 @@ impl Default for SmoothOptions {
             formula: PrincipalFormula::Eq225,
             orientation: Orientation::Unoriented,
             outputs: true,
+            non_finite: NonFinitePolicy::Reject,
         }
     }
 }
@@ -311,6 +319,111 @@ struct Resolved {
     feature: FeatureCriterion,
 }
 
+/// The finite points of `points` as `policy` asks: `None` when every point is finite (use
+/// `points` as they are), otherwise the original index of every finite point and the finite
+/// points themselves. [`NonFinitePolicy::Reject`] names the first non-finite point
+/// ([`NbhdError::NonFinite`]); an empty set, or one without finite points, is
+/// [`NbhdError::EmptyInput`].
+pub(crate) fn finite_subset(
+    points: &[DVec3],
+    policy: NonFinitePolicy,
+) -> Result<Option<(Vec<usize>, Vec<DVec3>)>> {
+    if points.is_empty() {
+        return Err(NbhdError::EmptyInput);
+    }
+    if points.iter().all(|p| p.is_finite()) {
+        return Ok(None);
+    }
+    match policy {
+        NonFinitePolicy::Reject => check_points(points).map(|_| None),
+        NonFinitePolicy::Skip => {
+            let index: Vec<usize> = (0..points.len())
+                .filter(|&i| points[i].is_finite())
+                .collect();
+            if index.is_empty() {
+                return Err(NbhdError::EmptyInput);
+            }
+            let finite = index.iter().map(|&i| points[i]).collect();
+            Ok(Some((index, finite)))
+        }
+    }
+}
+
+impl PointOutput {
+    /// The outputs of a point skipped for its non-finite coordinates: NaN everywhere, flagged
+    /// [`crate::geometry::normals::FLAG_SKIPPED`].
+    pub fn skipped() -> Self {
+        let nan3 = DVec3::splat(f64::NAN);
+        Self {
+            normal: nan3,
+            mean_curvature: f64::NAN,
+            max_principal_curvature: f64::NAN,
+            covariance_quotient: f64::NAN,
+            anisotropic_mean_curvature: f64::NAN,
+            principal_curvature_quotient: f64::NAN,
+            max_covariance: f64::NAN,
+            principal: PrincipalCurvatures {
+                k1: f64::NAN,
+                k2: f64::NAN,
+                dir1: nan3,
+                dir2: nan3,
+            },
+            normal_flags: crate::geometry::normals::FLAG_SKIPPED,
+            feature: false,
+            interior: false,
+        }
+    }
+}
+
+/// The result computed on the finite points `index` of `points` placed back at the original
+/// indices: skipped points unmoved, with [`PointOutput::skipped`] outputs.
+pub(crate) fn scatter_result(
+    mut result: SmoothResult,
+    points: &[DVec3],
+    index: &[usize],
+) -> SmoothResult {
+    let mut all = points.to_vec();
+    for (&i, &p) in index.iter().zip(&result.points) {
+        all[i] = p;
+    }
+    result.points = all;
+    if !result.outputs.is_empty() {
+        let mut outputs = vec![PointOutput::skipped(); points.len()];
+        for (&i, o) in index.iter().zip(&result.outputs) {
+            outputs[i] = *o;
+        }
+        result.outputs = outputs;
+    }
+    result
+}
+
+/// Refuses results in which every neighbourhood is degenerate ([`NbhdError::Degenerate`]):
+/// when no row of `table` reaches 3 points with the point itself, or (`flagged`, for
+/// estimates of the geometry alone) when every one of the `outputs` carries a degeneracy
+/// flag. `epsilon` (resolved) and `h` go into the message, with whether ε was relative.
+pub(crate) fn check_not_degenerate(
+    table: &NeighborTable<f64>,
+    outputs: Option<&[PointOutput]>,
+    epsilon: f64,
+    h: f64,
+    relative: bool,
+) -> Result<()> {
+    let largest = table.max_row_len() + 1;
+    let flagged = outputs.map_or(0, |o| o.iter().filter(|o| o.normal_flags != 0).count());
+    let all_flagged = outputs.is_some_and(|o| !o.is_empty() && flagged == o.len());
+    if largest < 3 || all_flagged {
+        return Err(NbhdError::Degenerate {
+            points: table.len(),
+            largest,
+            flagged,
+            epsilon,
+            spacing: h,
+            relative,
+        });
+    }
+    Ok(())
+}
+
 /// Refuses an empty set ([`NbhdError::EmptyInput`]) and names the first point with a NaN or
 /// infinite coordinate ([`NbhdError::NonFinite`]).
 pub(crate) fn check_points(points: &[DVec3]) -> Result<()> {
@@ -351,6 +464,12 @@ pub fn smooth(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult>
 
 /// [`smooth`] with a progress callback, called on the calling thread with the fraction done
 /// (0 to 1) and the stage; returning `false` stops the run with [`NbhdError::Cancelled`].
+///
+/// Errors besides the options' own: [`NbhdError::NonFinite`] (unless
+/// `options.non_finite` skips such points), [`NbhdError::EmptyInput`],
+/// [`NbhdError::Degenerate`] when no neighbourhood reaches 3 points — or, with `steps == 0`
+/// (an estimate of the geometry alone), when every normal is flagged degenerate —
+/// [`NbhdError::OutOfMemory`] when the neighbourhoods of `k` do not fit in memory.
 pub fn smooth_with_progress(
     points: &[DVec3],
     options: &SmoothOptions,
@@ -370,6 +489,28 @@ pub fn smooth_from(
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<SmoothResult> {
     options.validate()?;
+    match finite_subset(points, options.non_finite)? {
+        None => smooth_finite(points, neighbors, options, progress),
+        Some((index, finite)) => {
+            let mut holder = None;
+            let neighbors =
+                source::for_finite_subset(neighbors, &index, points.len(), &mut holder)?;
+            Ok(scatter_result(
+                smooth_finite(&finite, neighbors, options, progress)?,
+                points,
+                &index,
+            ))
+        }
+    }
+}
+
+/// [`smooth_from`] on finite points.
+fn smooth_finite(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &SmoothOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+) -> Result<SmoothResult> {
     check_points(points)?;
     let total = options.steps as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
@@ -401,6 +542,8 @@ pub fn smooth_from(
         },
     };
     let mut table = cut_to(knn, eps);
+    let relative_eps = matches!(options.epsilon, Length::Relative(_));
+    check_not_degenerate(&table, None, eps, h, relative_eps)?;
     let min_neighbors = table.min_row_len();
     let mut cur = points.to_vec();
     if options.steps > 0 {
@@ -429,7 +572,14 @@ pub fn smooth_from(
         if options.update_neighbors && options.steps > 0 {
             table = cut_to(knn_rows(&cur, research, options.k)?.0, eps);
         }
-        point_outputs_with(&cur, &table, options, &res)?
+        let base = options.steps as f64 + 0.2;
+        let outputs = point_outputs_reporting(&cur, &table, options, &res, &mut |f| {
+            report(base + 0.7 * f, Stage::Outputs).is_ok()
+        })?;
+        if options.steps == 0 {
+            check_not_degenerate(&table, Some(&outputs), eps, h, relative_eps)?;
+        }
+        outputs
     } else {
         Vec::new()
     };
@@ -708,8 +858,25 @@ fn point_outputs_with(
     options: &SmoothOptions,
     res: &Resolved,
 ) -> Result<Vec<PointOutput>> {
+    point_outputs_reporting(points, table, options, res, &mut |_| true)
+}
+
+/// [`point_outputs_with`] that reports the progress of the orientation (the part that can take
+/// long, see [`orient_with_progress`]) as a fraction of the outputs' work.
+fn point_outputs_reporting(
+    points: &[DVec3],
+    table: &NeighborTable<f64>,
+    options: &SmoothOptions,
+    res: &Resolved,
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Result<Vec<PointOutput>> {
     let mut frames = local_frames(points, table)?;
-    orient(points, table, &mut frames, options.orientation)?;
+    if !progress(0.3) {
+        return Err(NbhdError::Cancelled);
+    }
+    orient_with_progress(points, table, &mut frames, options.orientation, &mut |f| {
+        progress(0.3 + 0.5 * f)
+    })?;
     let principal =
         all_principal_curvatures(points, table, &frames, options.density, options.formula)?;
     let geo = Geometry {

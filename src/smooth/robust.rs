@@ -124,6 +124,9 @@ pub struct RobustOptions {
     /// Compute the per-point outputs of the result (as [`super::smooth`] does, with the robust
     /// normals in place of the covariance normals).
     pub outputs: bool,
+    /// Points with a NaN or infinite coordinate: rejected, or skipped (left unmoved, NaN
+    /// outputs and normals), as [`SmoothOptions::non_finite`].
+    pub non_finite: crate::NonFinitePolicy,
 }
 
 impl Default for RobustOptions {
@@ -139,6 +142,7 @@ impl Default for RobustOptions {
             tau: 1.0,
             orientation: Orientation::Unoriented,
             outputs: true,
+            non_finite: crate::NonFinitePolicy::Reject,
         }
     }
 }
@@ -222,6 +226,10 @@ pub fn smooth_robust_with_progress(
 
 /// [`smooth_robust_with_progress`] that also returns the normals, the noise estimates and the
 /// displacement of each iteration.
+///
+/// Non-finite points are refused or skipped as `options.non_finite` says (skipped points keep
+/// their index, are left unmoved and get NaN outputs and normals);
+/// [`NbhdError::Degenerate`] when no neighbourhood reaches 3 points.
 pub fn smooth_robust_report(
     points: &[DVec3],
     options: &RobustOptions,
@@ -241,6 +249,33 @@ pub fn smooth_robust_from(
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<RobustReport> {
     options.validate()?;
+    match super::finite_subset(points, options.non_finite)? {
+        None => robust_finite(points, neighbors, options, progress),
+        Some((index, finite)) => {
+            let mut holder = None;
+            let neighbors =
+                super::source::for_finite_subset(neighbors, &index, points.len(), &mut holder)?;
+            let r = robust_finite(&finite, neighbors, options, progress)?;
+            let mut normals = vec![DVec3::splat(f64::NAN); points.len()];
+            for (&i, &n) in index.iter().zip(&r.normals) {
+                normals[i] = n;
+            }
+            Ok(RobustReport {
+                result: super::scatter_result(r.result, points, &index),
+                normals,
+                ..r
+            })
+        }
+    }
+}
+
+/// [`smooth_robust_from`] on finite points.
+fn robust_finite(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &RobustOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+) -> Result<RobustReport> {
     check_points(points)?;
     let total = options.max_iterations as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
@@ -270,6 +305,11 @@ pub fn smooth_robust_from(
     // the points and their neighbour rows in tree order (rows.rs); back in input order at the end
     let mut cur: Vec<DVec3> = order.iter().map(|&o| points[o as usize]).collect();
     rows.update(&cur, &order, eps);
+    if rows.max_len() + 1 < 3 {
+        // no neighbourhood reaches 3 points: the same refusal as every smoothing call
+        let narrow = rows.narrow_table(&cur, options.k_plane, &order);
+        super::check_not_degenerate(&narrow, None, eps, h, relative)?;
+    }
     let min_neighbors = rows.min_narrow_len(options.k);
     let mut normals: Vec<DVec3> = Vec::new();
     let (mut noise, mut moved) = (Vec::new(), Vec::new());

@@ -82,6 +82,45 @@ pub(crate) fn knn_rows(
     }
 }
 
+/// `neighbors` for the finite points `index` of a cloud that has non-finite ones (the
+/// non-finite policy's subset): a caller's table is restricted to those points' rows and
+/// renumbered (entries naming a skipped point are dropped); a search is left as it is.
+/// `holder` keeps the restricted table for as long as the result borrows it.
+pub(crate) fn for_finite_subset<'a>(
+    neighbors: Neighbors<'a>,
+    index: &[usize],
+    total: usize,
+    holder: &'a mut Option<NeighborTable<f64>>,
+) -> Result<Neighbors<'a>> {
+    let Neighbors::Table(table) = neighbors else {
+        return Ok(neighbors);
+    };
+    if table.len() != total {
+        return Err(NbhdError::InvalidOption {
+            name: "table",
+            reason: format!("the table has {} rows for {total} points", table.len()),
+        });
+    }
+    let mut renumbered = vec![u32::MAX; total];
+    for (k, &i) in index.iter().enumerate() {
+        renumbered[i] = k as u32;
+    }
+    let mut offsets = Vec::with_capacity(index.len() + 1);
+    offsets.push(0);
+    let (mut ids, mut sq_dist) = (Vec::new(), Vec::new());
+    for &i in index {
+        for (&j, &d) in table.indices_of(i).iter().zip(table.sq_dists_of(i)) {
+            if let Some(&k) = renumbered.get(j as usize).filter(|&&k| k != u32::MAX) {
+                ids.push(k);
+                sq_dist.push(d);
+            }
+        }
+        offsets.push(ids.len());
+    }
+    *holder = NeighborTable::from_parts(offsets, ids, sq_dist);
+    Ok(holder.as_ref().map_or(neighbors, Neighbors::Table))
+}
+
 /// A caller's table fits `points`: a row per point, indices in range, no point in its own
 /// row, rows ordered by `(sq_dist, index)` with finite distances ≥ 0.
 fn check_rows(points: &[DVec3], table: &NeighborTable<f64>) -> Result<()> {

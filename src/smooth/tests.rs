@@ -175,17 +175,27 @@ fn degenerate_inputs() {
     };
     let r = smooth(&same, &abs).unwrap();
     assert!(all_finite(&r) && r.points == same);
-    // one point
+    // one or two points: no neighbourhood reaches 3 points, which is refused, saying why
     assert!(smooth(&same[..1], &opts).is_err());
-    let r = smooth(&same[..1], &abs).unwrap();
-    assert_eq!(r.points, same[..1]);
-    // two points: they meet halfway (τ = 0.5)
     let two = [DVec3::ZERO, DVec3::X];
-    for o in [opts, SmoothOptions::isotropic()] {
-        let r = smooth(&two, &SmoothOptions { steps: 1, ..o }).unwrap();
-        assert!(all_finite(&r));
-        assert_eq!(r.points, vec![DVec3::new(0.5, 0.0, 0.0); 2]);
+    for pts in [&same[..1], &two[..]] {
+        let iso = SmoothOptions {
+            weighting: Weighting::Isotropic,
+            ..abs
+        };
+        for o in [abs, iso] {
+            let e = smooth(pts, &SmoothOptions { steps: 1, ..o }).unwrap_err();
+            assert!(
+                matches!(e, NbhdError::Degenerate { largest, .. } if largest == pts.len()),
+                "{e}"
+            );
+        }
     }
+    // coincident points smooth (nothing moves), but their normals alone are refused
+    assert!(matches!(
+        analyze(&same, &abs),
+        Err(NbhdError::Degenerate { flagged: 10, .. })
+    ));
     // collinear points stay on their line
     let line: Vec<DVec3> = (0..20).map(|i| DVec3::splat(i as f64 * 0.1)).collect();
     for feature in [
@@ -454,17 +464,22 @@ fn robust_degenerate_inputs_and_options() {
         epsilon: Length::Absolute(1.0),
         ..opts
     };
-    for pts in [&same[..], &same[..1]] {
-        let r = smooth_robust(pts, &abs).unwrap();
-        assert!(all_finite(&r) && r.points == pts);
-    }
-    // two points, a line and a flat grid: no noise to remove, nothing moves, all finite
+    let r = smooth_robust(&same, &abs).unwrap();
+    assert!(all_finite(&r) && r.points == same);
+    // one or two points: no neighbourhood reaches 3 points, refused
     let two = [DVec3::ZERO, DVec3::X];
+    for pts in [&same[..1], &two[..]] {
+        assert!(matches!(
+            smooth_robust(pts, &abs),
+            Err(NbhdError::Degenerate { .. })
+        ));
+    }
+    // a line and a flat grid: no noise to remove, nothing moves, all finite
     let line: Vec<DVec3> = (0..20).map(|i| DVec3::splat(i as f64 * 0.1)).collect();
     let grid: Vec<DVec3> = (0..400)
         .map(|i| DVec3::new((i % 20) as f64, (i / 20) as f64, 0.5))
         .collect();
-    for pts in [&two[..], &line[..], &grid[..]] {
+    for pts in [&line[..], &grid[..]] {
         let r = smooth_robust(pts, &opts).unwrap();
         assert!(all_finite(&r));
         assert!(r
@@ -570,4 +585,141 @@ fn robust_beats_isotropic_fairing_at_one_spacing_of_noise() {
     assert!(r.moved.len() < RobustOptions::default().max_iterations);
     assert!(nz[1] < 0.8 * nz[0], "{nz:?}");
     assert!(nz[nz.len() - 1] > (1.0 - tol) * nz[nz.len() - 2], "{nz:?}");
+}
+
+#[test]
+fn skipped_non_finite_points_keep_their_index_and_stay_put() {
+    let s = sample(&Sphere::new(1.0), 800, 9);
+    let mut pts = s.points.clone();
+    let holes = [0usize, 17, 400, 799];
+    for &i in &holes {
+        pts[i] = DVec3::new(f64::NAN, 0.0, f64::INFINITY);
+    }
+    let finite: Vec<DVec3> = (0..pts.len())
+        .filter(|i| !holes.contains(i))
+        .map(|i| pts[i])
+        .collect();
+    // reject (the default) names the first hole
+    assert_eq!(
+        smooth(&pts, &SmoothOptions::default()),
+        Err(NbhdError::NonFinite {
+            index: 0,
+            coordinate: 0
+        })
+    );
+    let skip = SmoothOptions {
+        non_finite: NonFinitePolicy::Skip,
+        ..SmoothOptions::default()
+    };
+    let r = smooth(&pts, &skip).unwrap();
+    let f = smooth(&finite, &SmoothOptions::default()).unwrap();
+    assert_eq!(r.points.len(), pts.len());
+    assert_eq!(r.outputs.len(), pts.len());
+    let mut j = 0;
+    for i in 0..pts.len() {
+        if holes.contains(&i) {
+            assert!(r.points[i].x.is_nan() && r.points[i].z == f64::INFINITY);
+            assert!(r.outputs[i].normal.is_nan());
+            assert!(r.outputs[i].mean_curvature.is_nan());
+            assert_eq!(
+                r.outputs[i].normal_flags,
+                crate::geometry::normals::FLAG_SKIPPED
+            );
+        } else {
+            // the finite points get exactly the result of the finite subset
+            assert_eq!(r.points[i], f.points[j]);
+            assert_eq!(r.outputs[i], f.outputs[j]);
+            j += 1;
+        }
+    }
+    assert_eq!((r.spacing, r.epsilon), (f.spacing, f.epsilon));
+    // the robust mode too
+    let ro = RobustOptions {
+        non_finite: NonFinitePolicy::Skip,
+        ..robust_quiet()
+    };
+    let rr = smooth_robust_report(&pts, &ro, &mut |_, _| true).unwrap();
+    let rf = smooth_robust_report(&finite, &robust_quiet(), &mut |_, _| true).unwrap();
+    let mut j = 0;
+    for i in 0..pts.len() {
+        if holes.contains(&i) {
+            assert!(rr.result.points[i].x.is_nan() && rr.normals[i].is_nan());
+        } else {
+            assert_eq!(rr.result.points[i], rf.result.points[j]);
+            assert_eq!(rr.normals[i], rf.normals[j]);
+            j += 1;
+        }
+    }
+    // only holes: nothing to compute
+    let nan = vec![DVec3::splat(f64::NAN); 3];
+    assert_eq!(smooth(&nan, &skip), Err(NbhdError::EmptyInput));
+}
+
+#[test]
+fn a_relative_epsilon_meant_as_absolute_is_refused_with_its_value() {
+    // spacing about 0.05: ε = 0.01 relative is 0.0005 in the points' units, below every
+    // neighbour
+    let s = sample(&Sphere::new(1.0), 2000, 2);
+    let o = SmoothOptions {
+        epsilon: Length::Relative(0.01),
+        ..SmoothOptions::default()
+    };
+    let e = analyze(&s.points, &o).unwrap_err();
+    let h = mean_spacing(&s.points).unwrap();
+    match &e {
+        NbhdError::Degenerate {
+            largest,
+            epsilon,
+            relative,
+            ..
+        } => {
+            assert_eq!(*largest, 1);
+            assert!((epsilon - 0.01 * h).abs() < 1e-15);
+            assert!(*relative);
+        }
+        e => panic!("{e}"),
+    }
+    let text = e.to_string();
+    assert!(text.contains("epsilon resolved to"), "{text}");
+    assert!(text.contains("in the points' units"), "{text}");
+    assert!(text.contains("ABSOLUTE"), "{text}");
+    // the same number in the points' units works
+    let abs = SmoothOptions {
+        epsilon: Length::Absolute(0.3),
+        ..o
+    };
+    assert!(analyze(&s.points, &abs).is_ok());
+}
+
+#[test]
+fn extreme_magnitudes_give_scaled_geometry_not_nan() {
+    // a unit sphere scaled by 1e-150 ... 1e150: the same normals, curvatures scaled by 1/s,
+    // all finite (geometry is computed in a frame scaled to unit size)
+    let s = sample(&Sphere::new(1.0), 1500, 12);
+    let unit = analyze(&s.points, &SmoothOptions::default()).unwrap();
+    for e in [-150, -120, -90, -77, 80, 100, 150] {
+        let scale = 10f64.powi(e);
+        let pts: Vec<DVec3> = s.points.iter().map(|&p| p * scale).collect();
+        let r = analyze(&pts, &SmoothOptions::default()).unwrap();
+        for (a, b) in r.outputs.iter().zip(&unit.outputs) {
+            assert!(
+                a.normal.is_finite() && a.normal.dot(b.normal).abs() > 1.0 - 1e-9,
+                "1e{e}"
+            );
+            assert_eq!(a.normal_flags, b.normal_flags, "1e{e}");
+            let (ka, kb) = (a.principal.k1 * scale, b.principal.k1);
+            assert!(
+                a.principal.k1.is_finite() && a.mean_curvature.is_finite(),
+                "1e{e}"
+            );
+            assert!(
+                (ka - kb).abs() <= 1e-6 * kb.abs().max(1.0),
+                "1e{e}: {ka} vs {kb}"
+            );
+            assert!(
+                (a.covariance_quotient - b.covariance_quotient).abs() < 1e-9,
+                "1e{e}"
+            );
+        }
+    }
 }

@@ -284,6 +284,9 @@ impl<T: Scalar> Rows<T> for SortedRows<T> {
 /// Appends one row to the chunk's buffers.
 #[inline]
 fn write_row<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<T>) {
+    if !out.reserve_row(row.len()) {
+        return;
+    }
     out.0.push(row.len());
     let at = out.1.len();
     out.1.resize(at + row.len(), 0);
@@ -351,6 +354,9 @@ impl<T: Scalar> Rows<T> for SortedKeys<T> {
     fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
         for i in 0..m {
             let row = &self.buf[i * self.k..i * self.k + self.len[i]];
+            if !out.reserve_row(row.len()) {
+                return;
+            }
             out.0.push(row.len());
             let at = out.1.len();
             out.1.resize(at + row.len(), 0);
@@ -463,6 +469,9 @@ impl<T: Scalar> Rows<T> for RadiusRows<T> {
         }
         for &own in self_ids {
             let len = r.iter().filter(|nb| nb.index != own).count();
+            if !out.reserve_row(len) {
+                return;
+            }
             out.0.push(len);
             for nb in r.iter().filter(|nb| nb.index != own) {
                 out.1.push(nb.index);
@@ -522,7 +531,12 @@ pub(crate) fn table<T: Scalar, const D: usize>(
                     rows: (0..GROUP).map(|_| Vec::new()).collect(),
                     keys: Keys::default(),
                 };
-                run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
+                run(c, &mut |s, g| {
+                    // a chunk whose rows did not fit takes no more (see `RowsChunk`)
+                    if out.3.is_none() {
+                        s.group(g, &mut rows, &mut stack, out)
+                    }
+                });
             } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
                 let mut rows = SortedKeys {
                     k,
@@ -530,7 +544,12 @@ pub(crate) fn table<T: Scalar, const D: usize>(
                     len: [0; GROUP],
                     buf: vec![0; GROUP * k],
                 };
-                run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
+                run(c, &mut |s, g| {
+                    // a chunk whose rows did not fit takes no more (see `RowsChunk`)
+                    if out.3.is_none() {
+                        s.group(g, &mut rows, &mut stack, out)
+                    }
+                });
             } else if k <= SORTED_MAX_K {
                 let mut rows = SortedRows {
                     k,
@@ -538,7 +557,12 @@ pub(crate) fn table<T: Scalar, const D: usize>(
                     len: [0; GROUP],
                     buf: vec![Neighbor::default(); GROUP * k],
                 };
-                run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
+                run(c, &mut |s, g| {
+                    // a chunk whose rows did not fit takes no more (see `RowsChunk`)
+                    if out.3.is_none() {
+                        s.group(g, &mut rows, &mut stack, out)
+                    }
+                });
             } else {
                 let mut rows = HeapRows {
                     k,
@@ -546,7 +570,12 @@ pub(crate) fn table<T: Scalar, const D: usize>(
                     rows: (0..GROUP).map(|_| Vec::new()).collect(),
                     keys: Keys::default(),
                 };
-                run(c, &mut |s, g| s.group(g, &mut rows, &mut stack, out));
+                run(c, &mut |s, g| {
+                    // a chunk whose rows did not fit takes no more (see `RowsChunk`)
+                    if out.3.is_none() {
+                        s.group(g, &mut rows, &mut stack, out)
+                    }
+                });
             }
             Ok(())
         },

@@ -21,7 +21,7 @@ use crate::parallel::with_threads;
 use crate::points::PointsView;
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::{Scalar, ScalarType};
-use crate::table::{rows_in_work_order, NeighborTable, TableOptions};
+use crate::table::{check_knn_total, rows_in_work_order, NeighborTable, TableOptions};
 use build::{build_parallel, build_serial, BuildInput, Subtree};
 use layout::{BySlot, Inline, Layout, Record};
 use node::Node;
@@ -357,6 +357,7 @@ impl<T: Scalar> KdTree<T> {
         options: &TableOptions,
     ) -> Result<NeighborTable<T>> {
         nbhd.validate()?;
+        check_knn_total(self.len(), self.len(), nbhd, options.exclude_self)?;
         // Low dimensions: one descent per group of consecutive tree-order points, shared by
         // the group (see `group_search`); the same rows as the single-query search.
         let grouped = |f: fn(&TreeView<'_, T>, usize, Neighborhood<T>, bool) -> _| {
@@ -406,6 +407,7 @@ impl<T: Scalar> KdTree<T> {
                 got: queries.dim(),
             });
         }
+        check_knn_total(queries.len(), self.len(), nbhd, false)?;
         with_threads(options.threads, || {
             let order = self.leaf_order(queries);
             rows_in_work_order(
@@ -416,6 +418,7 @@ impl<T: Scalar> KdTree<T> {
                     q.resize(self.dim, T::ZERO);
                     queries.read_point(order[w] as usize, q);
                     self.search(Query::point(q), nbhd, row)
+                        .map_err(|e| e.for_query(order[w] as usize))
                 },
             )
         })?

@@ -3,6 +3,8 @@
  * force written here, and every error path is walked. Run by tests/c_abi.rs (also under
  * valgrind). Exits 0 when every check passed; prints each failed check and a summary.
  */
+/* fork, setrlimit, sysconf (POSIX) for the out-of-memory check, with -std=c99. */
+#define _POSIX_C_SOURCE 200809L
 #include "nbhd.h"
 #include "check.h"
 
@@ -267,13 +269,13 @@ static void test_version_and_strings(void) {
                               NBHD_VERSION_PATCH);
     sprintf(expected, "%d.%d.%d", NBHD_VERSION_MAJOR, NBHD_VERSION_MINOR, NBHD_VERSION_PATCH);
     CHECK(strcmp(nbhd_version_string(), expected) == 0);
-    for (s = NBHD_STATUS_OK; s <= NBHD_STATUS_INTERNAL; s++) {
+    for (s = NBHD_STATUS_OK; s <= NBHD_STATUS_OUT_OF_MEMORY; s++) {
         const char *text = nbhd_status_string(s);
         CHECK(text != NULL && text[0] != '\0' && strcmp(text, "unknown status") != 0);
     }
     CHECK(strcmp(nbhd_status_string(NBHD_STATUS_INVALID_K), "k must be at least 1") == 0);
     CHECK(strcmp(nbhd_status_string(-1), "unknown status") == 0);
-    CHECK(strcmp(nbhd_status_string(NBHD_STATUS_INTERNAL + 1), "unknown status") == 0);
+    CHECK(strcmp(nbhd_status_string(NBHD_STATUS_OUT_OF_MEMORY + 1), "unknown status") == 0);
     CHECK(strcmp(nbhd_status_string(1 << 30), "unknown status") == 0);
     /* Before any failure the message is empty, never NULL. */
     CHECK(nbhd_last_error_message() != NULL && nbhd_last_error_message()[0] == '\0');
@@ -594,6 +596,19 @@ static void test_build_errors(void) {
     CHECK_STATUS(nbhd_tree_build(&desc, NULL, &tree), NBHD_STATUS_ZERO_DIMENSION);
     CHECK_MESSAGE("dimension");
 
+    /* Sizes that overflow the address space: named with the values passed. */
+    desc = describe(0);
+    desc.dim = SIZE_MAX / 4; /* times 8 bytes overflows */
+    CHECK_STATUS(nbhd_tree_build(&desc, NULL, &tree), NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_MESSAGE("points: dim ");
+    CHECK_MESSAGE("times 8 bytes per coordinate");
+    CHECK_MESSAGE("overflows the address space");
+    desc = describe(0);
+    desc.stride = SIZE_MAX / 2;
+    CHECK_STATUS(nbhd_tree_build(&desc, NULL, &tree), NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_MESSAGE("count 240 and stride ");
+    CHECK_MESSAGE("overflows the address space");
+
     desc = describe(0);
     desc.stride = 16; /* one point of 3 doubles is 24 bytes */
     CHECK_STATUS(nbhd_tree_build(&desc, NULL, &tree), NBHD_STATUS_STRIDE_TOO_SMALL);
@@ -834,6 +849,21 @@ static void test_table_errors(void) {
     qd.dim = DIM;
     CHECK_STATUS(nbhd_tree_neighborhoods_of(tree, &qd, &spec, NULL, &t),
                  NBHD_STATUS_NON_FINITE_QUERY);
+    CHECK_MESSAGE("query point 1 has a NaN or infinite coordinate (coordinate 1)");
+    /* A radius finite as a double but not as the float tree's type, or whose square is not. */
+    spec.kind = NBHD_NEIGHBORHOOD_KIND_RADIUS;
+    spec.radius = 1e300;
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &t), NBHD_STATUS_INVALID_RADIUS);
+    CHECK_MESSAGE("radius 1e300 is too large for a tree of f32");
+    spec.radius = 1e20;
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &t), NBHD_STATUS_INVALID_RADIUS);
+    CHECK_MESSAGE("radius 1e20 is too large");
+    spec.radius = 1e19; /* its square, 1e38, is a float */
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &t), NBHD_STATUS_OK);
+    CHECK(nbhd_neighborhoods_total(t) == (size_t)N * (N - 1));
+    nbhd_neighborhoods_free(t);
+    t = NULL;
+    spec.kind = NBHD_NEIGHBORHOOD_KIND_KNN;
     qd.count = 0;
     CHECK_STATUS(nbhd_tree_neighborhoods_of(tree, &qd, &spec, NULL, &t),
                  NBHD_STATUS_EMPTY_INPUT);
@@ -870,7 +900,108 @@ static void test_table_errors(void) {
     nbhd_tree_free(tree);
 }
 
+#if defined(__linux__)
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+/* The address space this process uses now, in bytes (from /proc/self/statm). */
+static size_t address_space_now(void) {
+    unsigned long pages = 0;
+    FILE *f = fopen("/proc/self/statm", "r");
+    if (f != NULL) {
+        if (fscanf(f, "%lu", &pages) != 1) pages = 0;
+        fclose(f);
+    }
+    return (size_t)pages * (size_t)sysconf(_SC_PAGESIZE);
+}
+
+/* In a forked child limited to its current address space plus 768 MB (RLIMIT_AS): tables
+ * and smoothing whose output cannot fit return OUT_OF_MEMORY with the bytes needed, never
+ * abort; afterwards the library still works in the same process. */
+static void oom_child(void) {
+    enum { M = 300000 };
+    float *p = malloc((size_t)M * 3 * sizeof *p);
+    nbhd_points desc;
+    nbhd_tree *tree = NULL;
+    nbhd_neighborhood_spec spec;
+    nbhd_neighborhoods *t = NULL;
+    nbhd_smooth_options so = nbhd_smooth_options_default();
+    struct rlimit lim;
+    size_t i;
+    for (i = 0; i < (size_t)M * 3; i++) p[i] = (float)(next_u64() % 1000000) * 1e-6f;
+    desc.data = p;
+    desc.count = M;
+    desc.dim = 3;
+    desc.stride = 0;
+    desc.scalar_type = NBHD_SCALAR_TYPE_F32;
+    CHECK_STATUS(nbhd_tree_build(&desc, NULL, &tree), NBHD_STATUS_OK);
+    lim.rlim_cur = lim.rlim_max = address_space_now() + ((rlim_t)768 << 20);
+    CHECK(setrlimit(RLIMIT_AS, &lim) == 0);
+
+    spec.kind = NBHD_NEIGHBORHOOD_KIND_RADIUS; /* covers every point: 9e10 entries */
+    spec.k = 0;
+    spec.radius = 10.0;
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &t), NBHD_STATUS_OUT_OF_MEMORY);
+    CHECK_MESSAGE("out of memory: the neighbour table");
+    CHECK_MESSAGE(" bytes (");
+    CHECK(t == NULL);
+    spec.kind = NBHD_NEIGHBORHOOD_KIND_KNN_RADIUS;
+    spec.k = 1000000000;
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &t), NBHD_STATUS_OUT_OF_MEMORY);
+    spec.k = SIZE_MAX;
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &t), NBHD_STATUS_OUT_OF_MEMORY);
+    spec.kind = NBHD_NEIGHBORHOOD_KIND_KNN; /* known in advance: 300000 x 299999 entries */
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &t), NBHD_STATUS_OUT_OF_MEMORY);
+    CHECK_MESSAGE("needs 719997600000 bytes (720.0 GB)");
+    spec.kind = NBHD_NEIGHBORHOOD_KIND_RADIUS;
+    CHECK_STATUS(nbhd_tree_neighborhoods_of(tree, &desc, &spec, NULL, &t),
+                 NBHD_STATUS_OUT_OF_MEMORY);
+    CHECK(t == NULL);
+    so.k = SIZE_MAX;
+    so.epsilon = 1e300;
+    so.epsilon_units = NBHD_UNITS_ABSOLUTE;
+    CHECK_STATUS(nbhd_smooth(&desc, &so, p, NULL, NULL), NBHD_STATUS_OUT_OF_MEMORY);
+    CHECK_MESSAGE("bytes");
+    /* The process is unharmed: a table that fits still works. */
+    spec.kind = NBHD_NEIGHBORHOOD_KIND_KNN;
+    spec.k = 8;
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &t), NBHD_STATUS_OK);
+    CHECK(nbhd_neighborhoods_total(t) == (size_t)M * 8);
+    nbhd_neighborhoods_free(t);
+    nbhd_tree_free(tree);
+    free(p);
+}
+
+static void test_out_of_memory(void) {
+    const char *preload = getenv("LD_PRELOAD");
+    pid_t pid;
+    int status = 0;
+    if (preload != NULL && strstr(preload, "vgpreload") != NULL) {
+        printf("abi_test: out-of-memory checks skipped under valgrind (it needs the address space)\n");
+        return;
+    }
+    fflush(stdout);
+    pid = fork();
+    if (pid == 0) {
+        oom_child();
+        printf("abi_test (out-of-memory child): %d checks, %d failed\n", checks, failures);
+        fflush(stdout);
+        _exit(failures == 0 ? 0 : 1);
+    }
+    CHECK(pid > 0);
+    CHECK(waitpid(pid, &status, 0) == pid);
+    /* Exit 0: no abort (SIGABRT), no check failed. */
+    CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+#else
+static void test_out_of_memory(void) {}
+#endif
+
 int main(void) {
+    /* First, before any parallel call: a child forked after one would find rayon's global
+     * pool gone (see the header's thread-safety notes). */
+    test_out_of_memory();
     make_cloud();
     test_version_and_strings();
     test_defaults();

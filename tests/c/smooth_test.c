@@ -72,6 +72,18 @@ static nbhd_points describe(const void *data, size_t n, size_t stride, nbhd_scal
     return p;
 }
 
+/* Normals packed as double[3 * n] (and flags, may be NULL), no curvature. */
+static nbhd_normals_output packed_normals(double *normals, uint8_t *flags) {
+    nbhd_normals_output out;
+    memset(&out, 0, sizeof out);
+    out.normals = normals;
+    out.normals_stride = 0;
+    out.scalar_type = NBHD_SCALAR_TYPE_F64;
+    out.curvature = NULL;
+    out.flags = flags;
+    return out;
+}
+
 static void test_defaults(void) {
     nbhd_smooth_options o = nbhd_smooth_options_default();
     CHECK(o.k == 15);
@@ -100,7 +112,12 @@ static void test_normals_and_curvatures(size_t n) {
     pts = describe(p, n, 0, NBHD_SCALAR_TYPE_F64);
     o.orientation = NBHD_ORIENTATION_AWAY_FROM_POINT;
     o.orientation_point[0] = o.orientation_point[1] = o.orientation_point[2] = 0.0;
-    CHECK_STATUS(nbhd_estimate_normals(&pts, &o, normals, flags), NBHD_STATUS_OK);
+    {
+        nbhd_normal_options no = nbhd_normal_options_default();
+        nbhd_normals_output out = packed_normals(normals, flags);
+        no.orientation = o.orientation;
+        CHECK_STATUS(nbhd_estimate_normals(&pts, &no, &out), NBHD_STATUS_OK);
+    }
     for (i = 0; i < n; i++) {
         const double *q = p + 3 * i, *m = normals + 3 * i;
         double len = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
@@ -290,6 +307,8 @@ static void test_errors(void) {
     uint8_t flags[40];
     nbhd_point_geometry geo[40];
     nbhd_smooth_options o;
+    nbhd_normal_options no;
+    nbhd_normals_output nout;
     nbhd_points pts;
     size_t i;
 
@@ -301,8 +320,19 @@ static void test_errors(void) {
     CHECK_MESSAGE("points");
     CHECK_STATUS(nbhd_smooth(&pts, NULL, NULL, NULL, NULL), NBHD_STATUS_NULL_POINTER);
     CHECK_MESSAGE("out_coords");
-    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, NULL, flags), NBHD_STATUS_NULL_POINTER);
-    CHECK_MESSAGE("out_normals");
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_MESSAGE("out");
+    nout = packed_normals(NULL, flags);
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, &nout), NBHD_STATUS_NULL_POINTER);
+    CHECK_MESSAGE("out->normals");
+    nout = packed_normals(out, NULL);
+    nout.normals_stride = 16; /* less than 3 doubles */
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, &nout), NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_MESSAGE("normals_stride 16");
+    nout = packed_normals(out, NULL);
+    nout.normals_stride = SIZE_MAX / 8;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, &nout), NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_MESSAGE("overflows");
     CHECK_STATUS(nbhd_estimate_curvatures(&pts, NULL, NULL, NULL), NBHD_STATUS_NULL_POINTER);
     CHECK_MESSAGE("out_geometry");
     CHECK_STATUS(nbhd_estimate_curvatures(&pts, NULL, (nbhd_point_geometry *)((char *)geo + 1), NULL),
@@ -313,7 +343,8 @@ static void test_errors(void) {
     CHECK_STATUS(nbhd_smooth(&pts, NULL, out, NULL, NULL), NBHD_STATUS_EMPTY_INPUT);
     pts = describe(flat2, 40, 0, NBHD_SCALAR_TYPE_F64);
     pts.dim = 2;
-    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, out, NULL), NBHD_STATUS_INVALID_ARGUMENT);
+    nout = packed_normals(out, NULL);
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, &nout), NBHD_STATUS_INVALID_ARGUMENT);
     CHECK_MESSAGE("need 3-D points");
 
     /* A NaN coordinate: named by index. */
@@ -322,7 +353,7 @@ static void test_errors(void) {
     CHECK_STATUS(nbhd_smooth(&pts, NULL, out, NULL, NULL), NBHD_STATUS_NON_FINITE);
     CHECK_MESSAGE("17");
     p[3 * 17 + 1] = INFINITY;
-    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, out, NULL), NBHD_STATUS_NON_FINITE);
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, &nout), NBHD_STATUS_NON_FINITE);
     sphere(p, 40, 0.0);
 
     /* Options out of range. */
@@ -350,14 +381,15 @@ static void test_errors(void) {
     }
     CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_ARGUMENT);
     CHECK_MESSAGE("weighting");
-    o = nbhd_smooth_options_default();
-    o.orientation = NBHD_ORIENTATION_TOWARD_POINT;
-    o.orientation_point[1] = NAN;
-    CHECK_STATUS(nbhd_estimate_normals(&pts, &o, out, NULL), NBHD_STATUS_INVALID_OPTION);
+    no = nbhd_normal_options_default();
+    no.orientation = NBHD_ORIENTATION_TOWARD_POINT;
+    no.orientation_point[1] = NAN;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, &no, &nout), NBHD_STATUS_INVALID_OPTION);
     CHECK_MESSAGE("orientation_point");
 
     /* All points identical: relative units have no spacing to refer to, and say so; with
-     * absolute units the normals are defined, finite and flagged. */
+     * absolute units every normal is degenerate, which is refused for the normals alone
+     * (DEGENERATE) while smoothing leaves the points where they are. */
     for (i = 0; i < 40; i++) {
         p[3 * i] = 1.0;
         p[3 * i + 1] = 2.0;
@@ -369,13 +401,164 @@ static void test_errors(void) {
     o.epsilon = 1.0;
     o.epsilon_units = NBHD_UNITS_ABSOLUTE;
     o.lambda_units = NBHD_UNITS_ABSOLUTE;
-    CHECK_STATUS(nbhd_estimate_normals(&pts, &o, out, flags), NBHD_STATUS_OK);
-    for (i = 0; i < 40; i++) {
-        CHECK(isfinite(out[3 * i]) && isfinite(out[3 * i + 1]) && isfinite(out[3 * i + 2]));
-        CHECK(flags[i] != 0);
-    }
+    no = nbhd_normal_options_default();
+    no.epsilon = 1.0;
+    no.epsilon_units = NBHD_UNITS_ABSOLUTE;
+    nout = packed_normals(out, flags);
+    CHECK_STATUS(nbhd_estimate_normals(&pts, &no, &nout), NBHD_STATUS_DEGENERATE);
+    CHECK_MESSAGE("all 40 of 40 normals are degenerate");
+    CHECK_STATUS(nbhd_estimate_curvatures(&pts, &o, geo, NULL), NBHD_STATUS_DEGENERATE);
     CHECK_STATUS(nbhd_smooth(&pts, &o, out, geo, NULL), NBHD_STATUS_OK);
+    for (i = 0; i < 40; i++) CHECK(geo[i].normal_flags != 0 && isfinite(geo[i].normal[0]));
     CHECK(out[0] == 1.0 && out[1] == 2.0 && out[2] == 3.0);
+}
+
+/* An organized scan's holes: NaN points with NBHD_NON_FINITE_POLICY_SKIP keep their index, are
+ * left unmoved and get NaN geometry (flag 8); every other point gets exactly what the finite
+ * points alone give. */
+static void test_non_finite_skip(size_t n) {
+    double *p = malloc(3 * n * sizeof *p), *fin = malloc(3 * n * sizeof *fin);
+    double *out = malloc(3 * n * sizeof *out), *fout = malloc(3 * n * sizeof *fout);
+    double *nrm = malloc(3 * n * sizeof *nrm), *fnrm = malloc(3 * n * sizeof *fnrm);
+    uint8_t *flags = malloc(n), *fflags = malloc(n);
+    nbhd_point_geometry *geo = malloc(n * sizeof *geo), *fgeo = malloc(n * sizeof *fgeo);
+    nbhd_smooth_options o = nbhd_smooth_options_default();
+    nbhd_robust_options ro = nbhd_robust_options_default();
+    nbhd_normal_options no = nbhd_normal_options_default();
+    nbhd_normals_output nout, fnout;
+    nbhd_points pts, fpts;
+    size_t i, m = 0, j;
+
+    sphere(p, n, 0.05 * spacing(n));
+    for (i = 0; i < n; i++) {
+        if (i % 7 == 3) {
+            p[3 * i] = NAN; /* a hole, as PCL marks them */
+            p[3 * i + 1] = NAN;
+            p[3 * i + 2] = NAN;
+        } else {
+            memcpy(fin + 3 * m, p + 3 * i, 3 * sizeof *p);
+            m++;
+        }
+    }
+    pts = describe(p, n, 0, NBHD_SCALAR_TYPE_F64);
+    fpts = describe(fin, m, 0, NBHD_SCALAR_TYPE_F64);
+    /* Rejected by default, as nbhd_tree_build does. */
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_NON_FINITE);
+    CHECK_MESSAGE("point 3 ");
+    o.non_finite = NBHD_NON_FINITE_POLICY_SKIP;
+    ro.non_finite = NBHD_NON_FINITE_POLICY_SKIP;
+    no.non_finite = NBHD_NON_FINITE_POLICY_SKIP;
+    nout = packed_normals(nrm, flags);
+    fnout = packed_normals(fnrm, fflags);
+
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, geo, NULL), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_smooth(&fpts, NULL, fout, fgeo, NULL), NBHD_STATUS_OK);
+    for (i = 0, j = 0; i < n; i++) {
+        if (i % 7 == 3) {
+            CHECK(isnan(out[3 * i]) && isnan(out[3 * i + 1]) && isnan(out[3 * i + 2]));
+            CHECK(isnan(geo[i].normal[0]) && isnan(geo[i].k1) && geo[i].normal_flags == 8);
+        } else {
+            CHECK(memcmp(out + 3 * i, fout + 3 * j, 3 * sizeof *out) == 0);
+            /* field by field: the struct's padding bytes are not written */
+            CHECK(memcmp(geo[i].normal, fgeo[j].normal, sizeof geo[i].normal) == 0);
+            CHECK(geo[i].k1 == fgeo[j].k1 && geo[i].k2 == fgeo[j].k2);
+            CHECK(geo[i].covariance_quotient == fgeo[j].covariance_quotient);
+            CHECK(geo[i].normal_flags == fgeo[j].normal_flags);
+            j++;
+        }
+    }
+    CHECK_STATUS(nbhd_estimate_normals(&pts, &no, &nout), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_estimate_normals(&fpts, NULL, &fnout), NBHD_STATUS_OK);
+    for (i = 0, j = 0; i < n; i++) {
+        if (i % 7 == 3) {
+            CHECK(isnan(nrm[3 * i]) && flags[i] == 8);
+        } else {
+            CHECK(memcmp(nrm + 3 * i, fnrm + 3 * j, 3 * sizeof *nrm) == 0 && flags[i] == fflags[j]);
+            j++;
+        }
+    }
+    CHECK_STATUS(nbhd_estimate_curvatures(&pts, &o, geo, NULL), NBHD_STATUS_OK);
+    for (i = 0; i < n; i++) CHECK((i % 7 == 3) == (geo[i].normal_flags == 8));
+    /* In place: the holes stay NaN, the other points move. */
+    memcpy(out, p, 3 * n * sizeof *p);
+    CHECK_STATUS(nbhd_smooth_robust(&pts, &ro, out, NULL, NULL), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_smooth_robust(&pts, &ro, p, geo, NULL), NBHD_STATUS_OK);
+    for (i = 0; i < n; i++) {
+        if (i % 7 == 3) CHECK(isnan(p[3 * i]) && geo[i].normal_flags == 8);
+        else CHECK(p[3 * i] == out[3 * i] && isfinite(geo[i].normal[0]));
+    }
+    /* Nothing but holes: nothing to compute. */
+    pts.count = 1;
+    pts.data = p + 3 * 3;
+    CHECK_STATUS(nbhd_smooth(&pts, &o, out, NULL, NULL), NBHD_STATUS_EMPTY_INPUT);
+    free(p); free(fin); free(out); free(fout); free(nrm); free(fnrm);
+    free(flags); free(fflags); free(geo); free(fgeo);
+}
+
+/* epsilon = 0.01 meant as a length but left RELATIVE (0.01 h): refused with DEGENERATE and a
+ * message giving epsilon in the points' units; the same 0.01 taken as ABSOLUTE is fine. */
+static void test_units_are_not_silent(size_t n) {
+    double *p = malloc(3 * n * sizeof *p), *nrm = malloc(3 * n * sizeof *nrm);
+    nbhd_normal_options no = nbhd_normal_options_default();
+    nbhd_normals_output nout = packed_normals(nrm, NULL);
+    nbhd_points pts;
+    sphere(p, n, 0.0);
+    pts = describe(p, n, 0, NBHD_SCALAR_TYPE_F64);
+    no.epsilon = 0.01;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, &no, &nout), NBHD_STATUS_DEGENERATE);
+    CHECK_MESSAGE("epsilon resolved to");
+    CHECK_MESSAGE("in the points' units");
+    CHECK_MESSAGE("ABSOLUTE");
+    no.epsilon = 6.0 * spacing(n);
+    no.epsilon_units = NBHD_UNITS_ABSOLUTE;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, &no, &nout), NBHD_STATUS_OK);
+    free(p);
+    free(nrm);
+}
+
+/* Normals and PCL's curvature written in place into a PCL-like record (float normal[4], float
+ * curvature, 3 floats of padding: the layout of pcl::Normal), the other bytes untouched;
+ * the same values as the packed double output and nbhd_estimate_curvatures' surface
+ * variation, rounded to float. */
+typedef struct {
+    float normal[4];
+    float curvature;
+    float pad[3];
+} pcl_like_normal;
+
+static void test_normals_into_a_pcl_layout(size_t n) {
+    double *p = malloc(3 * n * sizeof *p), *nrm = malloc(3 * n * sizeof *nrm);
+    pcl_like_normal *rec = malloc(n * sizeof *rec);
+    nbhd_point_geometry *geo = malloc(n * sizeof *geo);
+    nbhd_normals_output nout = packed_normals(nrm, NULL), rout;
+    nbhd_points pts;
+    size_t i;
+    sphere(p, n, 0.1 * spacing(n));
+    pts = describe(p, n, 0, NBHD_SCALAR_TYPE_F64);
+    memset(rec, 0x5a, n * sizeof *rec);
+    memset(&rout, 0, sizeof rout);
+    rout.normals = &rec[0].normal[0];
+    rout.normals_stride = sizeof *rec;
+    rout.scalar_type = NBHD_SCALAR_TYPE_F32;
+    rout.curvature = &rec[0].curvature;
+    rout.curvature_stride = sizeof *rec;
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, &rout), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_estimate_normals(&pts, NULL, &nout), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_estimate_curvatures(&pts, NULL, geo, NULL), NBHD_STATUS_OK);
+    for (i = 0; i < n; i++) {
+        const unsigned char *pad = (const unsigned char *)rec[i].pad;
+        size_t b;
+        CHECK(rec[i].normal[0] == (float)nrm[3 * i] && rec[i].normal[1] == (float)nrm[3 * i + 1] &&
+              rec[i].normal[2] == (float)nrm[3 * i + 2]);
+        CHECK(rec[i].curvature == (float)geo[i].covariance_quotient);
+        CHECK(rec[i].curvature >= 0.0f && rec[i].curvature <= 1.0f / 3.0f + 1e-6f);
+        for (b = 0; b < sizeof rec[i].pad; b++) CHECK(pad[b] == 0x5a);
+        CHECK(((const unsigned char *)&rec[i].normal[3])[0] == 0x5a);
+    }
+    free(p);
+    free(nrm);
+    free(rec);
+    free(geo);
 }
 
 int main(int argc, char **argv) {
@@ -386,6 +569,9 @@ int main(int argc, char **argv) {
     test_threads_agree(n / 2);
     test_robust(n);
     test_errors();
+    test_non_finite_skip(n);
+    test_units_are_not_silent(n);
+    test_normals_into_a_pcl_layout(n);
     printf("smooth_test: %d checks, %d failed\n", checks, failures);
     return failures == 0 ? 0 : 1;
 }

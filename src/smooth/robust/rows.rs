@@ -139,6 +139,11 @@ impl Rows {
         &row[..row.len().min(k)]
     }
 
+    /// The largest number of neighbours any point has within ε.
+    pub(super) fn max_len(&self) -> usize {
+        self.len.iter().copied().max().unwrap_or(0) as usize
+    }
+
     /// The smallest number of neighbours any point has in its first `k`.
     pub(super) fn min_narrow_len(&self, k: usize) -> usize {
         self.len

@@ -1,0 +1,376 @@
+//! Normals for C: their own options struct (the neighbourhood, the orientation and the
+//! non-finite policy — nothing of smoothing) and an output description with strides, so that
+//! the normals (and PCL's curvature, the surface variation) are written straight into a
+//! caller's point type such as `pcl::Normal` or `pcl::PointNormal`. The export converts its
+//! arguments and calls [`crate::smooth::smooth_with_progress`] with no step; nothing is
+//! computed here.
+
+use std::ffi::c_void;
+
+use super::args::{check_aligned, check_optional, check_ptr};
+use super::smooth::{
+    length, nbhd_orientation, nbhd_progress_fn, nbhd_units, orientation_to_c, read_orientation,
+    read_points, run_with_progress, units_of_length,
+};
+use super::status::{guard, guard_value, nbhd_status, FfiError};
+use super::types::read_enum;
+use super::types::{c_enum_field, c_field, nbhd_non_finite_policy, nbhd_points, nbhd_scalar_type};
+use crate::error::NbhdError;
+use crate::scalar::ScalarType;
+use crate::smooth::{self, Curvature, SmoothOptions};
+
+/// Options of nbhd_estimate_normals. Start from nbhd_normal_options_default() and change
+/// what you need.
+///
+/// The neighbourhood of a point is the thesis' ε-k-neighbourhood (Section 2.1.1): its `k`
+/// nearest other points within `epsilon`; the normal is the eigenvector of the smallest
+/// eigenvalue of the covariance of the point and its neighbourhood (eq. 2.8–2.10), as PCL's
+/// NormalEstimation computes it.
+///
+/// UNITS: `epsilon` is RELATIVE by default — a multiple of the mean spacing h of the points
+/// (the mean distance of a point to its nearest other point), NOT a length in the points'
+/// units. The default `epsilon = 6` means 6 h. For a radius in the points' units (say 1 cm in
+/// metre coordinates) set BOTH `epsilon = 0.01` and `epsilon_units = NBHD_UNITS_ABSOLUTE`;
+/// a relative `epsilon = 0.01` (0.01 h, below any neighbour) is refused with
+/// NBHD_STATUS_DEGENERATE, whose message gives ε resolved to the points' units.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct nbhd_normal_options {
+    /// Maximum valence k (>= 1): at most the k nearest other points. Default 15.
+    pub k: usize,
+    /// Influence radius ε (> 0), plain (not squared), inclusive; in `epsilon_units`.
+    /// Default 6 (relative: 6 h).
+    pub epsilon: f64,
+    /// Units of `epsilon`: NBHD_UNITS_RELATIVE (multiples of h, the default) or
+    /// NBHD_UNITS_ABSOLUTE (the points' own units).
+    pub epsilon_units: nbhd_units,
+    /// Orientation of the normals. Default unoriented. NBHD_ORIENTATION_TOWARD_POINT with the
+    /// sensor position is PCL's flipNormalTowardsViewpoint: dot(viewpoint − p, n) >= 0.
+    pub orientation: nbhd_orientation,
+    /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+    pub orientation_point: [f64; 3],
+    /// Points with a NaN or infinite coordinate: REJECT (the default) refuses the input with
+    /// NON_FINITE; SKIP leaves them out — they keep their index and get a NaN normal (and
+    /// curvature) and flag 8.
+    pub non_finite: nbhd_non_finite_policy,
+    /// Worker threads: 0 the shared pool, n >= 1 a pool of n threads made for this call.
+    /// Results are identical for every value. Default 0.
+    pub threads: usize,
+    /// Called with the progress of the run; NULL for none. Default NULL.
+    pub progress: nbhd_progress_fn,
+    /// Passed to `progress` unchanged. Default NULL.
+    pub progress_user_data: *mut c_void,
+}
+
+/// Where nbhd_estimate_normals writes, in the caller's layout: point i's normal (x, y, z) at
+/// byte `i * normals_stride` from `normals`, its curvature at byte `i * curvature_stride`
+/// from `curvature`, all of `scalar_type`; only these values are written, other bytes of a
+/// strided layout are left alone. Strides of 0 mean packed (3 values, 1 value).
+///
+/// For `pcl::PointCloud<pcl::Normal> cloud` (float normal_x/y/z, then curvature, 32 bytes):
+/// `{&cloud[0].normal_x, sizeof(pcl::Normal), NBHD_SCALAR_TYPE_F32, &cloud[0].curvature,
+/// sizeof(pcl::Normal), NULL}`; for `pcl::PointNormal` use `&cloud[0].normal_x`,
+/// `&cloud[0].curvature` and `sizeof(pcl::PointNormal)`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct nbhd_normals_output {
+    /// First byte of point 0's normal. Must not be NULL.
+    pub normals: *mut c_void,
+    /// Bytes from one point's normal to the next: 0 (packed) or at least 3 values.
+    pub normals_stride: usize,
+    /// Type of every value written (normals and curvature).
+    pub scalar_type: nbhd_scalar_type,
+    /// First byte of point 0's curvature, or NULL for none. The curvature is PCL's: the
+    /// surface variation λ0 / (λ0 + λ1 + λ2) of the covariance eigenvalues (0 on a plane, at
+    /// most 1/3), as pcl::NormalEstimation writes to `curvature`.
+    pub curvature: *mut c_void,
+    /// Bytes from one point's curvature to the next: 0 (packed) or at least one value.
+    pub curvature_stride: usize,
+    /// `points->count` bytes (packed), or NULL: 0 for a well-defined normal, otherwise the
+    /// bits of nbhd_point_geometry.normal_flags (8: the point was skipped).
+    pub flags: *mut u8,
+}
+
+/// The C defaults of the normal options: those of the core ([`SmoothOptions::default`]).
+fn default_options() -> nbhd_normal_options {
+    let d = SmoothOptions::default();
+    let (epsilon_units, epsilon) = units_of_length(d.epsilon);
+    let (orientation, orientation_point) = orientation_to_c(d.orientation);
+    nbhd_normal_options {
+        k: d.k,
+        epsilon,
+        epsilon_units,
+        orientation,
+        orientation_point,
+        non_finite: d.non_finite.into(),
+        threads: 0,
+        progress: None,
+        progress_user_data: std::ptr::null_mut(),
+    }
+}
+
+/// The default normal options: the 15 nearest other points within 6 h (RELATIVE units: h is
+/// the mean spacing), unoriented, non-finite points rejected, the shared thread pool, no
+/// progress callback.
+#[no_mangle]
+pub extern "C" fn nbhd_normal_options_default() -> nbhd_normal_options {
+    guard_value(
+        "nbhd_normal_options_default",
+        default_options(),
+        default_options,
+    )
+}
+
+/// The options of one call read from C.
+struct NormalArgs {
+    core: SmoothOptions,
+    threads: usize,
+    progress: nbhd_progress_fn,
+    user_data: *mut c_void,
+}
+
+/// Reads `*options` field by field (NULL gives the defaults).
+///
+/// # Safety
+/// `options` must be NULL or point to a readable `nbhd_normal_options`.
+unsafe fn read_options(options: *const nbhd_normal_options) -> Result<NormalArgs, FfiError> {
+    let defaults = default_options();
+    let o: *const nbhd_normal_options = if options.is_null() {
+        &defaults
+    } else {
+        check_ptr(options, "options")?;
+        options
+    };
+    let epsilon = length(
+        c_enum_field!(o, epsilon_units, nbhd_units),
+        c_field!(o, epsilon),
+    );
+    let orientation = read_orientation(
+        c_enum_field!(o, orientation, nbhd_orientation),
+        c_field!(o, orientation_point),
+    )?;
+    let core = SmoothOptions {
+        k: c_field!(o, k),
+        epsilon,
+        steps: 0,
+        // the normals do not read λ; absolute, it needs no spacing (coincident points)
+        lambda: Curvature::Absolute(1.0),
+        orientation,
+        non_finite: c_enum_field!(o, non_finite, nbhd_non_finite_policy).into(),
+        outputs: true,
+        ..SmoothOptions::default()
+    };
+    Ok(NormalArgs {
+        core,
+        threads: c_field!(o, threads),
+        progress: c_field!(o, progress),
+        user_data: c_field!(o, progress_user_data),
+    })
+}
+
+/// One strided output array: where, how far apart, how many values per point.
+struct Strided {
+    at: *mut u8,
+    stride: usize,
+    scalar: ScalarType,
+}
+
+impl Strided {
+    /// Checks a strided array of `count` points of `width` values named `what`: the stride
+    /// (0 = packed) holds one point's values and the span does not overflow.
+    fn new(
+        at: *mut c_void,
+        stride: usize,
+        scalar: ScalarType,
+        width: usize,
+        count: usize,
+        what: &str,
+    ) -> Result<Self, FfiError> {
+        let size = width * scalar.size();
+        let stride = if stride == 0 { size } else { stride };
+        if stride < size {
+            return Err(FfiError::InvalidArgument(format!(
+                "out->{what}_stride {stride} is smaller than {width} value(s) of {} bytes",
+                scalar.size()
+            )));
+        }
+        if (count.max(1) - 1)
+            .checked_mul(stride)
+            .and_then(|b| b.checked_add(size))
+            .is_none_or(|b| b > isize::MAX as usize)
+        {
+            return Err(NbhdError::SizeOverflow {
+                what: format!("out->{what} with {count} points and stride {stride}"),
+            }
+            .into());
+        }
+        Ok(Self {
+            at: at.cast(),
+            stride,
+            scalar,
+        })
+    }
+
+    /// Writes the values of point `i`, unaligned.
+    ///
+    /// # Safety
+    /// The array must be writable for point `i` in the layout checked by [`Strided::new`], and
+    /// no Rust borrow of it may be live.
+    unsafe fn write(&self, i: usize, values: &[f64]) {
+        let size = self.scalar.size();
+        for (c, &v) in values.iter().enumerate() {
+            // SAFETY: inside point i's values of the caller's writable array (caller); the
+            // offset cannot overflow (checked in `new`); unaligned writes.
+            unsafe {
+                let p = self.at.add(i * self.stride + c * size);
+                match self.scalar {
+                    ScalarType::F32 => p.cast::<f32>().write_unaligned(v as f32),
+                    ScalarType::F64 => p.cast::<f64>().write_unaligned(v),
+                }
+            }
+        }
+    }
+}
+
+/// Estimates the normal of every point (thesis eq. 2.8–2.10: the eigenvector of the smallest
+/// eigenvalue of the covariance of the point and its ε-k-neighbourhood), oriented as
+/// `options->orientation` asks, and writes it into the caller's layout `*out` (see
+/// nbhd_normals_output: a packed `double[3 * count]`, or the fields of `pcl::Normal` /
+/// `pcl::PointNormal` in place), with PCL's curvature (the surface variation) and the
+/// degeneracy flags if asked. Degenerate neighbourhoods give a finite unit vector and a flag,
+/// never NaN; skipped points (NBHD_NON_FINITE_POLICY_SKIP) a NaN normal and curvature.
+/// `options` may be NULL for the defaults (NOTE: ε is then 6 × the mean spacing, RELATIVE
+/// units). Nothing is written unless the call succeeds.
+///
+/// Errors: NULL_POINTER (`points`, `points->data`, `out`, `out->normals`),
+/// MISALIGNED_POINTER, INVALID_ARGUMENT (dimension other than 3, an enum field out of range,
+/// an output stride smaller than its values or one that overflows), EMPTY_INPUT,
+/// STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite REJECT), INVALID_K,
+/// INVALID_OPTION (ε not > 0, relative units on a set without two distinct points, a
+/// non-finite orientation point), DEGENERATE (no neighbourhood reached 3 points, or every
+/// normal is flagged: usually ε far too small — check `epsilon_units`; the message gives ε in
+/// the points' units), OUT_OF_MEMORY, THREAD_POOL, CANCELLED.
+///
+/// # Safety
+/// `points` must describe readable memory; `out` must point to a readable
+/// nbhd_normals_output whose arrays are writable for `points->count` points in the layout it
+/// describes; `options` NULL or readable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_estimate_normals(
+    points: *const nbhd_points,
+    options: *const nbhd_normal_options,
+    out: *const nbhd_normals_output,
+) -> nbhd_status {
+    guard("nbhd_estimate_normals", || {
+        // SAFETY: forwarded from the caller.
+        let (_, pts) = unsafe { read_points(points) }?;
+        check_ptr(out, "out")?;
+        // SAFETY: `out` is non-NULL and aligned (checked above) and readable (caller); its
+        // fields are read through raw places, the enum as `int` and checked.
+        let (normals, normals_stride, scalar, curvature, curvature_stride, flags) = unsafe {
+            (
+                std::ptr::addr_of!((*out).normals).read(),
+                std::ptr::addr_of!((*out).normals_stride).read(),
+                read_enum::<nbhd_scalar_type>(std::ptr::addr_of!((*out).scalar_type)).map_err(
+                    |v| super::types::invalid_enum::<nbhd_scalar_type>("out", "scalar_type", v),
+                )?,
+                std::ptr::addr_of!((*out).curvature).read(),
+                std::ptr::addr_of!((*out).curvature_stride).read(),
+                std::ptr::addr_of!((*out).flags).read(),
+            )
+        };
+        let scalar = ScalarType::from(scalar);
+        check_aligned(normals.cast_const(), 1, "out->normals")?;
+        check_optional(flags.cast_const(), "out->flags")?;
+        let n = pts.len();
+        let normals = Strided::new(normals, normals_stride, scalar, 3, n, "normals")?;
+        let curvature = if curvature.is_null() {
+            None
+        } else {
+            Some(Strided::new(
+                curvature,
+                curvature_stride,
+                scalar,
+                1,
+                n,
+                "curvature",
+            )?)
+        };
+        // SAFETY: forwarded from the caller.
+        let args = unsafe { read_options(options) }?;
+        let core = args.core;
+        let result = run_with_progress(args.threads, args.progress, args.user_data, |p| {
+            smooth::smooth_with_progress(&pts, &core, p)
+        })?;
+        for (i, o) in result.outputs.iter().enumerate() {
+            // SAFETY: the arrays are writable for `n` points in the checked layouts (caller);
+            // the input view was dropped in `read_points`, so nothing borrowed overlaps.
+            unsafe {
+                normals.write(i, &o.normal.to_array());
+                if let Some(c) = &curvature {
+                    c.write(i, &[o.covariance_quotient]);
+                }
+            }
+        }
+        if !flags.is_null() {
+            let f: Vec<u8> = result.outputs.iter().map(|o| o.normal_flags).collect();
+            // SAFETY: `flags` is non-NULL and writable for `n` bytes (caller); it cannot
+            // overlap `f`, nbhd's own memory.
+            unsafe { std::ptr::copy_nonoverlapping(f.as_ptr(), flags, f.len()) };
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::{sample, Sphere};
+
+    #[test]
+    fn defaults_mirror_the_core() {
+        // SAFETY: NULL asks for the defaults.
+        let a = unsafe { read_options(std::ptr::null()) }.unwrap();
+        let d = SmoothOptions::default();
+        assert_eq!((a.core.k, a.core.epsilon), (d.k, d.epsilon));
+        assert_eq!(a.core.non_finite, d.non_finite);
+        assert_eq!((a.core.steps, a.core.outputs), (0, true));
+        let c = nbhd_normal_options_default();
+        // SAFETY: a live, initialised options struct.
+        let b = unsafe { read_options(&c) }.unwrap();
+        assert_eq!(a.core, b.core);
+    }
+
+    #[test]
+    fn normals_into_a_strided_float_layout_equal_the_core() {
+        let s = sample(&Sphere::new(1.0), 500, 4);
+        let data: Vec<f64> = s.points.iter().flat_map(|p| p.to_array()).collect();
+        let pts = nbhd_points {
+            data: data.as_ptr().cast(),
+            count: s.points.len(),
+            dim: 3,
+            stride: 0,
+            scalar_type: nbhd_scalar_type::F64,
+        };
+        // a PCL-like record: 4 floats of normal, then curvature and 3 floats of padding
+        let mut rec = vec![[7f32; 8]; s.points.len()];
+        let out = nbhd_normals_output {
+            normals: rec.as_mut_ptr().cast(),
+            normals_stride: 32,
+            scalar_type: nbhd_scalar_type::F32,
+            curvature: rec[0][4..].as_mut_ptr().cast(),
+            curvature_stride: 32,
+            flags: std::ptr::null_mut(),
+        };
+        // SAFETY: the descriptors match `data` and `rec`.
+        let st = unsafe { nbhd_estimate_normals(&pts, std::ptr::null(), &out) };
+        assert_eq!(st, nbhd_status::Ok);
+        let core = smooth::analyze(&s.points, &SmoothOptions::default()).unwrap();
+        for (r, o) in rec.iter().zip(&core.outputs) {
+            assert_eq!(&r[..3], &o.normal.as_vec3().to_array());
+            assert_eq!(r[3], 7.0);
+            assert_eq!(r[4], o.covariance_quotient as f32);
+            assert_eq!(&r[5..], &[7.0; 3]);
+        }
+    }
+}
