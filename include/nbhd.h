@@ -1464,6 +1464,98 @@ nbhd_status nbhd_smooth_robust(const nbhd_points *points,
                                nbhd_point_geometry *out_geometry,
                                nbhd_smooth_summary *out_summary);
 
+/**
+ * nbhd_smooth on the points a built tree holds, with the tree's own search for the
+ * neighbourhoods (no second build). `out_coords` receives the smoothed points packed in the
+ * caller's index order, three values of the tree's scalar type each; `out_geometry` and
+ * `out_summary` as in nbhd_smooth. The result is nbhd_smooth's on the same points.
+ *
+ * Errors: as nbhd_smooth; NULL_POINTER (`tree`, `out_coords`); INVALID_OPTION when the tree
+ * is not 3-D or skipped non-finite points (smooth the points themselves with a SKIP policy
+ * instead).
+ *
+ * # Safety
+ * `tree` must be a live tree; `out_coords` writable for 3 × the tree's point count values;
+ * `out_geometry`, `out_summary` NULL or writable; `options` NULL or readable.
+ */
+nbhd_status nbhd_smooth_tree(const nbhd_tree *tree,
+                             const nbhd_smooth_options *options,
+                             void *out_coords,
+                             nbhd_point_geometry *out_geometry,
+                             nbhd_smooth_summary *out_summary);
+
+/**
+ * nbhd_estimate_curvatures on the points a built tree holds (normals, curvatures and the
+ * other per-point geometry, without a second build). Errors: as nbhd_smooth_tree.
+ *
+ * # Safety
+ * `tree` must be a live tree; `out_geometry` writable for the tree's point count;
+ * `out_summary` NULL or writable; `options` NULL or readable.
+ */
+nbhd_status nbhd_estimate_curvatures_tree(const nbhd_tree *tree,
+                                          const nbhd_smooth_options *options,
+                                          nbhd_point_geometry *out_geometry,
+                                          nbhd_smooth_summary *out_summary);
+
+/**
+ * nbhd_smooth_robust on the points a built tree holds (its `k_plane` nearest from the tree's
+ * own search). Outputs and errors: as nbhd_smooth_tree.
+ *
+ * # Safety
+ * As nbhd_smooth_tree.
+ */
+nbhd_status nbhd_smooth_robust_tree(const nbhd_tree *tree,
+                                    const nbhd_robust_options *options,
+                                    void *out_coords,
+                                    nbhd_point_geometry *out_geometry,
+                                    nbhd_smooth_summary *out_summary);
+
+/**
+ * nbhd_smooth with the neighbourhoods of `table` instead of a search: row i of `table`
+ * (nbhd_tree_neighborhoods with each point left out of its own row, on the same points) gives
+ * the candidates of point i, of which the first k within ε are taken, as from the call's own
+ * search; a k-nearest table with at least `options->k` gives exactly nbhd_smooth's result.
+ * A float table's rows are re-measured in double. Outputs as nbhd_smooth.
+ *
+ * Errors: as nbhd_smooth; NULL_POINTER (`table`); INVALID_OPTION when the table does not fit
+ * the points (row count, an index out of range, a point in its own row, rows out of order).
+ *
+ * # Safety
+ * As nbhd_smooth; `table` must be a live table.
+ */
+nbhd_status nbhd_smooth_table(const nbhd_points *points,
+                              const nbhd_neighborhoods *table,
+                              const nbhd_smooth_options *options,
+                              void *out_coords,
+                              nbhd_point_geometry *out_geometry,
+                              nbhd_smooth_summary *out_summary);
+
+/**
+ * nbhd_estimate_curvatures with the neighbourhoods of `table` (see nbhd_smooth_table).
+ *
+ * # Safety
+ * As nbhd_estimate_curvatures; `table` must be a live table.
+ */
+nbhd_status nbhd_estimate_curvatures_table(const nbhd_points *points,
+                                           const nbhd_neighborhoods *table,
+                                           const nbhd_smooth_options *options,
+                                           nbhd_point_geometry *out_geometry,
+                                           nbhd_smooth_summary *out_summary);
+
+/**
+ * nbhd_smooth_robust with the neighbourhoods of `table` (the first `k_plane` of each row; see
+ * nbhd_smooth_table).
+ *
+ * # Safety
+ * As nbhd_smooth_robust; `table` must be a live table.
+ */
+nbhd_status nbhd_smooth_robust_table(const nbhd_points *points,
+                                     const nbhd_neighborhoods *table,
+                                     const nbhd_robust_options *options,
+                                     void *out_coords,
+                                     nbhd_point_geometry *out_geometry,
+                                     nbhd_smooth_summary *out_summary);
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif  // __cplusplus

@@ -37,9 +37,12 @@ pub mod normals;
 
 pub mod robust;
 
+pub mod prepared;
+
 mod args;
 
 pub use normals::*;
+pub use prepared::*;
 pub use query::*;
 pub use robust::*;
 pub use smooth::*;

@@ -96,7 +96,7 @@ pub extern "C" fn nbhd_robust_options_default() -> nbhd_robust_options {
 ///
 /// # Safety
 /// `options` must be NULL or point to a readable `nbhd_robust_options`.
-unsafe fn read_options(
+pub(super) unsafe fn read_options(
     options: *const nbhd_robust_options,
 ) -> Result<(RobustOptions, usize, nbhd_progress_fn, *mut c_void), FfiError> {
     let defaults = default_options();

@@ -376,11 +376,11 @@ pub(super) fn orientation_to_c(o: Orientation) -> (nbhd_orientation, [f64; 3]) {
 }
 
 /// The options of one call after reading them from C.
-struct SmoothArgs {
-    core: SmoothOptions,
-    threads: usize,
-    progress: nbhd_progress_fn,
-    user_data: *mut c_void,
+pub(super) struct SmoothArgs {
+    pub(super) core: SmoothOptions,
+    pub(super) threads: usize,
+    pub(super) progress: nbhd_progress_fn,
+    pub(super) user_data: *mut c_void,
 }
 
 /// Reads `*options` field by field (NULL gives the defaults); enum fields are read as `int`
@@ -388,7 +388,9 @@ struct SmoothArgs {
 ///
 /// # Safety
 /// `options` must be NULL or point to a readable `nbhd_smooth_options`.
-unsafe fn read_options(options: *const nbhd_smooth_options) -> Result<SmoothArgs, FfiError> {
+pub(super) unsafe fn read_options(
+    options: *const nbhd_smooth_options,
+) -> Result<SmoothArgs, FfiError> {
     let defaults = default_options();
     let o: *const nbhd_smooth_options = if options.is_null() {
         &defaults

@@ -19,6 +19,21 @@ pub struct nbhd_neighborhoods {
     table: AnyTable,
 }
 
+impl nbhd_neighborhoods {
+    /// The rows as the smoothing reads them (see `smooth::source::table_in_f64`).
+    pub(super) fn rows_in_f64(
+        &self,
+        points: &[glam::DVec3],
+    ) -> crate::Result<std::borrow::Cow<'_, NeighborTable<f64>>> {
+        use crate::smooth::source::table_in_f64;
+        Ok(match &self.table {
+            AnyTable::F64(t) if t.len() == points.len() => std::borrow::Cow::Borrowed(t),
+            AnyTable::F64(t) => std::borrow::Cow::Owned(table_in_f64(points, t)?),
+            AnyTable::F32(t) => std::borrow::Cow::Owned(table_in_f64(points, t)?),
+        })
+    }
+}
+
 /// A table of either scalar type.
 enum AnyTable {
     F32(NeighborTable<f32>),

@@ -215,16 +215,39 @@ pub fn tree_neighbors<T: Scalar>(
             threads: 0,
         },
     )?;
-    let mut offsets = Vec::with_capacity(n + 1);
+    let table = table_in_f64(&points, &rows)?;
+    Ok((points, table))
+}
+
+/// A table of either scalar type as the smoothing reads it: an `f64` table as it is, an `f32`
+/// table's rows re-measured in `f64` on `points` and re-ordered by `(sq_dist, index)` (its
+/// neighbour sets kept). A table that does not fit `points` is refused
+/// ([`NbhdError::InvalidOption`]).
+pub fn table_in_f64<T: Scalar>(
+    points: &[DVec3],
+    table: &NeighborTable<T>,
+) -> Result<NeighborTable<f64>> {
+    if table.len() != points.len() || table.indices().iter().any(|&j| j as usize >= points.len()) {
+        return Err(NbhdError::InvalidOption {
+            name: "table",
+            reason: format!(
+                "the table has {} rows for {} points, or names a point out of range",
+                table.len(),
+                points.len()
+            ),
+        });
+    }
+    let mut offsets = Vec::with_capacity(table.len() + 1);
     offsets.push(0);
-    let (mut index, mut sq_dist) = (Vec::with_capacity(rows.total()), Vec::new());
+    let (mut index, mut sq_dist) = (Vec::with_capacity(table.total()), Vec::new());
     let mut row: Vec<(f64, u32)> = Vec::new();
-    for i in 0..n {
+    for i in 0..table.len() {
         row.clear();
         row.extend(
-            rows.indices_of(i)
+            table
+                .indices_of(i)
                 .iter()
-                .zip(rows.sq_dists_of(i))
+                .zip(table.sq_dists_of(i))
                 .map(|(&j, &d)| {
                     let exact = if T::TYPE == ScalarType::F64 {
                         d.to_f64()
@@ -234,16 +257,15 @@ pub fn tree_neighbors<T: Scalar>(
                     (exact, j)
                 }),
         );
-        row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        if T::TYPE != ScalarType::F64 {
+            row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        }
         index.extend(row.iter().map(|e| e.1));
         sq_dist.extend(row.iter().map(|e| e.0));
         offsets.push(index.len());
     }
-    let table = NeighborTable::from_parts(offsets, index, sq_dist).ok_or_else(|| {
-        NbhdError::InvalidOption {
-            name: "tree",
-            reason: "the tree's table is inconsistent".into(),
-        }
-    })?;
-    Ok((points, table))
+    NeighborTable::from_parts(offsets, index, sq_dist).ok_or_else(|| NbhdError::InvalidOption {
+        name: "table",
+        reason: "the table's rows are inconsistent".into(),
+    })
 }

@@ -561,6 +561,101 @@ static void test_normals_into_a_pcl_layout(size_t n) {
     free(geo);
 }
 
+/* Field by field (the struct has padding bytes, which memcmp would read). */
+static bool same_geometry(const nbhd_point_geometry *a, const nbhd_point_geometry *b, size_t n) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        const nbhd_point_geometry *x = &a[i], *y = &b[i];
+        if (memcmp(x->normal, y->normal, sizeof x->normal) != 0 || x->k1 != y->k1 || x->k2 != y->k2 ||
+            memcmp(x->dir1, y->dir1, sizeof x->dir1) != 0 || memcmp(x->dir2, y->dir2, sizeof x->dir2) != 0 ||
+            x->mean_curvature != y->mean_curvature || x->max_principal_curvature != y->max_principal_curvature ||
+            x->covariance_quotient != y->covariance_quotient ||
+            x->anisotropic_mean_curvature != y->anisotropic_mean_curvature ||
+            x->principal_curvature_quotient != y->principal_curvature_quotient ||
+            x->max_covariance != y->max_covariance || x->normal_flags != y->normal_flags ||
+            x->feature != y->feature || x->interior != y->interior)
+            return false;
+    }
+    return true;
+}
+
+/* Smoothing what the caller already has: the points of a built tree, or points with a
+ * neighbourhood table. Every result is the bytes of the point-buffer call on the same
+ * neighbourhoods (a k-nearest table with at least the call's k; the tree's own search). */
+static void test_from_tree_and_table(size_t n) {
+    double *p = malloc(3 * n * sizeof *p);
+    double *want = malloc(3 * n * sizeof *want), *got = malloc(3 * n * sizeof *got);
+    nbhd_point_geometry *gw = malloc(n * sizeof *gw), *gg = malloc(n * sizeof *gg);
+    nbhd_smooth_summary sw, sg;
+    nbhd_smooth_options so = nbhd_smooth_options_default();
+    nbhd_robust_options ro = nbhd_robust_options_default();
+    nbhd_build_options bo = nbhd_build_options_default();
+    nbhd_tree *tree = NULL;
+    nbhd_neighborhoods *knn48 = NULL, *knn3 = NULL;
+    nbhd_neighborhood_spec spec = {NBHD_NEIGHBORHOOD_KIND_KNN, 48, 0.0};
+    nbhd_points pts;
+
+    sphere(p, n, 0.5 * spacing(n));
+    pts = describe(p, n, 0, NBHD_SCALAR_TYPE_F64);
+    CHECK_STATUS(nbhd_tree_build(&pts, &bo, &tree), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_tree_neighborhoods(tree, &spec, NULL, &knn48), NBHD_STATUS_OK);
+
+    /* faithful: tree and table against the points */
+    CHECK_STATUS(nbhd_smooth(&pts, &so, want, gw, &sw), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_smooth_tree(tree, &so, got, gg, &sg), NBHD_STATUS_OK);
+    CHECK(memcmp(want, got, 3 * n * sizeof *got) == 0);
+    CHECK(same_geometry(gw, gg, n) && memcmp(&sw, &sg, sizeof sg) == 0);
+    memset(got, 0, 3 * n * sizeof *got);
+    CHECK_STATUS(nbhd_smooth_table(&pts, knn48, &so, got, gg, &sg), NBHD_STATUS_OK);
+    CHECK(memcmp(want, got, 3 * n * sizeof *got) == 0);
+    CHECK(same_geometry(gw, gg, n) && memcmp(&sw, &sg, sizeof sg) == 0);
+
+    /* normals and curvatures */
+    CHECK_STATUS(nbhd_estimate_curvatures(&pts, &so, gw, &sw), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_estimate_curvatures_tree(tree, &so, gg, &sg), NBHD_STATUS_OK);
+    CHECK(same_geometry(gw, gg, n) && memcmp(&sw, &sg, sizeof sg) == 0);
+    memset(gg, 0, n * sizeof *gg);
+    CHECK_STATUS(nbhd_estimate_curvatures_table(&pts, knn48, &so, gg, &sg), NBHD_STATUS_OK);
+    CHECK(same_geometry(gw, gg, n));
+
+    /* robust: its k_plane = 48 nearest */
+    ro.max_iterations = 3;
+    CHECK_STATUS(nbhd_smooth_robust(&pts, &ro, want, NULL, &sw), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_smooth_robust_tree(tree, &ro, got, NULL, &sg), NBHD_STATUS_OK);
+    CHECK(memcmp(want, got, 3 * n * sizeof *got) == 0 && memcmp(&sw, &sg, sizeof sg) == 0);
+    memset(got, 0, 3 * n * sizeof *got);
+    CHECK_STATUS(nbhd_smooth_robust_table(&pts, knn48, &ro, got, NULL, &sg), NBHD_STATUS_OK);
+    CHECK(memcmp(want, got, 3 * n * sizeof *got) == 0);
+
+    /* refusals: NULLs, a table of another cloud, a table with each point in its own row */
+    CHECK_STATUS(nbhd_smooth_tree(NULL, &so, got, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_MESSAGE("tree");
+    CHECK_STATUS(nbhd_smooth_tree(tree, &so, NULL, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_smooth_table(&pts, NULL, &so, got, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_MESSAGE("table");
+    pts.count = n - 1;
+    CHECK_STATUS(nbhd_smooth_table(&pts, knn48, &so, got, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("rows");
+    pts.count = n;
+    {
+        nbhd_table_options to = nbhd_table_options_default();
+        nbhd_neighborhood_spec s3 = {NBHD_NEIGHBORHOOD_KIND_KNN, 3, 0.0};
+        to.exclude_self = false;
+        CHECK_STATUS(nbhd_tree_neighborhoods(tree, &s3, &to, &knn3), NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_estimate_curvatures_table(&pts, knn3, &so, gg, NULL),
+                     NBHD_STATUS_INVALID_OPTION);
+        CHECK_MESSAGE("itself");
+    }
+    nbhd_neighborhoods_free(knn3);
+    nbhd_neighborhoods_free(knn48);
+    nbhd_tree_free(tree);
+    free(p);
+    free(want);
+    free(got);
+    free(gw);
+    free(gg);
+}
+
 int main(int argc, char **argv) {
     size_t n = argc > 1 ? (size_t)strtoul(argv[1], NULL, 10) : 3000;
     test_defaults();
@@ -572,6 +667,7 @@ int main(int argc, char **argv) {
     test_non_finite_skip(n);
     test_units_are_not_silent(n);
     test_normals_into_a_pcl_layout(n);
+    test_from_tree_and_table(n);
     printf("smooth_test: %d checks, %d failed\n", checks, failures);
     return failures == 0 ? 0 : 1;
 }
