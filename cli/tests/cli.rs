@@ -808,7 +808,8 @@ fn robust_smoothing_is_the_default_and_matches_the_library() {
         ),
     ] {
         let out = tmp("nsphere-robust.ply");
-        let mut a = vec!["--json", "smooth", &file, &out];
+        // the input holds doubles: keep them, to compare with the library bit for bit
+        let mut a = vec!["--json", "smooth", &file, &out, "--precision", "keep"];
         a.extend(&args);
         let v = json_of(&nbhd(&a));
         assert_eq!(v["method"], "robust");
