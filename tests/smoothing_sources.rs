@@ -158,3 +158,44 @@ fn tables_that_do_not_fit_the_points_are_refused() {
     let e = tree_neighbors(&tree, 15).unwrap_err().to_string();
     assert!(e.contains("skipped"), "{e}");
 }
+
+#[test]
+fn a_table_with_skipped_points_gives_the_same_as_the_skipping_point_call() {
+    let mut p = cloud();
+    p[5] = DVec3::new(f64::NAN, 0.0, 0.0);
+    p[40] = DVec3::new(0.0, f64::INFINITY, 0.0);
+    let flat: Vec<f64> = p.iter().flat_map(|q| q.to_array()).collect();
+    let tree = KdTree::<f64>::from_flat(
+        &flat,
+        3,
+        &BuildOptions {
+            non_finite: nbhd::NonFinitePolicy::Skip,
+            ..BuildOptions::default()
+        },
+    )
+    .unwrap();
+    // rows for the skipped points are empty; the others name finite points only
+    let table = tree
+        .neighborhoods(Neighborhood::Knn { k: 48 }, &TableOptions::default())
+        .unwrap();
+    let opts = SmoothOptions {
+        non_finite: nbhd::NonFinitePolicy::Skip,
+        ..SmoothOptions::default()
+    };
+    let want = smooth(&p, &opts).unwrap();
+    let got = smooth_from(&p, Neighbors::Table(&table), &opts, &mut |_, _| true).unwrap();
+    assert_eq!(got.points.len(), p.len());
+    for (a, b) in got.points.iter().zip(&want.points) {
+        assert!(a == b || (a.is_nan() && b.is_nan()), "{a} {b}");
+    }
+    let robust = RobustOptions {
+        non_finite: nbhd::NonFinitePolicy::Skip,
+        max_iterations: 2,
+        ..RobustOptions::default()
+    };
+    let want = smooth_robust_report(&p, &robust, &mut |_, _| true).unwrap();
+    let got = smooth_robust_from(&p, Neighbors::Table(&table), &robust, &mut |_, _| true).unwrap();
+    for (a, b) in got.result.points.iter().zip(&want.result.points) {
+        assert!(a == b || (a.is_nan() && b.is_nan()), "{a} {b}");
+    }
+}
