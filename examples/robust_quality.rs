@@ -1,5 +1,5 @@
 //! The robust mode against the faithful method on the analytic shapes, in the metrics of
-//! `notes/smoothing.md` (lengths in h = mean spacing of the clean sample; noise Gaussian, seed
+//! `docs/smoothing-results.md` (lengths in h = mean spacing of the clean sample; noise Gaussian, seed
 //! 1 for the sample and 2 for the noise, as `tests/smoothing_quality.rs` uses). Prints the
 //! markdown table of `docs/smoothing-results.md`.
 //!

@@ -1,5 +1,5 @@
 //! Quality of the faithful smoothing on the analytic test shapes, in the metrics of
-//! `notes/smoothing.md` (lengths in h = mean spacing of the clean sample).
+//! `docs/smoothing-results.md` (lengths in h = mean spacing of the clean sample).
 //!
 //! `cargo run --release --example smoothing_quality [points] [threads]`
 

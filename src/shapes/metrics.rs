@@ -1,4 +1,4 @@
-//! Quality metrics of the smoothing notes (`notes/smoothing.md`), all lengths in units of the
+//! Quality metrics of the smoothing results (`docs/smoothing-results.md`), all lengths in units of the
 //! mean spacing `h` of the clean sample. Points keep their order through smoothing, so point
 //! `i` of a result is compared with clean sample point `i`.
 
