@@ -72,6 +72,27 @@ fn check_raw_header(data: &[u8]) -> PResult<()> {
         .checked_mul(u64::from(raw.point_data_record_length))
         .and_then(|b| b.checked_add(u64::from(raw.offset_to_point_data)));
     let compressed = raw.point_data_record_format & 0x80 != 0;
+    // The `las` crate reads the first extended VLR and resizes its data to the 64-bit length
+    // in the record's header (byte 20 of 60) before reading: check the file holds it.
+    if let Some(evlr) = raw.evlr {
+        let at = evlr.start_of_first_evlr;
+        let len = usize::try_from(at)
+            .ok()
+            .and_then(|a| data.get(a.checked_add(20)?..a.checked_add(28)?))
+            .map(|b| u64::from_le_bytes(b.try_into().unwrap()));
+        if let Some(len) = len {
+            if at.saturating_add(60).saturating_add(len) > data.len() as u64 {
+                return Err(Fail {
+                    at: Some(super::Location::Byte(at + 20)),
+                    kind: super::IoErrorKind::Malformed(format!(
+                        "the extended VLR at byte {at} declares {len} bytes of data, but the \
+                         file has {} bytes",
+                        data.len()
+                    )),
+                });
+            }
+        }
+    }
     match end {
         None => Err(bad(format!(
             "the LAS header declares {count} points of {} bytes, which overflows",
