@@ -22,6 +22,11 @@ use std::io::Cursor;
 /// Points read per call into the `las` reader (its buffers never exceed this).
 const CHUNK: u64 = 1 << 16;
 
+/// Bytes of records read per call: the `las` reader sizes its buffer to the chunk's points
+/// times the record length before decompressing, and a LAZ file's declared count cannot be
+/// checked against its size (records up to 65,535 bytes × [`CHUNK`] would be 4 GiB).
+const CHUNK_BYTES: u64 = 16 << 20;
+
 fn las_err(what: &str, e: las::Error) -> Fail {
     Fail {
         at: None,
@@ -169,9 +174,11 @@ fn read_inner(data: &[u8]) -> PResult<PointCloud> {
     let mut intensity = Vec::with_capacity(n_hint);
     let mut class = Vec::with_capacity(n_hint);
     let mut rgb: Vec<[u16; 3]> = Vec::new();
+    // At most CHUNK_BYTES of records per call (at least one record).
+    let chunk = (CHUNK_BYTES / u64::from(format.len()).max(1)).clamp(1, CHUNK);
     loop {
         let pd = reader
-            .read_points(CHUNK)
+            .read_points(chunk)
             .map_err(|e| las_err(&format!("LAS point {}", positions.len()), e))?;
         if pd.is_empty() {
             break;
