@@ -1361,8 +1361,8 @@ nbhd_smooth_options nbhd_smooth_options_default(void);
  *
  * Errors: NULL_POINTER (`points`, `points->data`, `out_coords`), MISALIGNED_POINTER,
  * INVALID_ARGUMENT (dimension other than 3, an enum field out of range, a buffer size that
- * overflows), EMPTY_INPUT (also: no finite point left to SKIP), STRIDE_TOO_SMALL,
- * TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT; the message names the point),
+ * overflows), ZERO_DIMENSION (dimension 0), EMPTY_INPUT (also: no finite point left to SKIP),
+ * STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT; the message names the point),
  * INVALID_K, INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two
  * distinct points, ...), DEGENERATE (no neighbourhood reached 3 points: ε far below the
  * spacing — check `epsilon_units`; the message gives ε in the points' units), OUT_OF_MEMORY
@@ -1418,8 +1418,8 @@ nbhd_normal_options nbhd_normal_options_default(void);
  *
  * Errors: NULL_POINTER (`points`, `points->data`, `out`, `out->normals`),
  * MISALIGNED_POINTER, INVALID_ARGUMENT (dimension other than 3, an enum field out of range,
- * an output stride smaller than its values or one that overflows), EMPTY_INPUT,
- * STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite REJECT), INVALID_K,
+ * an output stride smaller than its values or one that overflows), ZERO_DIMENSION (dimension
+ * 0), EMPTY_INPUT, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite REJECT), INVALID_K,
  * INVALID_OPTION (ε not > 0, relative units on a set without two distinct points, a
  * non-finite orientation point), DEGENERATE (no neighbourhood reached 3 points, or every
  * normal is flagged: usually ε far too small — check `epsilon_units`; the message gives ε in

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Fuzzes each reader of nbhd::io (PLY, PCD, PCD binary_compressed data, OBJ, XYZ, LAS/LAZ) with
+# Fuzzes each reader of nbhd::io (PLY, PCD, PCD binary_compressed data, OBJ, XYZ, LAS/LAZ) and
+# the C ABI's build/query, table and smoothing entry points (abi_*, fuzz/abi_bodies.rs) with
 # cargo-fuzz (libFuzzer) for a few seconds each: scripts/test.sh runs it so.
 #
 #   scripts/fuzz.sh                 every target, FUZZ_SECONDS (default 5) each
@@ -7,10 +8,12 @@
 #
 # cargo-fuzz needs nightly rustc flags; on the machine's stable toolchain RUSTC_BOOTSTRAP=1
 # enables them (only for these builds). Sanitizers are off (-s none): the readers are safe
-# Rust, and what the fuzzer looks for is a panic, an abort (allocation failure) or a hang
-# (-timeout). Seeds are tests/data/fuzz-seeds/<format>; the growing corpus lives under the
-# target directory; a crash is written to fuzz/artifacts/<target>/ and fails the run: keep it
-# as a regression case in tests/data/fuzz-regressions/<format>/ (tests/io_fuzz.rs reads them).
+# Rust, and what the fuzzer looks for is a panic (a failed check of an abi_* body included), an
+# abort (allocation failure) or a hang (-timeout). Seeds are tests/data/fuzz-seeds/<format> or
+# <abi_target>; the growing corpus lives under the target directory; a crash is written to
+# fuzz/artifacts/<target>/ and fails the run: keep it as a regression case in
+# tests/data/fuzz-regressions/<format or abi_target>/ (tests/io_fuzz.rs and tests/abi_fuzz.rs
+# read them).
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$repo"
@@ -26,7 +29,8 @@ case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
 export CARGO_TARGET_DIR="$target_dir/fuzz"
 targets=("$@")
 if [ "${#targets[@]}" -eq 0 ]; then
-    targets=(read_ply read_pcd read_pcd_compressed read_obj read_xyz read_las)
+    targets=(read_ply read_pcd read_pcd_compressed read_obj read_xyz read_las
+        abi_build_query abi_tables abi_smoothing)
 fi
 
 echo "== building the fuzz targets"

@@ -43,8 +43,8 @@ echo "== cargo test"
 export NBHD_REQUIRE_VALGRIND=1
 cargo test --workspace
 
-# --- fuzzing: a few seconds of each reader of nbhd::io (cargo-fuzz; scripts/fuzz.sh) ---------
-echo "== fuzzing the file readers (FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"
+# --- fuzzing: a few seconds of each reader of nbhd::io and of the C ABI (scripts/fuzz.sh) -----
+echo "== fuzzing the file readers and the C ABI (FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"
 scripts/fuzz.sh
 
 # --- C++ examples under ctest ---------------------------------------------------------------

@@ -166,6 +166,15 @@ fn hostile_las_headers_are_errors() {
     .unwrap();
     let e = io::read_bytes(&crash, Format::Las).unwrap_err();
     assert!(matches!(e.kind, IoErrorKind::Malformed(_)), "{e}");
+    // And an extended VLR declaring about 2e16 bytes of data, which the las crate resized its
+    // buffer to before reading (an abort).
+    let crash = std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz-regressions/las/evlr-length.las"),
+    )
+    .unwrap();
+    let e = io::read_bytes(&crash, Format::Las).unwrap_err();
+    assert!(e.to_string().contains("extended VLR"), "{e}");
 }
 
 /// nbhd's LAS and LAZ read by laspy, the reference implementation the files came from.

@@ -244,8 +244,8 @@ impl Strided {
 ///
 /// Errors: NULL_POINTER (`points`, `points->data`, `out`, `out->normals`),
 /// MISALIGNED_POINTER, INVALID_ARGUMENT (dimension other than 3, an enum field out of range,
-/// an output stride smaller than its values or one that overflows), EMPTY_INPUT,
-/// STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite REJECT), INVALID_K,
+/// an output stride smaller than its values or one that overflows), ZERO_DIMENSION (dimension
+/// 0), EMPTY_INPUT, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite REJECT), INVALID_K,
 /// INVALID_OPTION (ε not > 0, relative units on a set without two distinct points, a
 /// non-finite orientation point), DEGENERATE (no neighbourhood reached 3 points, or every
 /// normal is flagged: usually ε far too small — check `epsilon_units`; the message gives ε in

@@ -622,8 +622,8 @@ pub(super) unsafe fn write_outputs(
 ///
 /// Errors: NULL_POINTER (`points`, `points->data`, `out_coords`), MISALIGNED_POINTER,
 /// INVALID_ARGUMENT (dimension other than 3, an enum field out of range, a buffer size that
-/// overflows), EMPTY_INPUT (also: no finite point left to SKIP), STRIDE_TOO_SMALL,
-/// TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT; the message names the point),
+/// overflows), ZERO_DIMENSION (dimension 0), EMPTY_INPUT (also: no finite point left to SKIP),
+/// STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT; the message names the point),
 /// INVALID_K, INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two
 /// distinct points, ...), DEGENERATE (no neighbourhood reached 3 points: ε far below the
 /// spacing — check `epsilon_units`; the message gives ε in the points' units), OUT_OF_MEMORY

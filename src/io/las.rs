@@ -22,6 +22,11 @@ use std::io::Cursor;
 /// Points read per call into the `las` reader (its buffers never exceed this).
 const CHUNK: u64 = 1 << 16;
 
+/// Bytes of records read per call: the `las` reader sizes its buffer to the chunk's points
+/// times the record length before decompressing, and a LAZ file's declared count cannot be
+/// checked against its size (records up to 65,535 bytes × [`CHUNK`] would be 4 GiB).
+const CHUNK_BYTES: u64 = 16 << 20;
+
 fn las_err(what: &str, e: las::Error) -> Fail {
     Fail {
         at: None,
@@ -72,6 +77,27 @@ fn check_raw_header(data: &[u8]) -> PResult<()> {
         .checked_mul(u64::from(raw.point_data_record_length))
         .and_then(|b| b.checked_add(u64::from(raw.offset_to_point_data)));
     let compressed = raw.point_data_record_format & 0x80 != 0;
+    // The `las` crate reads the first extended VLR and resizes its data to the 64-bit length
+    // in the record's header (byte 20 of 60) before reading: check the file holds it.
+    if let Some(evlr) = raw.evlr {
+        let at = evlr.start_of_first_evlr;
+        let len = usize::try_from(at)
+            .ok()
+            .and_then(|a| data.get(a.checked_add(20)?..a.checked_add(28)?))
+            .map(|b| u64::from_le_bytes(b.try_into().unwrap()));
+        if let Some(len) = len {
+            if at.saturating_add(60).saturating_add(len) > data.len() as u64 {
+                return Err(Fail {
+                    at: Some(super::Location::Byte(at + 20)),
+                    kind: super::IoErrorKind::Malformed(format!(
+                        "the extended VLR at byte {at} declares {len} bytes of data, but the \
+                         file has {} bytes",
+                        data.len()
+                    )),
+                });
+            }
+        }
+    }
     match end {
         None => Err(bad(format!(
             "the LAS header declares {count} points of {} bytes, which overflows",
@@ -148,9 +174,11 @@ fn read_inner(data: &[u8]) -> PResult<PointCloud> {
     let mut intensity = Vec::with_capacity(n_hint);
     let mut class = Vec::with_capacity(n_hint);
     let mut rgb: Vec<[u16; 3]> = Vec::new();
+    // At most CHUNK_BYTES of records per call (at least one record).
+    let chunk = (CHUNK_BYTES / u64::from(format.len()).max(1)).clamp(1, CHUNK);
     loop {
         let pd = reader
-            .read_points(CHUNK)
+            .read_points(chunk)
             .map_err(|e| las_err(&format!("LAS point {}", positions.len()), e))?;
         if pd.is_empty() {
             break;

@@ -1,0 +1,10 @@
+//! The C ABI's build and query entry points on arbitrary arguments (see fuzz/abi_bodies.rs).
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+#[allow(dead_code)]
+#[path = "../abi_bodies.rs"]
+mod abi_bodies;
+
+fuzz_target!(|data: &[u8]| abi_bodies::build_query(data));
