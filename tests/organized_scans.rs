@@ -10,23 +10,18 @@ use nbhd::smooth::{analyze, smooth, Length, SmoothOptions};
 use nbhd::{io, NbhdError, NonFinitePolicy};
 use std::path::PathBuf;
 
-/// The PCL test scans: `tests/data/pcl` in the repository, else `../shared/data/pcl` (where
-/// they were before they moved into the repository); `None` (the test is skipped with a note)
-/// when neither holds them.
-fn scan(name: &str) -> Option<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let found = [root.join("tests/data/pcl"), root.join("../shared/data/pcl")]
-        .into_iter()
-        .map(|d| d.join(name))
-        .find(|p| p.is_file());
-    if found.is_none() {
-        println!("NOTE: {name} is missing; organized-scan test skipped");
-    }
-    found
+/// A PCL test scan of the repository's `tests/data/pcl` (see its README); a missing file fails
+/// the test rather than skipping it.
+fn scan(name: &str) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/pcl")
+        .join(name);
+    assert!(path.is_file(), "{} is missing", path.display());
+    path
 }
 
 fn check_scan(name: &str, expect_points: usize) {
-    let Some(path) = scan(name) else { return };
+    let path = scan(name);
     let cloud = io::read(&path).unwrap();
     assert_eq!(cloud.len(), expect_points);
     let pts: Vec<DVec3> = cloud.positions.iter().map(|&p| DVec3::from(p)).collect();
