@@ -661,10 +661,7 @@ impl Rows {
     /// `table` for the points stored as `order` says (`order[s]` is the index of the point
     /// stored at `s`; a permutation).
     fn permuted(table: &NeighborTable<f64>, order: &[u32]) -> Self {
-        let mut position = vec![0u32; order.len()];
-        for (s, &o) in order.iter().enumerate() {
-            position[o as usize] = s as u32;
-        }
+        let position = positions_of(order);
         let mut offsets = Vec::with_capacity(order.len() + 1);
         let mut indices = Vec::with_capacity(table.total());
         offsets.push(0);
@@ -687,6 +684,16 @@ impl Rows {
 }
 
 /// Writes the points stored as `order` says back in index order.
+/// The inverse of a storage order: `positions_of(order)[i]` is where the point of index `i` is
+/// stored (`order[s]` is the index of the point stored at `s`; a permutation).
+fn positions_of(order: &[u32]) -> Vec<u32> {
+    let mut position = vec![0u32; order.len()];
+    for (s, &o) in order.iter().enumerate() {
+        position[o as usize] = s as u32;
+    }
+    position
+}
+
 fn unpermute(stored: &[DVec3], order: &[u32], out: &mut [DVec3]) {
     for (&p, &o) in stored.iter().zip(order) {
         out[o as usize] = p;

@@ -416,8 +416,6 @@ fn displacement_rms(before: &[DVec3], after: &[DVec3], order: &[u32]) -> f64 {
 /// caller's order.
 fn in_input_order(stored: &[DVec3], order: &[u32]) -> Vec<DVec3> {
     let mut out = vec![DVec3::ZERO; stored.len()];
-    for (&v, &o) in stored.iter().zip(order) {
-        out[o as usize] = v;
-    }
+    super::unpermute(stored, order, &mut out);
     out
 }

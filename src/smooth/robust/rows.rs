@@ -45,10 +45,7 @@ impl Rows {
     /// at ε (see [`Rows::update`]).
     pub(super) fn in_stored_order(table: &NeighborTable<f64>, order: &[u32]) -> Self {
         let width = table.max_row_len();
-        let mut position = vec![0u32; order.len()];
-        for (s, &o) in order.iter().enumerate() {
-            position[o as usize] = s as u32;
-        }
+        let position = super::super::positions_of(order);
         let mut index = Vec::with_capacity(order.len() * width);
         let mut candidates = Vec::with_capacity(order.len());
         for &o in order {
@@ -79,10 +76,7 @@ impl Rows {
             KdTree::<f64>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())?;
         drop(flat);
         let order = tree.tree_order().to_vec();
-        let mut position = vec![0u32; n];
-        for (s, &o) in order.iter().enumerate() {
-            position[o as usize] = s as u32;
-        }
+        let position = super::super::positions_of(&order);
         let width = k.min(n.saturating_sub(1));
         let mut index = vec![0u32; n * width];
         let mut nearest = vec![None; n];
@@ -186,14 +180,11 @@ impl Rows {
         k: usize,
         order: &[u32],
     ) -> NeighborTable<f64> {
-        let mut position = vec![0usize; order.len()];
-        for (s, &o) in order.iter().enumerate() {
-            position[o as usize] = s;
-        }
+        let position = super::super::positions_of(order);
         let mut offsets = Vec::with_capacity(order.len() + 1);
         offsets.push(0);
         let (mut index, mut sq_dist) = (Vec::new(), Vec::new());
-        for &s in &position {
+        for s in position.iter().map(|&s| s as usize) {
             let row = self.narrow(s, k);
             index.extend(row.iter().map(|&j| order[j as usize]));
             sq_dist.extend(
