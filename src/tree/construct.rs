@@ -1,0 +1,188 @@
+//! The build driver: from the caller's points to a [`KdTree`]. It reads the points (straight
+//! into compact records for dimensions 1 to 3, through a [`Cloud`] otherwise), runs the build
+//! the options ask for (`build.rs`, `presorted.rs`) on the thread count asked for, and keeps
+//! the coordinates and caller indices in tree order.
+
+use rayon::prelude::*;
+
+use super::build::{build_parallel, build_serial, BuildInput, Subtree};
+use super::layout::{BySlot, Inline, Layout, Record};
+use super::presorted;
+use super::{BuildOptions, KdTree, MedianAlgorithm};
+use crate::cloud::{Cloud, NonFinitePolicy};
+use crate::error::{NbhdError, Result};
+use crate::parallel::with_threads;
+use crate::points::PointsView;
+use crate::scalar::{Scalar, ScalarType};
+use std::sync::OnceLock;
+
+impl<T: Scalar> KdTree<T> {
+    /// Builds a tree over the points of `view` (converted to `T`).
+    ///
+    /// Errors: [`NbhdError::NonFinite`] naming the first point with a NaN or infinite
+    /// coordinate (unless `options.non_finite` skips them), [`NbhdError::EmptyInput`] if no
+    /// point remains, [`NbhdError::InvalidOption`] for a leaf size of 0,
+    /// [`NbhdError::ThreadPool`] if a requested pool cannot be created.
+    pub fn build(view: &PointsView<'_>, options: &BuildOptions) -> Result<Self> {
+        options.validate()?;
+        let dim = view.dim();
+        let (subtree, coords, ids) = match dim {
+            1 => build_inline::<T, 1>(view, options)?,
+            2 => build_inline::<T, 2>(view, options)?,
+            3 => build_inline::<T, 3>(view, options)?,
+            _ => {
+                let cloud = Cloud::<T>::from_view(view, options.non_finite)?;
+                let n = cloud.len();
+                let layout = BySlot {
+                    coords: &cloud.coords,
+                    dim,
+                };
+                let mut slots: Vec<u32> = (0..n as u32).collect();
+                let subtree = run_build(layout, options, &mut slots)?;
+                let coords = slots
+                    .iter()
+                    .flat_map(|&s| cloud.point(s as usize).iter().copied())
+                    .collect();
+                let ids = slots.iter().map(|&s| cloud.ids[s as usize]).collect();
+                (subtree, coords, ids)
+            }
+        };
+        Ok(Self {
+            dim,
+            coords,
+            ids,
+            nodes: subtree.nodes,
+            depth: subtree.depth,
+            source_len: view.len(),
+            options: *options,
+            position_of: OnceLock::new(),
+        })
+    }
+
+    /// Builds from packed coordinates `[x0, y0, z0, x1, ...]` of dimension `dim`.
+    pub fn from_flat(coords: &[T], dim: usize, options: &BuildOptions) -> Result<Self> {
+        Self::build(&PointsView::from_flat(coords, dim)?, options)
+    }
+}
+
+/// Builds with compact records of dimension `D`, read straight from the caller's buffer;
+/// returns the nodes, the coordinates and the caller indices in tree order. A record's slot is
+/// the caller's index itself: it orders ties exactly as the packed slots of a [`Cloud`] would
+/// (both increase with the caller's index), and needs no map back.
+fn build_inline<T: Scalar, const D: usize>(
+    view: &PointsView<'_>,
+    options: &BuildOptions,
+) -> Result<(Subtree<T>, Vec<T>, Vec<u32>)> {
+    // Reading the points and copying the result out are a fifth of a fast build: on more than
+    // one thread they would cap its speed-up, so for large clouds they run in parallel too.
+    let parallel = options.threads != 1 && view.len() >= PARALLEL_COPY_MIN;
+    let work = || {
+        let policy = options.non_finite;
+        let mut records = match (view.scalar_type(), parallel) {
+            (ScalarType::F32, false) => read_records::<T, f32, D>(view, policy)?,
+            (ScalarType::F64, false) => read_records::<T, f64, D>(view, policy)?,
+            (ScalarType::F32, true) => read_records_parallel::<T, f32, D>(view, policy)?,
+            (ScalarType::F64, true) => read_records_parallel::<T, f64, D>(view, policy)?,
+        };
+        let subtree = run_build(Inline::<D>, options, &mut records)?;
+        let mut coords = vec![T::ZERO; records.len() * D];
+        let mut ids = Vec::new();
+        if parallel {
+            coords
+                .par_chunks_mut(D)
+                .zip(records.par_iter())
+                .with_min_len(4096)
+                .for_each(|(c, r)| c.copy_from_slice(&r.p));
+            records
+                .par_iter()
+                .with_min_len(4096)
+                .map(|r| r.slot)
+                .collect_into_vec(&mut ids);
+        } else {
+            for (c, r) in coords.chunks_exact_mut(D).zip(&records) {
+                c.copy_from_slice(&r.p);
+            }
+            ids.extend(records.iter().map(|r| r.slot));
+        }
+        Ok((subtree, coords, ids))
+    };
+    if parallel {
+        with_threads(options.threads, work)?
+    } else {
+        work()
+    }
+}
+
+/// Points from which a build on more than one thread reads and writes its copies in parallel.
+const PARALLEL_COPY_MIN: usize = 256 * 1024;
+
+/// [`read_records`] on the current rayon pool: every point converted in parallel, in order;
+/// if any is not finite, the serial reader decides (the error names the first such point, or
+/// the skipped points are left out).
+fn read_records_parallel<T: Scalar, S: Scalar, const D: usize>(
+    view: &PointsView<'_>,
+    policy: NonFinitePolicy,
+) -> Result<Vec<Record<T, D>>> {
+    let mut records = Vec::new();
+    (0..view.len())
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| Record {
+            p: view.row::<S, D>(i).map(|c| T::from_f64(c.to_f64())),
+            slot: i as u32,
+        })
+        .collect_into_vec(&mut records);
+    if records
+        .par_iter()
+        .any(|r| r.p.iter().any(|c| !c.is_finite()))
+    {
+        return read_records::<T, S, D>(view, policy);
+    }
+    Ok(records)
+}
+
+/// The finite points of `view` (stored as `S`) as records of `T` coordinates, applying
+/// `policy` to the others (a value finite in `S` that overflows `T` counts as non-finite, as
+/// in [`Cloud::from_view`]).
+fn read_records<T: Scalar, S: Scalar, const D: usize>(
+    view: &PointsView<'_>,
+    policy: NonFinitePolicy,
+) -> Result<Vec<Record<T, D>>> {
+    let n = view.len();
+    let mut records = Vec::with_capacity(n);
+    for i in 0..n {
+        let p = view.row::<S, D>(i).map(|c| T::from_f64(c.to_f64()));
+        if p.iter().all(|c| c.is_finite()) {
+            records.push(Record { p, slot: i as u32 });
+        } else if policy == NonFinitePolicy::Reject {
+            let coordinate = p.iter().position(|c| !c.is_finite()).unwrap_or(0);
+            return Err(NbhdError::NonFinite {
+                index: i,
+                coordinate,
+            });
+        }
+    }
+    if records.is_empty() {
+        return Err(NbhdError::EmptyInput);
+    }
+    Ok(records)
+}
+
+/// Runs the build the options ask for over `items` (given in slot order, left in tree order).
+fn run_build<T: Scalar, L: Layout<T>>(
+    layout: L,
+    options: &BuildOptions,
+    items: &mut [L::Item],
+) -> Result<Subtree<T>> {
+    let input = BuildInput {
+        layout,
+        options: *options,
+    };
+    if options.median == MedianAlgorithm::Presorted {
+        return Ok(presorted::build_presorted(&input, items));
+    }
+    match options.threads {
+        1 => Ok(build_serial(&input, items, 0, 0)),
+        t => with_threads(t, || build_parallel(&input, items, 0, 0)),
+    }
+}
