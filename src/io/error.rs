@@ -35,7 +35,7 @@ pub enum IoErrorKind {
     InvalidCloud(String),
 }
 
-/// Error of [`read`](super::read) and [`write`](super::write): the file, the place in it
+/// Error of [`read`](super::read()) and [`write`](super::write()): the file, the place in it
 /// (when known) and what went wrong. Displays as `path: line 12: message`.
 #[derive(Debug)]
 pub struct IoError {

@@ -169,7 +169,7 @@ fn read_inner(data: &[u8]) -> PResult<PointCloud> {
             });
         }
     }
-    let n_hint = (declared.min(super::MAX_RESERVE as u64)) as usize;
+    let n_hint = (declared.min(super::assemble::MAX_RESERVE as u64)) as usize;
     let mut positions = Vec::with_capacity(n_hint);
     let mut intensity = Vec::with_capacity(n_hint);
     let mut class = Vec::with_capacity(n_hint);

@@ -1,9 +1,12 @@
 //! PCD, the Point Cloud Library's format (v0.7; v0.5/0.6 headers without WIDTH/HEIGHT too).
 
+use super::assemble::{assign_columns, Builder};
+use super::cloud::is_packed_name;
+use super::columns::{ColorStyle, Columns, Store};
 use super::error::{Fail, PResult};
 use super::lzf;
 use super::value::{parse_num, tokens, Lines, Ty};
-use super::{assign_columns, Builder, ColorStyle, Columns, Encoding, Grid, PointCloud, Store};
+use super::{Encoding, Grid, PointCloud};
 use std::io::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -253,7 +256,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
     let mut col_ty = Vec::new();
     let mut packed_float = Vec::new();
     for f in &fields {
-        let packed = f.count == 1 && f.ty == Ty::F32 && super::is_packed_name(&f.name);
+        let packed = f.count == 1 && f.ty == Ty::F32 && is_packed_name(&f.name);
         for k in 0..f.count {
             col_names.push(if f.count == 1 || f.name == "_" {
                 f.name.clone()

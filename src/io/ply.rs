@@ -1,9 +1,11 @@
 //! PLY (Stanford polygon format): the `vertex` element is the cloud; other elements (faces,
 //! ...) are skipped.
 
+use super::assemble::{assign_columns, Builder};
+use super::columns::{ColorStyle, Columns, Store};
 use super::error::{Fail, PResult};
 use super::value::{parse_num, tokens, Lines, Ty};
-use super::{assign_columns, Builder, ColorStyle, Columns, Encoding, PointCloud, Store};
+use super::{Encoding, PointCloud};
 use std::io::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq)]

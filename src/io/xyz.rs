@@ -14,9 +14,11 @@
 //! Column names are read as: `nx ny nz` or `normal_x ...` normals; `r g b` or
 //! `red green blue` colour channels; anything else a scalar field of that name.
 
+use super::assemble::{assign_columns, Builder};
+use super::columns::{ColorStyle, Columns};
 use super::error::{Fail, PResult};
 use super::value::{parse_num, Lines};
-use super::{assign_columns, Builder, ColorStyle, Columns, PointCloud, TextColumns};
+use super::{PointCloud, TextColumns};
 use std::io::Write;
 
 fn split(line: &str) -> impl Iterator<Item = &str> {
