@@ -30,7 +30,7 @@
 //! - Field names are the tools' own: a `curvature` field is read by PCL as
 //!   `PointNormal::curvature`, which is the surface variation λ0/(λ0+λ1+λ2); the command-line
 //!   tool writes that meaning under that name, and principal curvatures as `k1`, `k2`.
-//! - PCD `binary_compressed` is LZF field by field, as PCL writes it; the encoder (`lzf.rs`)
+//! - PCD `binary_compressed` is LZF field by field, as PCL writes it; the encoder (`pcd/lzf.rs`)
 //!   matches greedily over a hash table as liblzf does.
 //! - LAS/LAZ go through the `las` crate (feature `las`, on by default); see [`not_written`]
 //!   for what LAS cannot hold.
@@ -59,7 +59,6 @@ mod error;
 mod format;
 #[cfg(feature = "las")]
 mod las;
-mod lzf;
 mod obj;
 mod pcd;
 mod ply;
