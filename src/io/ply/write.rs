@@ -1,0 +1,58 @@
+//! Writing PLY: a `vertex` element with a property per column, in ascii or binary.
+
+use std::io::Write;
+
+use crate::io::columns::{ColorStyle, Columns, Store};
+use crate::io::error::PResult;
+use crate::io::{Encoding, PointCloud};
+
+pub(crate) fn write(
+    w: &mut impl Write,
+    cloud: &PointCloud,
+    enc: Encoding,
+    single: bool,
+) -> PResult<()> {
+    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels);
+    w.write_all(header(&cols, cloud.len(), enc, single).as_bytes())?;
+    let mut buf = Vec::new();
+    let mut line = String::new();
+    let be = enc == Encoding::BinaryBigEndian;
+    for i in 0..cloud.len() {
+        if enc == Encoding::Ascii {
+            cols.line(&mut line, i, single);
+            w.write_all(line.as_bytes())?;
+        } else {
+            buf.clear();
+            for c in 0..cols.len() {
+                cols.put(&mut buf, c, i, single, be);
+            }
+            w.write_all(&buf)?;
+        }
+    }
+    Ok(())
+}
+
+/// The header of `n` vertices with the properties `cols`.
+fn header(cols: &Columns<'_>, n: usize, enc: Encoding, single: bool) -> String {
+    let fmt = match enc {
+        Encoding::Ascii => "ascii",
+        Encoding::Binary => "binary_little_endian",
+        Encoding::BinaryBigEndian => "binary_big_endian",
+        Encoding::BinaryCompressed => unreachable!("refused by check_writable"),
+    };
+    let float = if single { "float" } else { "double" };
+    let mut h = format!(
+        "ply\nformat {fmt} 1.0\ncomment written by nbhd {}\nelement vertex {n}\n",
+        env!("CARGO_PKG_VERSION"),
+    );
+    for (c, name) in cols.names().iter().enumerate() {
+        let ty = match cols.store(c) {
+            Store::Float => float,
+            Store::U8 => "uchar",
+            Store::RgbBits => "uint",
+        };
+        h.push_str(&format!("property {ty} {name}\n"));
+    }
+    h.push_str("end_header\n");
+    h
+}
