@@ -101,6 +101,56 @@ fn ty_of(s: &str) -> Option<Ty> {
     })
 }
 
+/// The header's keyword lines as written, up to `end_header`; nothing checked across lines yet.
+#[derive(Default)]
+struct Keywords {
+    fmt: Option<Fmt>,
+    elements: Vec<Element>,
+    ended: bool,
+}
+
+impl Keywords {
+    /// Reads the lines after `ply` up to and including `end_header` (or to the end of the
+    /// file).
+    fn read(lines: &mut Lines<'_>) -> PResult<Keywords> {
+        let mut k = Keywords::default();
+        for item in lines.by_ref() {
+            let (ln, line) = item?;
+            let mut tok = tokens(line);
+            let Some(key) = tok.next() else { continue };
+            let rest: Vec<&str> = tok.collect();
+            k.take(ln, key, &rest)?;
+            if k.ended {
+                break;
+            }
+        }
+        Ok(k)
+    }
+
+    /// Takes the keyword `key` with its words `rest`, on line `ln`.
+    fn take(&mut self, ln: usize, key: &str, rest: &[&str]) -> PResult<()> {
+        match key {
+            "comment" | "obj_info" => {}
+            "format" => self.fmt = Some(Fmt::parse(ln, rest.first().copied())?),
+            "element" => self.elements.push(Element::parse(ln, rest)?),
+            "property" => {
+                let Some(el) = self.elements.last_mut() else {
+                    return Err(Fail::line(ln, "property before any element"));
+                };
+                el.props.push(parse_property(ln, rest)?);
+            }
+            "end_header" => self.ended = true,
+            other => {
+                return Err(Fail::line(
+                    ln,
+                    format!("unknown PLY header keyword '{other}'"),
+                ))
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A checked PLY header.
 pub(super) struct Header {
     /// How the elements are stored.
@@ -129,36 +179,11 @@ impl Header {
                 ))
             }
         }
-        let mut fmt = None;
-        let mut elements: Vec<Element> = Vec::new();
-        let mut ended = false;
-        for item in lines.by_ref() {
-            let (ln, line) = item?;
-            let mut tok = tokens(line);
-            let Some(key) = tok.next() else { continue };
-            let rest: Vec<&str> = tok.collect();
-            match key {
-                "comment" | "obj_info" => {}
-                "format" => fmt = Some(Fmt::parse(ln, rest.first().copied())?),
-                "element" => elements.push(Element::parse(ln, &rest)?),
-                "property" => {
-                    let Some(el) = elements.last_mut() else {
-                        return Err(Fail::line(ln, "property before any element"));
-                    };
-                    el.props.push(parse_property(ln, &rest)?);
-                }
-                "end_header" => {
-                    ended = true;
-                    break;
-                }
-                other => {
-                    return Err(Fail::line(
-                        ln,
-                        format!("unknown PLY header keyword '{other}'"),
-                    ))
-                }
-            }
-        }
+        let Keywords {
+            fmt,
+            elements,
+            ended,
+        } = Keywords::read(&mut lines)?;
         let end_line = lines.line_no();
         if !ended {
             return Err(Fail::line(
