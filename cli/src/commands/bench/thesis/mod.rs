@@ -8,10 +8,10 @@
 //! as the thesis' Java program was, and trees have one point per leaf (the thesis' shape).
 
 //!
-//! The run follows the chapter: [`build`] (8.1), [`baselines`] (8.2), [`closest_to_middle`]
-//! (8.3, 8.4), then the list of the thesis' claims and whether each holds here; [`setup`] holds
-//! the geometries, variants and the thesis' own figures, [`measure`] the samples, trees and
-//! timed tables, [`report`] the markdown, JSON and plots.
+//! The run follows the chapter: `build` (8.1), `baselines` (8.2), `closest_to_middle`
+//! (8.3, 8.4), then the list of the thesis' claims and whether each holds here; `setup` holds
+//! the geometries, variants and the thesis' own figures, `measure` the samples, trees and
+//! timed tables, `report` the markdown, JSON and plots.
 
 mod baselines;
 mod build;
