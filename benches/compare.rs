@@ -1,5 +1,5 @@
 //! Side-by-side speed of nbhd, kiddo's immutable tree and brute force: a thin wrapper around
-//! the CLI's `nbhd bench speed` (cli/src/commands/bench_speed.rs), which is the one home of the
+//! the CLI's `nbhd bench speed` (cli/src/commands/bench/speed.rs), which is the one home of the
 //! side-by-side table (see `nbhd bench speed --help` and cli/README.md).
 //!
 //! Run: `cargo bench --bench compare -- --sets torus-77k,cylinder-plane-123k --ops knn10`:

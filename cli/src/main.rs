@@ -1,10 +1,12 @@
 //! `nbhd`, the command-line tool of the nbhd library. One module per subcommand under
 //! `commands/` of the `nbhd_cli` library; to add one, add a variant to [`Command`], a module,
-//! and a line in [`run`].
+//! and a line in [`run`]. Every command returns `nbhd_cli::error::Result`; an error is printed
+//! as `nbhd: error: …` and the exit status is 1 (2 for a command line clap refuses).
 
 use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use nbhd_cli::commands;
+use nbhd_cli::error::{Context, Result};
 use nbhd_cli::output::Output;
 use std::process::ExitCode;
 
@@ -95,9 +97,9 @@ enum Command {
     Render(commands::render::Args),
 }
 
-fn run(cli: Cli) -> Result<(), String> {
+fn run(cli: Cli) -> Result<()> {
     let out = Output::new(cli.json, cli.quiet);
-    commands::set_read_context(out, cli.columns.clone());
+    nbhd_cli::read::set_context(out, cli.columns.clone());
     if let Some(t) = cli.threads {
         if t == 0 {
             return Err("--threads must be at least 1".into());
@@ -106,7 +108,8 @@ fn run(cli: Cli) -> Result<(), String> {
             return Err(format!(
                 "--threads {t} is above the maximum of {} worker threads",
                 nbhd::parallel::MAX_THREADS
-            ));
+            )
+            .into());
         }
         rayon_threads(t)?;
     }
@@ -128,11 +131,11 @@ fn run(cli: Cli) -> Result<(), String> {
 }
 
 /// Sizes the global rayon pool that the library's parallel loops run on.
-fn rayon_threads(n: usize) -> Result<(), String> {
+fn rayon_threads(n: usize) -> Result<()> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build_global()
-        .map_err(|e| format!("could not create {n} threads: {e}"))
+        .context(format!("could not create {n} threads"))
 }
 
 /// Parses the command line; the demo's options are refused after a command.

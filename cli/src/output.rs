@@ -47,3 +47,8 @@ fn emit(s: &str) {
 pub fn num(v: f64) -> serde_json::Value {
     serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
 }
+
+/// The time since `t` in milliseconds, as the commands report times.
+pub fn ms(t: std::time::Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}

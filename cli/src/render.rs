@@ -205,10 +205,6 @@ pub fn render(
     paint: Paint<'_>,
     opts: &RenderOptions,
 ) -> Image {
-    let scalars = match paint {
-        Paint::Scalar(s) => Some(s),
-        _ => None,
-    };
     let (w, h) = (opts.width.max(1), opts.height.max(1));
     let mut img = Image {
         width: w,
@@ -226,50 +222,11 @@ pub fn render(
     if proj.is_empty() {
         return img;
     }
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for (_, q) in &proj {
-        for j in 0..3 {
-            lo[j] = lo[j].min(q[j]);
-            hi[j] = hi[j].max(q[j]);
-        }
-    }
-    // Fit into the image with a margin, same scale on both axes.
-    let margin = 0.06;
-    let (aw, ah) = (
-        w as f64 * (1.0 - 2.0 * margin),
-        h as f64 * (1.0 - 2.0 * margin),
-    );
-    let (ex, ey) = ((hi[0] - lo[0]).max(1e-300), (hi[1] - lo[1]).max(1e-300));
-    let scale = if hi[0] - lo[0] == 0.0 && hi[1] - lo[1] == 0.0 {
-        1.0
-    } else {
-        (aw / ex).min(ah / ey)
-    };
-    let (cx, cy) = ((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0);
-    let radius = opts.point_radius.unwrap_or_else(|| {
-        // About half the points face the camera; cover their share of the projected area.
-        let area = (ex * scale).max(1.0) * (ey * scale).max(1.0);
-        let per_point = area / (proj.len() as f64 / 2.0).max(1.0);
-        (per_point / std::f64::consts::PI).sqrt().clamp(1.0, 12.0) * 2.0
-    });
-    // Scalar range.
-    let range = scalars.map(|s| {
-        opts.range.unwrap_or_else(|| {
-            let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
-            for &(i, _) in &proj {
-                if s[i].is_finite() {
-                    a = a.min(s[i]);
-                    b = b.max(s[i]);
-                }
-            }
-            if a > b {
-                (0.0, 1.0)
-            } else {
-                (a, b)
-            }
-        })
-    });
+    let frame = Frame::fit(&proj, w, h);
+    let radius = opts
+        .point_radius
+        .unwrap_or_else(|| frame.splat_radius(proj.len()));
+    let colors = Colors::new(paint, &proj, opts);
     // Light from the upper left, behind the viewer; two-sided (scan normals are often
     // unoriented).
     let light = normalize([
@@ -278,60 +235,180 @@ pub fn render(
         -0.45 * r[2] + 0.6 * u[2] - f[2],
     ])
     .unwrap();
-    let depth_span = (hi[2] - lo[2]).max(1e-300);
+    let depth_span = (frame.hi[2] - frame.lo[2]).max(1e-300);
     let mut zbuf = vec![f64::INFINITY; (w * h) as usize];
-    let rr = radius * radius;
-    let ri = radius.ceil() as i64;
     for &(i, q) in &proj {
-        let base = match (scalars, range) {
-            (Some(s), Some((a, b))) => {
+        let shade = match normals.and_then(|n| normalize(n[i])) {
+            Some(n) => 0.22 + 0.78 * dot(n, light).abs(),
+            None => 1.0 - 0.45 * (q[2] - frame.lo[2]) / depth_span,
+        };
+        let color = colors
+            .of(i)
+            .map(|c| (c as f64 * shade).round().clamp(0.0, 255.0) as u8);
+        splat(&mut img, &mut zbuf, &frame, q, radius, color);
+    }
+    img
+}
+
+/// Where the projected points land: their bounding box in camera coordinates, and the scale
+/// and centre that fit it into the picture with a margin, the same scale on both axes.
+struct Frame {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    /// Extent of the box across and up the picture (at least 1e-300).
+    extent: (f64, f64),
+    /// Pixels per unit.
+    scale: f64,
+    /// Centre of the box across and up.
+    centre: (f64, f64),
+    /// Picture size in pixels.
+    size: (u32, u32),
+}
+
+impl Frame {
+    fn fit(proj: &[(usize, [f64; 3])], w: u32, h: u32) -> Self {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (_, q) in proj {
+            for j in 0..3 {
+                lo[j] = lo[j].min(q[j]);
+                hi[j] = hi[j].max(q[j]);
+            }
+        }
+        let margin = 0.06;
+        let (aw, ah) = (
+            w as f64 * (1.0 - 2.0 * margin),
+            h as f64 * (1.0 - 2.0 * margin),
+        );
+        let (ex, ey) = ((hi[0] - lo[0]).max(1e-300), (hi[1] - lo[1]).max(1e-300));
+        let scale = if hi[0] - lo[0] == 0.0 && hi[1] - lo[1] == 0.0 {
+            1.0
+        } else {
+            (aw / ex).min(ah / ey)
+        };
+        Self {
+            lo,
+            hi,
+            extent: (ex, ey),
+            scale,
+            centre: ((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0),
+            size: (w, h),
+        }
+    }
+
+    /// A splat radius in pixels from the point density: about half the `n` points face the
+    /// camera; together they cover the projected area.
+    fn splat_radius(&self, n: usize) -> f64 {
+        let (ex, ey) = self.extent;
+        let area = (ex * self.scale).max(1.0) * (ey * self.scale).max(1.0);
+        let per_point = area / (n as f64 / 2.0).max(1.0);
+        (per_point / std::f64::consts::PI).sqrt().clamp(1.0, 12.0) * 2.0
+    }
+
+    /// The picture position (x right, y down, in pixels) of a projected point.
+    fn pixel(&self, q: [f64; 3]) -> (f64, f64) {
+        let (w, h) = self.size;
+        (
+            (q[0] - self.centre.0) * self.scale + w as f64 / 2.0,
+            h as f64 / 2.0 - (q[1] - self.centre.1) * self.scale,
+        )
+    }
+}
+
+/// The unlit colour of each point.
+struct Colors<'a> {
+    paint: Paint<'a>,
+    /// Scalar values at the two ends of the colour map (scalar paint only).
+    range: Option<(f64, f64)>,
+    colormap: ColorMap,
+    flat: [u8; 3],
+}
+
+impl<'a> Colors<'a> {
+    /// The colours of `paint`; a scalar range not given in `opts` is the finite min/max of the
+    /// drawn points.
+    fn new(paint: Paint<'a>, proj: &[(usize, [f64; 3])], opts: &RenderOptions) -> Self {
+        let range = match paint {
+            Paint::Scalar(s) => Some(opts.range.unwrap_or_else(|| {
+                let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
+                for &(i, _) in proj {
+                    if s[i].is_finite() {
+                        a = a.min(s[i]);
+                        b = b.max(s[i]);
+                    }
+                }
+                if a > b {
+                    (0.0, 1.0)
+                } else {
+                    (a, b)
+                }
+            })),
+            _ => None,
+        };
+        Self {
+            paint,
+            range,
+            colormap: opts.colormap,
+            flat: opts.flat_color,
+        }
+    }
+
+    /// The colour of point `i`: NaN scalars grey, a constant scalar the map's middle.
+    fn of(&self, i: usize) -> [u8; 3] {
+        match (self.paint, self.range) {
+            (Paint::Scalar(s), Some((a, b))) => {
                 if s[i].is_nan() {
                     [150, 150, 150]
                 } else if b > a {
-                    opts.colormap.color((s[i] - a) / (b - a))
+                    self.colormap.color((s[i] - a) / (b - a))
                 } else {
-                    opts.colormap.color(0.5)
+                    self.colormap.color(0.5)
                 }
             }
-            _ => match paint {
-                Paint::Rgb(c) => c[i],
-                _ => opts.flat_color,
-            },
-        };
-        let shade = match normals.and_then(|n| normalize(n[i])) {
-            Some(n) => 0.22 + 0.78 * dot(n, light).abs(),
-            None => 1.0 - 0.45 * (q[2] - lo[2]) / depth_span,
-        };
-        let color = base.map(|c| (c as f64 * shade).round().clamp(0.0, 255.0) as u8);
-        let px = (q[0] - cx) * scale + w as f64 / 2.0;
-        let py = h as f64 / 2.0 - (q[1] - cy) * scale;
-        let (x0, y0) = (px.floor() as i64, py.floor() as i64);
-        for dy in -ri..=ri {
-            let y = y0 + dy;
-            if y < 0 || y >= h as i64 {
+            (Paint::Rgb(c), _) => c[i],
+            _ => self.flat,
+        }
+    }
+}
+
+/// Draws one point as a small sphere of `radius` pixels (its centre nearer than its rim)
+/// where it is nearer than what the depth buffer holds.
+fn splat(
+    img: &mut Image,
+    zbuf: &mut [f64],
+    frame: &Frame,
+    q: [f64; 3],
+    radius: f64,
+    color: [u8; 3],
+) {
+    let (w, h) = frame.size;
+    let rr = radius * radius;
+    let ri = radius.ceil() as i64;
+    let (px, py) = frame.pixel(q);
+    let (x0, y0) = (px.floor() as i64, py.floor() as i64);
+    for dy in -ri..=ri {
+        let y = y0 + dy;
+        if y < 0 || y >= h as i64 {
+            continue;
+        }
+        for dx in -ri..=ri {
+            let x = x0 + dx;
+            if x < 0 || x >= w as i64 {
                 continue;
             }
-            for dx in -ri..=ri {
-                let x = x0 + dx;
-                if x < 0 || x >= w as i64 {
-                    continue;
-                }
-                let (ddx, ddy) = (x as f64 + 0.5 - px, y as f64 + 0.5 - py);
-                let d2 = ddx * ddx + ddy * ddy;
-                if d2 > rr {
-                    continue;
-                }
-                // A splat is a small sphere: its centre is nearer than its rim.
-                let z = q[2] - (rr - d2).sqrt() / scale;
-                let k = (y as u32 * w + x as u32) as usize;
-                if z < zbuf[k] {
-                    zbuf[k] = z;
-                    img.pixels[k] = color;
-                }
+            let (ddx, ddy) = (x as f64 + 0.5 - px, y as f64 + 0.5 - py);
+            let d2 = ddx * ddx + ddy * ddy;
+            if d2 > rr {
+                continue;
+            }
+            let z = q[2] - (rr - d2).sqrt() / frame.scale;
+            let k = (y as u32 * w + x as u32) as usize;
+            if z < zbuf[k] {
+                zbuf[k] = z;
+                img.pixels[k] = color;
             }
         }
     }
-    img
 }
 
 /// Draws a cloud, coloured by the scalar field `color_by`, by a coordinate (`x`, `y`, `z`), or
@@ -340,7 +417,7 @@ pub fn render_cloud(
     cloud: &PointCloud,
     color_by: Option<&str>,
     opts: &RenderOptions,
-) -> Result<Image, String> {
+) -> crate::error::Result<Image> {
     let coord: Vec<f64>;
     let colors: Vec<[u8; 3]>;
     let paint = match color_by {

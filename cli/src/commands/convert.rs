@@ -1,7 +1,10 @@
 //! `nbhd convert IN OUT`: from one point-cloud format to another.
 
-use crate::commands::{precision_text, FormatArg, PrecisionArgs};
+use crate::args::{InputArgs, PrecisionArgs};
+use crate::error::Result;
 use crate::output::Output;
+use crate::read::columns_note;
+use crate::write;
 use nbhd::io::{self, Encoding, Format, Precision, WriteOptions};
 use serde_json::json;
 use std::path::PathBuf;
@@ -30,16 +33,18 @@ pub enum EncodingArg {
 /// colour, and the command names what it cannot hold. NaN points are kept, and an organized
 /// PCD stays organized when written as PCD.
 #[derive(clap::Args, Debug)]
+// `mut_arg` moves the argument to the end of the list: the explicit indices keep
+// `<INPUT> <OUTPUT>` in that order.
+#[command(mut_arg("input", |a| a.index(1).help(
+    "Input file (.ply, .pcd, .las/.laz, .obj, .xyz/.txt/.pts/.asc/.csv)"
+)))]
 pub struct Args {
-    /// Input file (.ply, .pcd, .las/.laz, .obj, .xyz/.txt/.pts/.asc/.csv)
-    pub input: PathBuf,
+    #[command(flatten)]
+    pub input: InputArgs,
 
     /// Output file (.ply, .pcd, .las, .laz, .xyz)
+    #[arg(index = 2)]
     pub output: PathBuf,
-
-    /// Read the input as this format instead of recognising it
-    #[arg(long, value_enum)]
-    pub from: Option<FormatArg>,
 
     /// Encoding of the output [default: binary for PLY, PCD and LAS, compressed for .laz,
     /// text for XYZ]
@@ -50,8 +55,9 @@ pub struct Args {
     pub precision: PrecisionArgs,
 }
 
-pub fn run(a: Args, out: &Output) -> Result<(), String> {
-    let (cloud, info) = crate::commands::read_cloud_info(&a.input, a.from)?;
+pub fn run(a: Args, out: &Output) -> Result<()> {
+    let input = &a.input.input;
+    let (cloud, info) = a.input.read_info()?;
     let from = info.format;
     let opts = WriteOptions {
         format: None,
@@ -64,16 +70,16 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         precision: a.precision.get(),
     };
     let to_format = Format::from_path(&a.output);
+    let dropped = to_format.map_or_else(Vec::new, |f| io::not_written(&cloud, f));
+    let stored = write::cloud(&a.output, &cloud, &opts)?;
     let stored = if to_format == Some(Format::Las) {
         "LAS scaled integers"
     } else {
-        precision_text(opts.precision, &cloud)
+        stored
     };
-    let dropped = to_format.map_or_else(Vec::new, |f| io::not_written(&cloud, f));
-    io::write(&a.output, &cloud, &opts).map_err(|e| e.to_string())?;
     let to = Format::from_path(&a.output).map_or("?", |f| f.name());
     out.json(&json!({
-        "input": a.input.display().to_string(),
+        "input": input.display().to_string(),
         "output": a.output.display().to_string(),
         "from": from.name(),
         "to": to,
@@ -91,7 +97,7 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
     }));
     out.text(format!(
         "{} -> {}: {} points ({} -> {}), fields {} ({stored})",
-        a.input.display(),
+        input.display(),
         a.output.display(),
         cloud.len(),
         from.name(),
@@ -105,8 +111,8 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
             dropped.join(", ")
         ));
     }
-    if let Some(note) = crate::commands::columns_note(&info) {
-        out.text(format!("{}: {note}", a.input.display()));
+    if let Some(note) = columns_note(&info) {
+        out.text(format!("{}: {note}", input.display()));
     }
     if stored == "float32" && cloud.source_precision == Some(Precision::Double) {
         out.text(

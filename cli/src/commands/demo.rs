@@ -7,16 +7,16 @@
 //! curvatures and PNG pictures coloured by curvature; and the quality against the analytic
 //! surface (RMS distance, edge RMS, normal error) in a summary table.
 
-use crate::commands::geometry::add_outputs;
-use crate::commands::ms;
-use crate::output::{num, Output};
+use crate::error::{Context, Result};
+use crate::output::{ms, num, Output};
 use crate::progress::Progress;
-use crate::render::{render, ColorMap, Image, Paint, RenderOptions};
+use crate::render::{Image, RenderOptions};
+use crate::write;
 use glam::DVec3;
 use nbhd::geometry::Orientation;
-use nbhd::io::{self, PointCloud, Precision, WriteOptions};
+use nbhd::io::{PointCloud, Precision, WriteOptions};
 use nbhd::shapes::metrics::{evaluate, Quality};
-use nbhd::shapes::{noisy_sample, Cube, CylinderPlane, NoiseKind, Shape, Torus};
+use nbhd::shapes::{noisy_sample, Cube, CylinderPlane, NoiseKind, NoisySample, Shape, Torus};
 use nbhd::smooth::robust::{smooth_robust_with_progress, RobustOptions};
 use nbhd::smooth::{smooth_with_progress, SmoothOptions, SmoothResult};
 use nbhd::{
@@ -24,7 +24,7 @@ use nbhd::{
 };
 use serde_json::json;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Run the demo on built-in shapes (what `nbhd` without a command does)
@@ -66,12 +66,6 @@ pub struct Args {
     #[arg(long, default_value_t = nbhd::tree::DEFAULT_LEAF_SIZE)]
     pub leaf_size: usize,
 }
-
-/// Surface variation λ0/(λ0+λ1+λ2) drawn at the hot end of the colour map. The covariance
-/// quotient of the thesis' program ('CovQuotient', Section 7.3) and PCL's `curvature`: 0 on a
-/// plane, about 0.02 on faces with 0.5h noise, 0.06–0.16 along a cube edge. The pictures of all
-/// shapes and stages share this scale.
-pub const SURFACE_VARIATION_RANGE: f64 = 0.08;
 
 /// A demo shape with the camera that shows it best.
 struct DemoShape {
@@ -132,23 +126,17 @@ struct ShapeReport {
     runs: Vec<Run>,
 }
 
-pub fn run(a: Args, out: &Output) -> Result<(), String> {
+pub fn run(a: Args, out: &Output) -> Result<()> {
     if a.points < 100 {
-        return Err(format!(
-            "--points {} is too few; use at least 100",
-            a.points
-        ));
+        return Err(format!("--points {} is too few; use at least 100", a.points).into());
     }
     if !(a.noise.is_finite() && a.noise >= 0.0) {
-        return Err(format!("--noise {} must be a finite number >= 0", a.noise));
+        return Err(format!("--noise {} must be a finite number >= 0", a.noise).into());
     }
     if !(a.radius_h.is_finite() && a.radius_h > 0.0) {
-        return Err(format!(
-            "--radius-h {} must be a finite number > 0",
-            a.radius_h
-        ));
+        return Err(format!("--radius-h {} must be a finite number > 0", a.radius_h).into());
     }
-    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    std::fs::create_dir_all(&a.out).context(a.out.display())?;
     let folder = a.out.canonicalize().unwrap_or_else(|_| a.out.clone());
     let started = Instant::now();
     out.text(format!(
@@ -169,9 +157,7 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         tiles.push(images);
     }
     let overview = a.out.join("overview.png");
-    mosaic(&tiles)
-        .save_png(&overview)
-        .map_err(|e| format!("{}: {e}", overview.display()))?;
+    write::png(&overview, &mosaic(&tiles))?;
     let summary = summary_table(&reports);
     let total = started.elapsed().as_secs_f64();
     let md = a.out.join("summary.md");
@@ -191,7 +177,7 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
             summary
         ),
     )
-    .map_err(|e| format!("{}: {e}", md.display()))?;
+    .context(md.display())?;
     out.json(&json!({
         "folder": folder.display().to_string(),
         "points_per_shape": a.points,
@@ -225,10 +211,10 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
     Ok(())
 }
 
-/// Runs everything on one shape; returns the report and the pictures (noisy, iso, aniso).
-fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<Image>), String> {
+/// Runs everything on one shape; returns the report and the pictures (noisy, isotropic,
+/// anisotropic, robust).
+fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<Image>)> {
     let name = s.shape.name();
-    let lib = |e: nbhd::NbhdError| format!("{name}: {e}");
     // Stages: sample, 4 trees, normals of the input, two smoothings (10 each), files.
     let bar = Progress::bar(out, 30, format!("{name}: sampling"));
     let ns = noisy_sample(
@@ -238,13 +224,42 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
         NoiseKind::Gaussian,
         a.seed,
     )
-    .map_err(lib)?;
+    .context(name)?;
     let h = ns.h;
     bar.inc(1);
+    let trees = time_trees(a, name, &ns.points, h, &bar)?;
+    let results = smooth_all(a, name, &ns.points, &bar)?;
+    bar.message(format!("{name}: files and pictures"));
+    let (runs, images) = write_runs(a, s, &ns, &results)?;
+    bar.set(30);
+    Ok((
+        ShapeReport {
+            name,
+            points: ns.points.len(),
+            h,
+            trees: trees.rows,
+            tables_identical: trees.identical,
+            rows: trees.row_lens,
+            runs,
+        },
+        images,
+    ))
+}
 
-    // Trees with every pivot policy, and the ε-k table of each.
-    let flat: Vec<f64> = ns.points.iter().flat_map(|p| p.to_array()).collect();
-    let view = PointsView::from_flat(&flat, 3).map_err(lib)?;
+/// The trees of every pivot policy on one shape and their ε-k tables.
+struct Trees {
+    rows: Vec<TreeRow>,
+    /// Whether every policy's table is the first one's.
+    identical: bool,
+    /// Smallest, mean and largest row length of the table.
+    row_lens: (usize, f64, usize),
+}
+
+/// Builds the tree with every pivot policy (median of three builds) and times the ε-k table
+/// of each; advances the bar by one per policy.
+fn time_trees(a: &Args, name: &str, points: &[DVec3], h: f64, bar: &Progress) -> Result<Trees> {
+    let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
+    let view = PointsView::from_flat(&flat, 3).context(name)?;
     let nbhd = Neighborhood::KnnRadius {
         k: a.k,
         radius: a.radius_h * h,
@@ -253,8 +268,8 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
     // page faults and thread start-up.
     KdTree::<f64>::build(&view, &BuildOptions::default())
         .and_then(|t| t.neighborhoods(nbhd, &TableOptions::default()))
-        .map_err(lib)?;
-    let mut trees = Vec::new();
+        .context(name)?;
+    let mut rows = Vec::new();
     let mut first: Option<NeighborTable<f64>> = None;
     let mut identical = true;
     for policy in PivotPolicy::ALL {
@@ -268,7 +283,7 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
         let mut tree = None;
         for _ in 0..3 {
             let t = Instant::now();
-            tree = Some(KdTree::<f64>::build(&view, &opts).map_err(lib)?);
+            tree = Some(KdTree::<f64>::build(&view, &opts).context(name)?);
             times.push(ms(t));
         }
         times.sort_by(f64::total_cmp);
@@ -276,13 +291,13 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
         let t = Instant::now();
         let table = tree
             .neighborhoods(nbhd, &TableOptions::default())
-            .map_err(lib)?;
+            .context(name)?;
         let table_ms = ms(t);
         match &first {
             None => first = Some(table),
             Some(f) => identical &= *f == table,
         }
-        trees.push(TreeRow {
+        rows.push(TreeRow {
             policy,
             stats: tree.stats(),
             build_ms,
@@ -291,13 +306,25 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
         bar.inc(1);
     }
     let table = first.expect("at least one policy");
-    let rows = (
-        table.min_row_len(),
-        table.mean_row_len(),
-        table.max_row_len(),
-    );
+    Ok(Trees {
+        rows,
+        identical,
+        row_lens: (
+            table.min_row_len(),
+            table.mean_row_len(),
+            table.max_row_len(),
+        ),
+    })
+}
 
-    // Normals and curvatures of the noisy input, then the two smoothings.
+/// Normals and curvatures of the noisy input (`noisy`, no step), then the isotropic, the
+/// anisotropic and the robust smoothing; each with its time in seconds.
+fn smooth_all(
+    a: &Args,
+    name: &str,
+    points: &[DVec3],
+    bar: &Progress,
+) -> Result<Vec<(&'static str, SmoothResult, f64)>> {
     let base = SmoothOptions {
         k: a.k,
         epsilon: nbhd::smooth::Length::Relative(a.radius_h),
@@ -319,7 +346,6 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
     let mut results: Vec<(&'static str, SmoothResult, f64)> = Vec::new();
     let progress_of = |i: usize, label: &'static str| {
         let (start, len) = (bar_pos(i), bar_pos(i + 1) - bar_pos(i));
-        let bar = &bar;
         move |f: f64, _| {
             bar.message(format!("{name}: {label}"));
             bar.set(start + (f * len as f64) as u64);
@@ -328,7 +354,7 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
     };
     for (i, (label, o)) in runs_opts.iter().enumerate() {
         let t = Instant::now();
-        let r = smooth_with_progress(&ns.points, o, &mut progress_of(i, label)).map_err(lib)?;
+        let r = smooth_with_progress(points, o, &mut progress_of(i, label)).context(name)?;
         results.push((label, r, t.elapsed().as_secs_f64()));
     }
     // The robust smoothing with its defaults (its neighbourhoods are its own: the 24 nearest
@@ -338,46 +364,49 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
         orientation: Orientation::Propagate,
         ..RobustOptions::default()
     };
-    let r = smooth_robust_with_progress(
-        &ns.points,
-        &robust,
-        &mut progress_of(runs_opts.len(), "robust"),
-    )
-    .map_err(lib)?;
+    let r =
+        smooth_robust_with_progress(points, &robust, &mut progress_of(runs_opts.len(), "robust"))
+            .context(name)?;
     results.push(("robust", r, t.elapsed().as_secs_f64()));
+    Ok(results)
+}
 
-    // Files, pictures and quality.
-    bar.message(format!("{name}: files and pictures"));
+/// Writes each result as a PLY file with normals and curvatures and as a PNG picture, and
+/// measures its quality against the analytic surface.
+fn write_runs(
+    a: &Args,
+    s: &DemoShape,
+    ns: &NoisySample,
+    results: &[(&'static str, SmoothResult, f64)],
+) -> Result<(Vec<Run>, Vec<Image>)> {
+    let name = s.shape.name();
     let mut runs = Vec::new();
     let mut images = Vec::new();
-    for (label, r, secs) in &results {
+    for (label, r, secs) in results {
         let normals: Vec<DVec3> = r.outputs.iter().map(|o| o.normal).collect();
         let quality =
-            evaluate(s.shape.as_ref(), &ns.clean, h, &r.points, Some(&normals)).map_err(lib)?;
+            evaluate(s.shape.as_ref(), &ns.clean, ns.h, &r.points, Some(&normals)).context(name)?;
         let mut cloud = PointCloud::from_positions(r.points.iter().map(|p| p.to_array()).collect());
         let index: Vec<usize> = (0..cloud.len()).collect();
-        add_outputs(&mut cloud, &index, &r.outputs, true)?;
+        write::add_fields(&mut cloud, &index, &r.outputs, true)?;
         let file = format!("{}-{label}.ply", s.file);
-        write_ply(&a.out.join(&file), &cloud)?;
-        let variation: Vec<f64> = r.outputs.iter().map(|o| o.covariance_quotient).collect();
-        let img = render(
-            &cloud.positions,
-            cloud.normals.as_deref(),
-            Paint::Scalar(&variation),
-            &RenderOptions {
+        let single = WriteOptions {
+            precision: Precision::Single,
+            ..WriteOptions::default()
+        };
+        write::cloud(&a.out.join(&file), &cloud, &single)?;
+        let img = write::surface_variation_picture(
+            &cloud,
+            RenderOptions {
                 width: 640,
                 height: 480,
                 view: s.view,
                 up: s.up,
-                colormap: ColorMap::Heat,
-                range: Some((0.0, SURFACE_VARIATION_RANGE)),
                 ..RenderOptions::default()
             },
-        );
+        )?;
         let png = format!("{}-{label}.png", s.file);
-        let path = a.out.join(&png);
-        img.save_png(&path)
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        write::png(&a.out.join(&png), &img)?;
         images.push(img);
         runs.push(Run {
             label,
@@ -387,33 +416,13 @@ fn run_shape(a: &Args, s: &DemoShape, out: &Output) -> Result<(ShapeReport, Vec<
             png,
         });
     }
-    bar.set(30);
-    Ok((
-        ShapeReport {
-            name,
-            points: ns.points.len(),
-            h,
-            trees,
-            tables_identical: identical,
-            rows,
-            runs,
-        },
-        images,
-    ))
+    Ok((runs, images))
 }
 
 /// Bar position where smoothing run `i` starts (0: input's normals, 1: isotropic, 2:
 /// anisotropic, 3: robust, 4: the end of the last).
 fn bar_pos(i: usize) -> u64 {
     [5, 8, 13, 18, 29][i]
-}
-
-fn write_ply(path: &Path, cloud: &PointCloud) -> Result<(), String> {
-    let opts = WriteOptions {
-        precision: Precision::Single,
-        ..WriteOptions::default()
-    };
-    io::write(path, cloud, &opts).map_err(|e| e.to_string())
 }
 
 /// The pictures of all shapes in one: a row per shape, a column per stage.

@@ -1,7 +1,9 @@
 //! `nbhd info FILE`: what a point-cloud file holds.
 
-use crate::commands::FormatArg;
+use crate::args::FormatArg;
+use crate::error::Result;
 use crate::output::{num, Output};
+use crate::read;
 use nbhd::io;
 use serde_json::json;
 use std::path::PathBuf;
@@ -21,8 +23,8 @@ pub struct Args {
     pub format: Option<FormatArg>,
 }
 
-pub fn run(a: Args, out: &Output) -> Result<(), String> {
-    let (cloud, info) = crate::commands::read_cloud_info(&a.file, a.format)?;
+pub fn run(a: Args, out: &Output) -> Result<()> {
+    let (cloud, info) = read::cloud_info(&a.file, a.format.map(Into::into))?;
     let format = info.format;
     let n = cloud.len();
     let bad = cloud.non_finite_count();
@@ -59,7 +61,7 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
     let mut t = String::new();
     t.push_str(&format!("file       {}\n", a.file.display()));
     t.push_str(&format!("format     {}\n", format.name()));
-    if let Some(note) = crate::commands::columns_note(&info) {
+    if let Some(note) = read::columns_note(&info) {
         t.push_str(&format!("read as    {note}\n"));
     }
     t.push_str(&format!("points     {n}\n"));

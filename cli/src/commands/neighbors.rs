@@ -6,11 +6,14 @@
 //! positions in the file, counted from 0; `sq_dist` is the squared Euclidean distance, written
 //! with every digit), or a JSON document.
 
-use crate::commands::{length_text, ms, parse_length, read_cloud, FormatArg, TreeArgs};
-use crate::output::{num, Output};
+use crate::args::{length_text, parse_length, InputArgs, TreeArgs};
+use crate::error::{Context, Result};
+use crate::output::{ms, num, Output};
 use crate::progress::Progress;
+use crate::read;
+use nbhd::io::PointCloud;
 use nbhd::smooth::Length;
-use nbhd::{KdTree, NeighborTable, Neighborhood, TableOptions};
+use nbhd::{BuildOptions, KdTree, NeighborTable, Neighborhood, TableOptions, TreeStats};
 use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -18,11 +21,14 @@ use std::time::Instant;
 
 /// What every neighbourhood command takes.
 #[derive(clap::Args, Debug)]
+#[command(mut_arg("input", |a| a.help(
+    "Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv); points with NaN coordinates are \
+     skipped and get empty rows, the others keep their index in the file"
+)))]
+#[command(mut_arg("from", |a| a.help(
+    "Read the input (and the queries) as this format instead of recognising it"
+)))]
 pub struct Common {
-    /// Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv); points with NaN coordinates are
-    /// skipped and get empty rows, the others keep their index in the file
-    pub input: PathBuf,
-
     /// Write the neighbourhoods to this file (.csv or .txt: query,rank,index,sq_dist lines;
     /// .json: one document) instead of standard output
     #[arg(long, short)]
@@ -36,9 +42,9 @@ pub struct Common {
     #[arg(long)]
     pub queries: Option<PathBuf>,
 
-    /// Read the input (and the queries) as this format instead of recognising it
-    #[arg(long, value_enum)]
-    pub from: Option<FormatArg>,
+    // The input file and its format: here, so that --from is listed after --queries.
+    #[command(flatten)]
+    pub input: InputArgs,
 
     #[command(flatten)]
     pub tree: TreeArgs,
@@ -90,30 +96,28 @@ enum Kind {
     KnnRadius(i64, Length),
 }
 
-pub fn run_knn(a: KnnArgs, out: &Output) -> Result<(), String> {
+pub fn run_knn(a: KnnArgs, out: &Output) -> Result<()> {
     run(a.common, Kind::Knn(a.k), out)
 }
 
-pub fn run_radius(a: RadiusArgs, out: &Output) -> Result<(), String> {
+pub fn run_radius(a: RadiusArgs, out: &Output) -> Result<()> {
     run(a.common, Kind::Radius(a.radius), out)
 }
 
-pub fn run_neighbors(a: NeighborsArgs, out: &Output) -> Result<(), String> {
+pub fn run_neighbors(a: NeighborsArgs, out: &Output) -> Result<()> {
     run(a.common, Kind::KnnRadius(a.k, a.radius), out)
 }
 
-fn check_k(k: i64) -> Result<usize, String> {
+fn check_k(k: i64) -> Result<usize> {
     if k < 1 {
-        return Err(format!("k must be at least 1 (got {k})"));
+        return Err(format!("k must be at least 1 (got {k})").into());
     }
-    usize::try_from(k).map_err(|_| format!("k {k} is too large"))
+    usize::try_from(k).map_err(|_| format!("k {k} is too large").into())
 }
 
 /// Mean distance of a point to its nearest other point, from the tree.
-fn mean_spacing(tree: &KdTree<f64>) -> Result<f64, String> {
-    let t = tree
-        .neighborhoods(Neighborhood::Knn { k: 1 }, &TableOptions::default())
-        .map_err(|e| e.to_string())?;
+fn mean_spacing(tree: &KdTree<f64>) -> Result<f64> {
+    let t = tree.neighborhoods(Neighborhood::Knn { k: 1 }, &TableOptions::default())?;
     let d: Vec<f64> = (0..t.len())
         .filter_map(|i| t.sq_dists_of(i).first().map(|d| d.sqrt()))
         .collect();
@@ -128,7 +132,25 @@ fn mean_spacing(tree: &KdTree<f64>) -> Result<f64, String> {
     }
 }
 
-fn run(c: Common, kind: Kind, out: &Output) -> Result<(), String> {
+/// What a neighbourhood command computed, for its summary (JSON and text).
+struct Facts {
+    name: String,
+    queries_file: Option<PathBuf>,
+    k: Option<usize>,
+    length: Option<Length>,
+    h: Option<f64>,
+    radius: Option<f64>,
+    nbhd: Neighborhood<f64>,
+    exclude_self: bool,
+    points: usize,
+    tree: BuildOptions,
+    stats: TreeStats,
+    table: NeighborTable<f64>,
+    build_ms: f64,
+    query_ms: f64,
+}
+
+fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
     // Check what can be checked before reading.
     let k = match kind {
         Kind::Knn(k) | Kind::KnnRadius(k, _) => Some(check_k(k)?),
@@ -137,29 +159,20 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<(), String> {
     if c.exclude_self && c.queries.is_some() {
         return Err("--exclude-self applies to the input's own points, not to --queries".into());
     }
-    let cloud = read_cloud(&c.input, c.from)?;
+    let cloud = c.input.read()?;
     let queries = match &c.queries {
-        Some(q) => Some(read_cloud(q, c.from)?),
+        Some(q) => Some((q, read::cloud(q, c.input.from.map(Into::into))?)),
         None => None,
     };
     let opts = c.tree.options();
-    let name = c.input.display().to_string();
-    let view = cloud.view().map_err(|e| format!("{name}: {e}"))?;
-    let t = Instant::now();
-    let tree = {
-        let _s = Progress::spinner(
-            out,
-            format!("building the k-d tree of {} points", cloud.len()),
-        );
-        KdTree::<f64>::build(&view, &opts).map_err(|e| format!("{name}: {e}"))?
-    };
-    let build_ms = ms(t);
+    let name = c.input.input.display().to_string();
+    let (tree, build_ms) = build_tree(&cloud, &opts, &name, out)?;
     let length = match kind {
         Kind::Radius(l) | Kind::KnnRadius(_, l) => Some(l),
         Kind::Knn(_) => None,
     };
     let h = match length {
-        Some(Length::Relative(_)) => Some(mean_spacing(&tree).map_err(|e| format!("{name}: {e}"))?),
+        Some(Length::Relative(_)) => Some(mean_spacing(&tree).context(&name)?),
         _ => None,
     };
     let radius = length.map(|l| l.resolve(h.unwrap_or(1.0)));
@@ -172,99 +185,169 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<(), String> {
         (Some(k), Some(radius)) => Neighborhood::KnnRadius { k, radius },
         (None, None) => unreachable!("every kind has k or a radius"),
     };
-    nbhd.validate().map_err(|e| e.to_string())?;
+    nbhd.validate()?;
     let t = Instant::now();
     let table = {
         let _s = Progress::spinner(out, "computing neighbourhoods");
-        match &queries {
-            None => tree.neighborhoods(
-                nbhd,
-                &TableOptions {
-                    exclude_self: c.exclude_self,
-                    threads: 0,
-                },
-            ),
-            Some(q) => {
-                let qname = c.queries.as_ref().unwrap().display().to_string();
-                let qv = q.view().map_err(|e| format!("{qname}: {e}"))?;
-                if let Some((i, _)) = qv.first_non_finite() {
-                    return Err(format!(
-                        "{qname}: query point {i} has a NaN or infinite coordinate"
-                    ));
-                }
-                tree.neighborhoods_of(&qv, nbhd, &TableOptions::default())
-            }
-        }
-        .map_err(|e| format!("{name}: {e}"))?
+        let queries = queries.as_ref().map(|(path, cloud)| (*path, cloud));
+        table(&tree, nbhd, c.exclude_self, queries, &name)?
     };
-    let query_ms = ms(t);
-    let stats = tree.stats();
-    let kind_name = match nbhd {
-        Neighborhood::Knn { .. } => "knn",
-        Neighborhood::Radius { .. } => "radius",
-        Neighborhood::KnnRadius { .. } => "neighbors",
-    };
-    let summary = json!({
-        "input": name,
-        "queries_file": c.queries.as_ref().map(|q| q.display().to_string()),
-        "kind": kind_name,
-        "k": k,
-        "radius": radius.map(num),
-        "radius_given": length.map(length_text),
-        "spacing_h": h.map(num),
-        "exclude_self": c.exclude_self,
-        "points": cloud.len(),
-        "skipped_non_finite": cloud.len() - stats.points,
-        "queries": table.len(),
-        "tree": {
-            "pivot": opts.pivot.name(),
-            "median": opts.median.name(),
-            "leaf_size": opts.leaf_size,
-            "depth": stats.depth,
-            "nodes": stats.nodes,
-            "leaves": stats.leaves,
-            "bytes": stats.bytes,
-        },
-        "build_ms": num(build_ms),
-        "query_ms": num(query_ms),
-        "rows": {
-            "min": table.min_row_len(),
-            "mean": num(table.mean_row_len()),
-            "max": table.max_row_len(),
-            "total": table.total(),
-        },
-    });
-    let text = format!(
-        "{name}: {kind_name} of {} queries over {} points ({} skipped as non-finite){}{}: \
-         neighbours per row min {} / mean {:.2} / max {}, total {}\n\
-         tree {} / {} / leaf {}: depth {}, {} nodes, {} leaves, {} KiB, built in {:.1} ms; \
-         queries {:.1} ms",
-        table.len(),
-        cloud.len(),
-        cloud.len() - stats.points,
-        k.map_or(String::new(), |k| format!(", k = {k}")),
-        radius.map_or(String::new(), |r| format!(
-            ", ε = {r}{}",
-            h.map_or(String::new(), |h| format!(
-                " ({} with h = {h})",
-                length_text(length.unwrap())
-            ))
-        )),
-        table.min_row_len(),
-        table.mean_row_len(),
-        table.max_row_len(),
-        table.total(),
-        opts.pivot.name(),
-        opts.median.name(),
-        opts.leaf_size,
-        stats.depth,
-        stats.nodes,
-        stats.leaves,
-        stats.bytes / 1024,
+    let facts = Facts {
+        name,
+        queries_file: c.queries,
+        k,
+        length,
+        h,
+        radius,
+        nbhd,
+        exclude_self: c.exclude_self,
+        points: cloud.len(),
+        tree: opts,
+        stats: tree.stats(),
+        table,
         build_ms,
-        query_ms,
-    );
-    match &c.output {
+        query_ms: ms(t),
+    };
+    write_result(c.output.as_deref(), &facts, out)
+}
+
+/// Builds the k-d tree of `cloud` under a spinner; returns it and the milliseconds taken.
+fn build_tree(
+    cloud: &PointCloud,
+    opts: &BuildOptions,
+    name: &str,
+    out: &Output,
+) -> Result<(KdTree<f64>, f64)> {
+    let view = cloud.view().context(name)?;
+    let t = Instant::now();
+    let tree = {
+        let _s = Progress::spinner(
+            out,
+            format!("building the k-d tree of {} points", cloud.len()),
+        );
+        KdTree::<f64>::build(&view, opts).context(name)?
+    };
+    Ok((tree, ms(t)))
+}
+
+/// The neighbourhoods of the tree's own points, or of the points of the query file (which
+/// must all be finite); errors of the search name the input file `name`.
+fn table(
+    tree: &KdTree<f64>,
+    nbhd: Neighborhood<f64>,
+    exclude_self: bool,
+    queries: Option<(&PathBuf, &PointCloud)>,
+    name: &str,
+) -> Result<NeighborTable<f64>> {
+    match queries {
+        None => {
+            let opts = TableOptions {
+                exclude_self,
+                threads: 0,
+            };
+            tree.neighborhoods(nbhd, &opts).context(name)
+        }
+        Some((path, q)) => {
+            let qname = path.display().to_string();
+            let qv = q.view().context(&qname)?;
+            if let Some((i, _)) = qv.first_non_finite() {
+                return Err(
+                    format!("{qname}: query point {i} has a NaN or infinite coordinate").into(),
+                );
+            }
+            tree.neighborhoods_of(&qv, nbhd, &TableOptions::default())
+                .context(name)
+        }
+    }
+}
+
+impl Facts {
+    fn kind_name(&self) -> &'static str {
+        match self.nbhd {
+            Neighborhood::Knn { .. } => "knn",
+            Neighborhood::Radius { .. } => "radius",
+            Neighborhood::KnnRadius { .. } => "neighbors",
+        }
+    }
+
+    /// The summary as JSON (without the rows).
+    fn json(&self) -> serde_json::Value {
+        json!({
+            "input": self.name,
+            "queries_file": self.queries_file.as_ref().map(|q| q.display().to_string()),
+            "kind": self.kind_name(),
+            "k": self.k,
+            "radius": self.radius.map(num),
+            "radius_given": self.length.map(length_text),
+            "spacing_h": self.h.map(num),
+            "exclude_self": self.exclude_self,
+            "points": self.points,
+            "skipped_non_finite": self.points - self.stats.points,
+            "queries": self.table.len(),
+            "tree": {
+                "pivot": self.tree.pivot.name(),
+                "median": self.tree.median.name(),
+                "leaf_size": self.tree.leaf_size,
+                "depth": self.stats.depth,
+                "nodes": self.stats.nodes,
+                "leaves": self.stats.leaves,
+                "bytes": self.stats.bytes,
+            },
+            "build_ms": num(self.build_ms),
+            "query_ms": num(self.query_ms),
+            "rows": {
+                "min": self.table.min_row_len(),
+                "mean": num(self.table.mean_row_len()),
+                "max": self.table.max_row_len(),
+                "total": self.table.total(),
+            },
+        })
+    }
+
+    /// The summary as text.
+    fn text(&self) -> String {
+        format!(
+            "{}: {} of {} queries over {} points ({} skipped as non-finite){}{}: \
+             neighbours per row min {} / mean {:.2} / max {}, total {}\n\
+             tree {} / {} / leaf {}: depth {}, {} nodes, {} leaves, {} KiB, built in {:.1} ms; \
+             queries {:.1} ms",
+            self.name,
+            self.kind_name(),
+            self.table.len(),
+            self.points,
+            self.points - self.stats.points,
+            self.k.map_or(String::new(), |k| format!(", k = {k}")),
+            self.radius.map_or(String::new(), |r| format!(
+                ", ε = {r}{}",
+                self.h.map_or(String::new(), |h| format!(
+                    " ({} with h = {h})",
+                    length_text(self.length.unwrap())
+                ))
+            )),
+            self.table.min_row_len(),
+            self.table.mean_row_len(),
+            self.table.max_row_len(),
+            self.table.total(),
+            self.tree.pivot.name(),
+            self.tree.median.name(),
+            self.tree.leaf_size,
+            self.stats.depth,
+            self.stats.nodes,
+            self.stats.leaves,
+            self.stats.bytes / 1024,
+            self.build_ms,
+            self.query_ms,
+        )
+    }
+}
+
+/// Writes the rows to `output` (CSV or JSON by its extension) or standard output, and the
+/// summary as text or JSON.
+fn write_result(output: Option<&Path>, facts: &Facts, out: &Output) -> Result<()> {
+    let table = &facts.table;
+    let summary = facts.json();
+    let text = facts.text();
+    match output {
         Some(path) => {
             let json_file = path
                 .extension()
@@ -272,12 +355,12 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<(), String> {
             let bar = Progress::bar(out, table.len() as u64, "writing");
             let res = if json_file {
                 let mut doc = summary.clone();
-                doc["neighbors"] = rows_json(&table);
+                doc["neighbors"] = rows_json(table);
                 std::fs::write(path, serde_json::to_string(&doc).expect("plain values"))
             } else {
-                write_csv(path, &table, &bar)
+                write_csv(path, table, &bar)
             };
-            res.map_err(|e| format!("{}: {e}", path.display()))?;
+            res.context(path.display())?;
             drop(bar);
             let mut doc = summary;
             doc["output"] = json!(path.display().to_string());
@@ -286,14 +369,14 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<(), String> {
         }
         None if out.json => {
             let mut doc = summary;
-            doc["neighbors"] = rows_json(&table);
+            doc["neighbors"] = rows_json(table);
             out.json(&doc);
         }
         None => {
             let stdout = std::io::stdout();
             let mut w = std::io::BufWriter::new(stdout.lock());
             // A closed pipe (`nbhd knn ... | head`) ends the output quietly.
-            if write_rows(&mut w, &table, &Progress::hidden()).is_ok() {
+            if write_rows(&mut w, table, &Progress::hidden()).is_ok() {
                 let _ = w.flush();
             }
             drop(w);

@@ -1,8 +1,10 @@
 //! `nbhd render IN OUT.png`: a picture of a point cloud.
 
-use crate::commands::{parse_vec3, FormatArg};
+use crate::args::{parse_vec3, InputArgs};
+use crate::error::{Context, Result};
 use crate::output::Output;
 use crate::render::{render_cloud, ColorMap, RenderOptions};
+use crate::write;
 use nbhd::io;
 use serde_json::json;
 use std::path::PathBuf;
@@ -15,15 +17,11 @@ use std::path::PathBuf;
 /// NaN points are left out.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv)
-    pub input: PathBuf,
+    #[command(flatten)]
+    pub input: InputArgs,
 
     /// Output picture (.png)
     pub output: PathBuf,
-
-    /// Read the input as this format instead of recognising it
-    #[arg(long, value_enum)]
-    pub from: Option<FormatArg>,
 
     /// Colour by this scalar field (e.g. curvature, intensity), a coordinate (x, y, z), or
     /// rgb for the scan's own colours
@@ -55,8 +53,11 @@ pub struct Args {
     pub point_radius: Option<f64>,
 }
 
-pub fn run(a: Args, out: &Output) -> Result<(), String> {
-    let (cloud, _) = io::read_as(&a.input, a.from.map(Into::into)).map_err(|e| e.to_string())?;
+pub fn run(a: Args, out: &Output) -> Result<()> {
+    let input = &a.input.input;
+    // The plain reader: `render` reads text columns as the library guesses them, without the
+    // global --columns and without the note on them.
+    let (cloud, _) = io::read_as(input, a.input.from.map(Into::into))?;
     if a.width == 0 || a.height == 0 || a.width > 16384 || a.height > 16384 {
         return Err("--width and --height must be between 1 and 16384".into());
     }
@@ -69,13 +70,11 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
         colormap: a.colormap,
         ..RenderOptions::default()
     };
-    let img = render_cloud(&cloud, a.color.as_deref(), &opts)
-        .map_err(|e| format!("{}: {e}", a.input.display()))?;
-    img.save_png(&a.output)
-        .map_err(|e| format!("{}: {e}", a.output.display()))?;
+    let img = render_cloud(&cloud, a.color.as_deref(), &opts).context(input.display())?;
+    write::png(&a.output, &img)?;
     let covered = img.coverage(opts.background);
     out.json(&json!({
-        "input": a.input.display().to_string(),
+        "input": input.display().to_string(),
         "output": a.output.display().to_string(),
         "points": cloud.len(),
         "drawn": cloud.len() - cloud.non_finite_count(),

@@ -2,13 +2,15 @@
 //! thesis' methods: isotropic Gaussian fairing (Section 2.1.3) and anisotropic mean curvature
 //! flow (Section 2.3) with the thesis' settings (Section 7.3).
 
-use crate::commands::geometry::{add_outputs, orientation, write_cloud, write_png, OrientArg};
-use crate::commands::{
-    curvature_text, finite_points, length_text, parse_curvature, parse_length, parse_vec3,
-    read_cloud, FormatArg,
+use crate::args::{
+    curvature_text, length_text, orientation, parse_curvature, parse_length, parse_vec3, InputArgs,
+    OrientArg, PrecisionArgs,
 };
+use crate::error::{Context, Result};
 use crate::output::{num, Output};
 use crate::progress::Progress;
+use crate::read::finite_points;
+use crate::write;
 use nbhd::smooth::robust::{smooth_robust_report, RobustOptions};
 use nbhd::smooth::{
     smooth_with_progress, Curvature, FeatureCriterion, Length, SmoothOptions, SmoothResult,
@@ -82,16 +84,18 @@ pub enum CriterionArg {
 /// directional curvature against the threshold λ. Lengths may be given in units of the mean
 /// spacing h of the input (6h), curvatures in units of 1/h (0.2/h).
 #[derive(clap::Args, Debug)]
+// `mut_arg` moves the argument to the end of the list: the explicit indices keep
+// `<INPUT> <OUTPUT>` in that order.
+#[command(mut_arg("input", |a| a.index(1).help(
+    "Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv); NaN points are kept as they are"
+)))]
 pub struct Args {
-    /// Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv); NaN points are kept as they are
-    pub input: PathBuf,
+    #[command(flatten)]
+    pub input: InputArgs,
 
     /// Output file (.ply, .pcd, .xyz) with normals and curvature fields of the result
+    #[arg(index = 2)]
     pub output: PathBuf,
-
-    /// Read the input as this format instead of recognising it
-    #[arg(long, value_enum)]
-    pub from: Option<FormatArg>,
 
     /// Smoothing method
     #[arg(long, short, value_enum, default_value = "robust")]
@@ -190,12 +194,12 @@ pub struct Args {
     pub up: [f64; 3],
 
     #[command(flatten)]
-    pub precision: crate::commands::PrecisionArgs,
+    pub precision: PrecisionArgs,
 }
 
 impl Args {
     /// The options given that the chosen method does not read: an error naming the first.
-    fn check_method_options(&self) -> Result<(), String> {
+    fn check_method_options(&self) -> Result<()> {
         let robust_only = [
             ("--k-plane", self.k_plane.is_some()),
             ("--iterations", self.iterations.is_some()),
@@ -221,10 +225,9 @@ impl Args {
             MethodArg::Isotropic => robust_only.iter().chain(&anisotropic_only).collect(),
         };
         match refused.iter().find(|(_, given)| *given) {
-            Some((name, _)) => Err(format!(
-                "{name} does not apply to --method {}",
-                self.method.name()
-            )),
+            Some((name, _)) => {
+                Err(format!("{name} does not apply to --method {}", self.method.name()).into())
+            }
             None => Ok(()),
         }
     }
@@ -293,7 +296,7 @@ struct Run {
 }
 
 /// The thesis' isotropic or anisotropic smoothing.
-fn run_thesis(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run, String> {
+fn run_thesis(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run> {
     let opts = SmoothOptions {
         orientation: orientation(a.orient, None, points),
         ..a.options()
@@ -301,8 +304,7 @@ fn run_thesis(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run, Str
     let res = {
         let bar = Progress::bar(out, 1000, "smoothing");
         let mut cb = bar.smoothing_callback("smoothing");
-        smooth_with_progress(points, &opts, &mut cb)
-            .map_err(|e| format!("{}: {e}", a.input.display()))?
+        smooth_with_progress(points, &opts, &mut cb).context(a.input.input.display())?
     };
     let features = res.outputs.iter().filter(|o| o.feature).count();
     let radius_given = length_text(a.radius.unwrap_or(opts.epsilon));
@@ -336,7 +338,7 @@ fn run_thesis(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run, Str
 }
 
 /// The robust smoothing (`nbhd::smooth::robust`).
-fn run_robust(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run, String> {
+fn run_robust(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run> {
     let opts = RobustOptions {
         orientation: orientation(a.orient, None, points),
         ..a.robust_options()
@@ -344,8 +346,7 @@ fn run_robust(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run, Str
     let rep = {
         let bar = Progress::bar(out, 1000, "smoothing");
         let mut cb = bar.smoothing_callback("robust smoothing");
-        smooth_robust_report(points, &opts, &mut cb)
-            .map_err(|e| format!("{}: {e}", a.input.display()))?
+        smooth_robust_report(points, &opts, &mut cb).context(a.input.input.display())?
     };
     let res = rep.result;
     let radius_given = length_text(a.radius.unwrap_or(opts.epsilon));
@@ -386,15 +387,13 @@ fn run_robust(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run, Str
     })
 }
 
-pub fn run(a: Args, out: &Output) -> Result<(), String> {
+pub fn run(a: Args, out: &Output) -> Result<()> {
     a.check_method_options()?;
-    let mut cloud = read_cloud(&a.input, a.from)?;
+    let input = &a.input.input;
+    let mut cloud = a.input.read()?;
     let (points, index) = finite_points(&cloud);
     if points.is_empty() {
-        return Err(format!(
-            "{}: no point with finite coordinates",
-            a.input.display()
-        ));
+        return Err(format!("{}: no point with finite coordinates", input.display()).into());
     }
     let t = std::time::Instant::now();
     let run = match a.method {
@@ -414,14 +413,14 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
     for (&i, p) in index.iter().zip(&res.points) {
         cloud.positions[i] = p.to_array();
     }
-    add_outputs(&mut cloud, &index, &res.outputs, true)?;
-    write_cloud(&a.output, &cloud, &a.precision)?;
+    write::add_fields(&mut cloud, &index, &res.outputs, true)?;
+    write::cloud(&a.output, &cloud, &a.precision.write_options())?;
     if let Some(png) = &a.png {
-        write_png(png, &cloud, a.view, a.up)?;
+        write::surface_variation_png(png, &cloud, a.view, a.up)?;
     }
     let method = a.method.name();
     let mut summary = json!({
-        "input": a.input.display().to_string(),
+        "input": input.display().to_string(),
         "output": a.output.display().to_string(),
         "png": a.png.as_ref().map(|p| p.display().to_string()),
         "points": cloud.len(),
@@ -440,7 +439,7 @@ pub fn run(a: Args, out: &Output) -> Result<(), String> {
     out.text(format!(
         "{} -> {}: {} points ({} skipped as non-finite) smoothed, method {method}: {}\
          points moved {:.3}h on average, {:.3}h at most; {:.2} s{}",
-        a.input.display(),
+        input.display(),
         a.output.display(),
         cloud.len(),
         cloud.len() - points.len(),

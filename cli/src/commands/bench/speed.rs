@@ -8,8 +8,9 @@
 //! Each figure is the median of `--reps` runs; ratios are peer / nbhd, so > 1 means nbhd is
 //! faster. Neighbour counts are checked against kiddo's and any difference is reported.
 
-use crate::commands::{finite_points, read_cloud};
+use crate::error::{Context, Result};
 use crate::output::{num, Output};
+use crate::read;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nbhd::shapes::datasets::Dataset;
 use nbhd::table::neighborhoods_of_all;
@@ -179,7 +180,7 @@ struct Plan {
     brute_max_points: usize,
 }
 
-pub fn run(a: SpeedArgs, out: &Output) -> Result<(), String> {
+pub fn run(a: SpeedArgs, out: &Output) -> Result<()> {
     let plan = plan(&a)?;
     let sets = load_sets(&a.sets, a.quick)?;
     let (mut rows, mut infos) = (Vec::new(), Vec::new());
@@ -200,7 +201,7 @@ pub fn run(a: SpeedArgs, out: &Output) -> Result<(), String> {
 }
 
 /// Checks the options; `--quick` means one run per figure.
-fn plan(a: &SpeedArgs) -> Result<Plan, String> {
+fn plan(a: &SpeedArgs) -> Result<Plan> {
     if a.reps == 0 {
         return Err("--reps must be at least 1".into());
     }
@@ -215,7 +216,8 @@ fn plan(a: &SpeedArgs) -> Result<Plan, String> {
         return Err(format!(
             "--thread-counts {t} is above the maximum of {} worker threads",
             nbhd::parallel::MAX_THREADS
-        ));
+        )
+        .into());
     }
     let mut ops = a.ops.clone();
     ops.dedup();
@@ -234,7 +236,7 @@ fn plan(a: &SpeedArgs) -> Result<Plan, String> {
 }
 
 /// Generated sets by name (`all` for every one) and files by path, finite points only.
-fn load_sets(names: &[String], quick: bool) -> Result<Vec<BenchSet>, String> {
+fn load_sets(names: &[String], quick: bool) -> Result<Vec<BenchSet>> {
     let mut sets = Vec::new();
     for name in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
         if name == "all" {
@@ -247,7 +249,7 @@ fn load_sets(names: &[String], quick: bool) -> Result<Vec<BenchSet>, String> {
             if quick && d.len_hint() > QUICK_MAX_POINTS {
                 return Err(format!(
                     "--quick runs small sets only (at most {QUICK_MAX_POINTS} points); {name} is not"
-                ));
+                ).into());
             }
             sets.push(generated(d));
         } else if Path::new(name).exists() {
@@ -257,7 +259,8 @@ fn load_sets(names: &[String], quick: bool) -> Result<Vec<BenchSet>, String> {
             return Err(format!(
                 "'{name}' is neither a generated set ({}, all) nor an existing file",
                 known.join(", ")
-            ));
+            )
+            .into());
         }
     }
     if sets.is_empty() {
@@ -290,9 +293,9 @@ fn generated(d: Dataset) -> BenchSet {
 }
 
 /// A point-cloud file (format from the extension); points with NaN coordinates are skipped.
-fn from_file(path: &str, quick: bool) -> Result<BenchSet, String> {
-    let cloud = read_cloud(Path::new(path), None).map_err(|e| format!("{path}: {e}"))?;
-    let points: Vec<[f64; 3]> = finite_points(&cloud)
+fn from_file(path: &str, quick: bool) -> Result<BenchSet> {
+    let cloud = read::cloud(Path::new(path), None).context(path)?;
+    let points: Vec<[f64; 3]> = read::finite_points(&cloud)
         .0
         .iter()
         .map(|p| p.to_array())
@@ -301,13 +304,15 @@ fn from_file(path: &str, quick: bool) -> Result<BenchSet, String> {
         return Err(format!(
             "{path}: {} finite points; the benchmark needs at least 31",
             points.len()
-        ));
+        )
+        .into());
     }
     if quick && points.len() > QUICK_MAX_POINTS {
         return Err(format!(
             "--quick runs small sets only (at most {QUICK_MAX_POINTS} points); {path} has {}",
             points.len()
-        ));
+        )
+        .into());
     }
     let name = Path::new(path)
         .file_name()
@@ -318,14 +323,13 @@ fn from_file(path: &str, quick: bool) -> Result<BenchSet, String> {
 /// The radius giving about 20 neighbours (self included, so the 21st nearest) on average: the
 /// median distance to the 21st nearest point over a sample of about 2,000 points, computed in
 /// f64 so that f32 and f64 runs use the same radius.
-fn radius_for_20(points: &[[f64; 3]]) -> Result<f64, String> {
-    let view = PointsView::from_rows(points).map_err(|e| e.to_string())?;
-    let tree = KdTree::<f64>::build(&view, &BuildOptions::default()).map_err(|e| e.to_string())?;
+fn radius_for_20(points: &[[f64; 3]]) -> Result<f64> {
+    let view = PointsView::from_rows(points)?;
+    let tree = KdTree::<f64>::build(&view, &BuildOptions::default())?;
     let mut out = Vec::new();
     let mut d: Vec<f64> = Vec::new();
     for i in (0..points.len()).step_by((points.len() / 2000).max(1)) {
-        tree.knn(Query::stored(i as u32), 21, &mut out)
-            .map_err(|e| e.to_string())?;
+        tree.knn(Query::stored(i as u32), 21, &mut out)?;
         d.push(out.last().map_or(0.0, |n| n.sq_dist.sqrt()));
     }
     d.sort_by(f64::total_cmp);
@@ -345,11 +349,11 @@ fn median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
     t[reps / 2]
 }
 
-fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .map_err(|e| format!("could not create {threads} threads: {e}"))
+        .context(format!("could not create {threads} threads"))
 }
 
 /// A coordinate type run by both nbhd and kiddo.
@@ -433,23 +437,22 @@ fn bench_set<T: Float>(
     radius: f64,
     plan: &Plan,
     rows: &mut Vec<Row>,
-) -> Result<SetInfo, String> {
+) -> Result<SetInfo> {
     let pts: Vec<[T; 3]> = set
         .points
         .iter()
         .map(|p| p.map(|c| T::from_f64(c)))
         .collect();
-    let view = PointsView::from_rows(&pts).map_err(|e| e.to_string())?;
+    let view = PointsView::from_rows(&pts)?;
     let options = BuildOptions {
         non_finite: NonFinitePolicy::Reject,
         ..BuildOptions::default()
     };
-    let tree = KdTree::<T>::build(&view, &options).map_err(|e| e.to_string())?;
+    let tree = KdTree::<T>::build(&view, &options)?;
     let peer = T::peer_build(&pts);
     let brute = (set.points.len() <= plan.brute_max_points && plan.ops.contains(&Op::Knn10))
         .then(|| BruteForce::<T>::new(&view, NonFinitePolicy::Reject))
-        .transpose()
-        .map_err(|e| e.to_string())?;
+        .transpose()?;
     let r = T::from_f64(radius);
     for &op in &plan.ops {
         for &threads in &plan.threads {

@@ -1,0 +1,54 @@
+//! Reading point-cloud files, for every command: the global `--columns` of text files, the note
+//! on how a text file's columns were read, and the finite points of a cloud.
+
+use crate::error::Result;
+use crate::output::Output;
+use nbhd::io::{Format, PointCloud, ReadInfo, ReadOptions};
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// What every command reads input files with: the output mode (for the note on text
+/// columns) and the global `--columns`.
+static READ_CONTEXT: OnceLock<(Output, Option<Vec<String>>)> = OnceLock::new();
+
+/// Sets the output mode and `--columns` for [`cloud`] (once, from `main`).
+pub fn set_context(out: Output, columns: Option<Vec<String>>) {
+    let _ = READ_CONTEXT.set((out, columns));
+}
+
+/// Reads a cloud (in `format`, or the one recognised) with the global `--columns`, and tells what was read; errors name the file.
+pub fn cloud_info(path: &Path, format: Option<Format>) -> Result<(PointCloud, ReadInfo)> {
+    let opts = ReadOptions {
+        format,
+        columns: READ_CONTEXT.get().and_then(|c| c.1.clone()),
+    };
+    Ok(nbhd::io::read_with(path, &opts)?)
+}
+
+/// `columns x y z red green blue (the header on line 1)` for a text input.
+pub fn columns_note(info: &ReadInfo) -> Option<String> {
+    info.text_columns
+        .as_ref()
+        .map(|t| format!("columns {} ({})", t.names.join(" "), t.from))
+}
+
+/// Reads a cloud; errors name the file. For a text input, says on standard error what its
+/// columns were read as (unless --quiet or --json).
+pub fn cloud(path: &Path, format: Option<Format>) -> Result<PointCloud> {
+    let (cloud, info) = cloud_info(path, format)?;
+    if let (Some(note), Some((out, _))) = (columns_note(&info), READ_CONTEXT.get()) {
+        out.note(format!("{}: {note}", path.display()));
+    }
+    Ok(cloud)
+}
+
+/// The finite points of a cloud as `DVec3` and their indices in the file.
+pub fn finite_points(cloud: &PointCloud) -> (Vec<glam::DVec3>, Vec<usize>) {
+    cloud
+        .positions
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.iter().all(|c| c.is_finite()))
+        .map(|(i, p)| (glam::DVec3::from_array(*p), i))
+        .unzip()
+}
