@@ -7,9 +7,10 @@
 //!   (e.g. `tests/data/pcl/office1.pcd`; non-finite points are left out).
 //! * `--repeat R` — time the normals and the propagation R times each, alternating, and report
 //!   the minimum of each and their ratio (default 3; the machine may be shared and noisy).
-//! * `--stage table|normals|all` — stop after the neighbour table or the normals (one pass, no
-//!   timing repeats): run under `valgrind --tool=callgrind` with `RAYON_NUM_THREADS=1` at each
-//!   stage, the differences of the instruction counts are the normals' and the propagation's.
+//! * `--stage table|normals|propagate` — stop after the neighbour table, the normals or the
+//!   propagation (one pass, no checks): run under `valgrind --tool=callgrind` with
+//!   `RAYON_NUM_THREADS=1` at each stage, the differences of the instruction counts are the
+//!   normals' and the propagation's.
 //! * `--save FILE` / `--compare FILE` — write which normals the propagation flipped (one byte per
 //!   point), or count the points whose orientation differs from such a file.
 //!
@@ -59,6 +60,11 @@ fn main() {
         return;
     }
     let runs = if stage == "all" { repeat.max(1) } else { 1 };
+    if stage == "propagate" {
+        let mut frames = local_frames(&points, &table).unwrap();
+        orient(&points, &table, &mut frames, Orientation::Propagate).unwrap();
+        return;
+    }
     let (mut normals_s, mut propagate_s) = (f64::INFINITY, f64::INFINITY);
     let (mut frames, mut oriented) = (Vec::new(), Vec::new());
     for _ in 0..runs {
@@ -100,8 +106,15 @@ fn main() {
     }
     if let Some(path) = compare {
         let before = std::fs::read(&path).expect("a file written by --save");
-        assert_eq!(before.len(), flipped.len(), "the saved run had other points");
+        assert_eq!(
+            before.len(),
+            flipped.len(),
+            "the saved run had other points"
+        );
         let differ = before.iter().zip(&flipped).filter(|(a, b)| a != b).count();
-        println!("{differ} of {} normals oriented otherwise than in {path}", flipped.len());
+        println!(
+            "{differ} of {} normals oriented otherwise than in {path}",
+            flipped.len()
+        );
     }
 }
