@@ -7,6 +7,7 @@ use crate::error::{NbhdError, Result};
 use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 /// How to orient the (sign-free) covariance normals.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -89,18 +90,25 @@ fn flip(f: &mut LocalFrame, want_positive: bool) {
     f.minor = f.normal.cross(f.major);
 }
 
-/// Bits of an edge's place in the live edge list inside a [`propagate`] key.
+/// Bits of an edge's place in the neighbour table inside a [`propagate`] key.
 const PLACE_BITS: u32 = 40;
 /// Mask of the place bits.
 const PLACE_MASK: u64 = (1 << PLACE_BITS) - 1;
 
-/// The key of the edge at `place` with weight `w` in `[0, 1]`: larger weights first (quantised
-/// to 24 bits), ties by the earlier place; the largest key is the preferred edge. Keys are
-/// distinct, so the maximum spanning forest is unique and does not depend on the threads.
+/// The key of the table entry at `place` with weight `w` in `[0, 1]`: larger weights first
+/// (quantised to 24 bits), ties by the earlier place; the largest key is the preferred edge.
+/// Keys are distinct, so the maximum spanning forest is unique and does not depend on the
+/// threads nor on the order the edges are visited in.
 #[inline]
 fn edge_key(w: f32, place: usize) -> u64 {
     let q = (w.clamp(0.0, 1.0) * ((1 << 24) - 1) as f32) as u64;
     (q << PLACE_BITS) | (PLACE_MASK - place as u64)
+}
+
+/// The table place an [`edge_key`] was made from.
+#[inline]
+fn place_of(key: u64) -> usize {
+    (PLACE_MASK - (key & PLACE_MASK)) as usize
 }
 
 /// Union-find root of `i`, halving paths on the way.
@@ -113,6 +121,181 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
     i
 }
 
+/// Bits per axis of the Morton code of [`locality_order`].
+const MORTON_BITS: u32 = 21;
+
+/// `x`'s low [`MORTON_BITS`] bits spread to every third bit.
+#[inline]
+fn spread3(x: u32) -> u64 {
+    let mut x = u64::from(x) & 0x1f_ffff;
+    x = (x | x << 32) & 0x001f_0000_0000_ffff;
+    x = (x | x << 16) & 0x001f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    (x | x << 2) & 0x1249_2492_4924_9249
+}
+
+/// A numbering of the points in which neighbours mostly lie close: by the Morton code of each
+/// point's cell in a grid of 2^21 cells a side over the finite points' bounding cube
+/// (non-finite points first), ties by index. Only the speed of [`propagate`] depends on it —
+/// its keys and its result are those of the caller's numbering — since the random reads of
+/// the forest's rounds then fall on nearby memory. Returns `(order, rank)`: `order[r]` is the
+/// caller's index of the point numbered `r`, `rank` the inverse.
+fn locality_order(points: &[DVec3]) -> (Vec<u32>, Vec<u32>) {
+    let (lo, hi) = points
+        .par_iter()
+        .filter(|p| p.is_finite())
+        .fold(
+            || (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        )
+        .reduce(
+            || (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    // halves, so that no difference overflows
+    let (lo, extent) = (lo * 0.5, (hi * 0.5 - lo * 0.5).max_element());
+    let cells = ((1u32 << MORTON_BITS) - 1) as f64;
+    let scale = if extent > 0.0 && (cells / extent).is_finite() {
+        cells / extent
+    } else {
+        0.0
+    };
+    let mut keyed: Vec<(u64, u32)> = points
+        .par_iter()
+        .enumerate()
+        .map(|(i, &p)| {
+            let code = if p.is_finite() {
+                let c = ((p * 0.5 - lo) * scale).clamp(DVec3::ZERO, DVec3::splat(cells));
+                spread3(c.x as u32) | spread3(c.y as u32) << 1 | spread3(c.z as u32) << 2
+            } else {
+                0
+            };
+            (code, i as u32)
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    let order: Vec<u32> = keyed.into_par_iter().map(|(_, i)| i).collect();
+    let mut rank = vec![0u32; order.len()];
+    for (r, &i) in order.iter().enumerate() {
+        rank[i as usize] = r as u32;
+    }
+    (order, rank)
+}
+
+/// Rows per block of [`Block`]s.
+const BLOCK_ROWS: usize = 2048;
+
+/// The edges of a run of consecutive rows (points in the [`locality_order`]) between different
+/// components of the growing forest, as compressed rows: row `r` is `to[off[r]..off[r + 1]]`
+/// with its keys.
+struct Block {
+    /// Number (in the locality order) of the first row.
+    start: usize,
+    /// Row boundaries, one more than there are rows.
+    off: Vec<usize>,
+    /// Other end of each edge, in the locality order.
+    to: Vec<u32>,
+    /// [`edge_key`] of each edge.
+    key: Vec<u64>,
+}
+
+/// The neighbour graph in the locality order: the table's entries `i → j` (`j ≠ i`) as edges
+/// from `rank[i]` to `rank[j]` keyed by [`edge_key`] of `|⟨n_i, n_j⟩|` (the normals rounded to
+/// f32) and the entry's place in the table. Each entry is one edge; an entry and its reverse
+/// are two parallel edges of the same weight.
+fn edge_blocks(
+    table: &NeighborTable<f64>,
+    order: &[u32],
+    rank: &[u32],
+    frames: &[LocalFrame],
+) -> Vec<Block> {
+    // the normals alone, compact and in the locality order: the weights read them at random
+    let unit: Vec<glam::Vec3> = order
+        .par_iter()
+        .map(|&i| frames[i as usize].normal.as_vec3())
+        .collect();
+    let n = order.len();
+    (0..n)
+        .step_by(BLOCK_ROWS)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|start| {
+            let rows = start..(start + BLOCK_ROWS).min(n);
+            let len = rows
+                .clone()
+                .map(|u| table.indices_of(order[u] as usize).len())
+                .sum();
+            let mut b = Block {
+                start,
+                off: Vec::with_capacity(rows.len() + 1),
+                to: Vec::with_capacity(len),
+                key: Vec::with_capacity(len),
+            };
+            b.off.push(0);
+            for u in rows {
+                let i = order[u] as usize;
+                let at = table.offsets()[i];
+                for (t, &j) in table.indices_of(i).iter().enumerate() {
+                    if j as usize != i {
+                        let v = rank[j as usize];
+                        b.to.push(v);
+                        let w = unit[u].dot(unit[v as usize]).abs();
+                        b.key.push(edge_key(w, at + t));
+                    }
+                }
+                b.off.push(b.to.len());
+            }
+            b
+        })
+        .collect()
+}
+
+/// Raises `best` to `key` if it is lower: read first — once a component's best is high most
+/// of its edges lose, and a read does not contend as a write does.
+#[inline]
+fn offer(best: &AtomicU64, key: u64) {
+    if best.load(Relaxed) < key {
+        best.fetch_max(key, Relaxed);
+    }
+}
+
+/// One Borůvka sweep over a block: drops the edges inside a component (in place) and offers
+/// every other edge to the best of both its components. Returns the edges kept.
+fn sweep(b: &mut Block, comp: &[u32], best: &[AtomicU64]) -> usize {
+    let rows = b.off.len() - 1;
+    let (mut from, mut kept) = (b.off[0], 0);
+    for r in 0..rows {
+        let end = b.off[r + 1];
+        b.off[r] = kept;
+        let cu = comp[b.start + r];
+        let mut top = 0;
+        for e in from..end {
+            let (v, key) = (b.to[e], b.key[e]);
+            let cv = comp[v as usize];
+            if cv != cu {
+                b.to[kept] = v;
+                b.key[kept] = key;
+                kept += 1;
+                top = top.max(key);
+                offer(&best[cv as usize], key);
+            }
+        }
+        if top != 0 {
+            offer(&best[cu as usize], top);
+        }
+        from = end;
+    }
+    b.off[rows] = kept;
+    b.to.truncate(kept);
+    b.key.truncate(kept);
+    if kept < b.to.capacity() / 4 {
+        b.to.shrink_to_fit();
+        b.key.shrink_to_fit();
+    }
+    kept
+}
+
 /// Hoppe et al.'s propagation: a maximum spanning forest of the neighbour graph (both
 /// directions of every table entry) weighted by `|⟨n_i, n_j⟩|`, then every normal made to
 /// agree with its parent's, from the point of largest z (ties by the smaller index) of each
@@ -123,14 +306,16 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
 /// the picks are joined, and edges inside a component are dropped; every round at least
 /// halves the number of components, and the edge list shrinks with them. The edge order of
 /// [`edge_key`] is strict, so the forest is unique — the one Prim's algorithm grows from any
-/// seed — and the result does not depend on the number of threads.
+/// seed — and the result does not depend on the number of threads. The rounds run over the
+/// points in a [`locality_order`], where the edge list is kept as compressed rows
+/// ([`edge_blocks`]) and a component's best edge and the points' components are read from
+/// nearby memory; the keys, and so the forest, are those of the caller's numbering.
 fn propagate(
     points: &[DVec3],
     table: &NeighborTable<f64>,
     frames: &mut [LocalFrame],
     report: &mut dyn FnMut(f64) -> Result<()>,
 ) -> Result<()> {
-    use std::sync::atomic::{AtomicU64, Ordering as AtomicOrdering};
     let n = points.len();
     if n == 0 {
         return Ok(());
@@ -141,120 +326,59 @@ fn propagate(
             reason: format!("{} edges are too many to propagate over", table.total()),
         });
     }
-    // blocks of rows for the passes over the table
-    const BLOCK: usize = 4096;
-    let blocks: Vec<std::ops::Range<usize>> = (0..n)
-        .step_by(BLOCK)
-        .map(|a| a..(a + BLOCK).min(n))
-        .collect();
-    // the normals alone, compact: the weights read them at random
-    let unit: Vec<glam::Vec3> = frames.par_iter().map(|f| f.normal.as_vec3()).collect();
-    let weight = |i: usize, j: u32| unit[i].dot(unit[j as usize]).abs();
+    let (order, rank) = locality_order(points);
+    report(0.05)?;
+    let mut blocks = edge_blocks(table, &order, &rank, frames);
+    report(0.1)?;
+    // the ends of the edge a key names, in the locality order: the row of a place is its
+    // quotient by k when every row has k entries
+    let offsets = table.offsets();
+    let k = offsets.get(1).copied().unwrap_or(0);
+    let uniform = k > 0 && offsets.par_iter().enumerate().all(|(i, &o)| o == i * k);
+    let ends = |key: u64| {
+        let place = place_of(key);
+        let row = if uniform {
+            place / k
+        } else {
+            offsets.partition_point(|&o| o <= place) - 1
+        };
+        (rank[row], rank[table.indices()[place] as usize])
+    };
+    // Borůvka's rounds; components are named by their smallest point (locality order)
     let mut comp: Vec<u32> = (0..n as u32).collect();
-    let mut parent: Vec<u32> = comp.clone();
+    let mut parent = comp.clone();
+    let mut roots = comp.clone();
     let best: Vec<AtomicU64> = (0..n).map(|_| AtomicU64::new(0)).collect();
     let mut tree: Vec<(u32, u32)> = Vec::with_capacity(n);
-    let mut components = n;
-    report(0.1)?;
-    // Offers an edge to the best of both its components: read first — once a component's
-    // best is high most of its edges lose, and a read does not contend as a write does.
-    let offer = |best: &[AtomicU64], ci: u32, cj: u32, key: u64| {
-        for c in [ci, cj] {
-            let b = &best[c as usize];
-            if b.load(AtomicOrdering::Relaxed) < key {
-                b.fetch_max(key, AtomicOrdering::Relaxed);
-            }
-        }
-    };
-    // The first round reads the table itself (every point is its own component); an edge's
-    // place is its position in the table.
-    blocks.par_iter().for_each(|r| {
-        for i in r.clone() {
-            let at = table.offsets()[i];
-            for (t, &j) in table.indices_of(i).iter().enumerate() {
-                if j as usize != i {
-                    offer(&best, i as u32, j, edge_key(weight(i, j), at + t));
-                }
-            }
-        }
-    });
-    let join = |best: &[AtomicU64],
-                parent: &mut [u32],
-                tree: &mut Vec<(u32, u32)>,
-                edge: &dyn Fn(usize) -> (u32, u32)| {
-        let mut added = 0;
-        for b in best {
-            let key = b.swap(0, AtomicOrdering::Relaxed);
-            if key == 0 {
-                continue;
-            }
-            let (i, j) = edge((PLACE_MASK - (key & PLACE_MASK)) as usize);
-            let (a, c) = (find(parent, i), find(parent, j));
-            if a != c {
-                parent[a.max(c) as usize] = a.min(c);
-                tree.push((i, j));
-                added += 1;
-            }
-        }
-        added
-    };
-    let row_of_place = |p: usize| -> (u32, u32) {
-        let i = table.offsets().partition_point(|&o| o <= p) - 1;
-        (i as u32, table.indices()[p])
-    };
-    components -= join(&best, &mut parent, &mut tree, &row_of_place);
-    for c in comp.iter_mut() {
-        *c = find(&mut parent, *c);
-    }
-    // the edges between components, in table order, with their weights
-    let mut live: Vec<(u32, u32, f32)> = {
-        let comp = &comp;
-        let parts: Vec<Vec<(u32, u32, f32)>> = blocks
-            .par_iter()
-            .map(|r| {
-                let mut v = Vec::new();
-                for i in r.clone() {
-                    for &j in table.indices_of(i) {
-                        if comp[i] != comp[j as usize] {
-                            v.push((i as u32, j, weight(i, j)));
-                        }
-                    }
-                }
-                v
-            })
-            .collect();
-        parts.concat()
-    };
-    report(0.1 + 0.8 * (1.0 - components as f64 / n as f64))?;
-    while !live.is_empty() {
-        {
-            let comp = &comp;
-            let best = &best;
-            live.par_iter().enumerate().for_each(|(place, &(i, j, w))| {
-                let (ci, cj) = (comp[i as usize], comp[j as usize]);
-                if ci != cj {
-                    offer(best, ci, cj, edge_key(w, place));
-                }
-            });
-        }
-        let edge = |p: usize| (live[p].0, live[p].1);
-        let added = join(&best, &mut parent, &mut tree, &edge);
-        if added == 0 {
+    loop {
+        let live: usize = blocks.par_iter_mut().map(|b| sweep(b, &comp, &best)).sum();
+        if live == 0 {
             break;
         }
-        for c in comp.iter_mut() {
-            *c = find(&mut parent, *c);
-        }
-        components -= added;
-        let comp = &comp;
-        live = live
+        let picks: Vec<(u32, u32)> = roots
             .par_iter()
-            .copied()
-            .filter(|&(i, j, _)| comp[i as usize] != comp[j as usize])
+            .filter_map(|&c| {
+                let key = best[c as usize].swap(0, Relaxed);
+                (key != 0).then(|| ends(key))
+            })
             .collect();
-        report(0.1 + 0.8 * (1.0 - components as f64 / n as f64))?;
+        for (a, b) in picks {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra != rb {
+                parent[ra.max(rb) as usize] = ra.min(rb);
+                tree.push((a, b));
+            }
+        }
+        // every old root straight to its new root, then the points' components in one step
+        for &r in &roots {
+            let f = find(&mut parent, r);
+            parent[r as usize] = f;
+        }
+        comp.par_iter_mut().for_each(|c| *c = parent[*c as usize]);
+        roots.retain(|&r| parent[r as usize] == r);
+        report(0.1 + 0.8 * (1.0 - roots.len() as f64 / n as f64))?;
     }
-    drop(live);
+    drop(blocks);
     drop(best);
     // the forest as adjacency lists
     let mut tdeg = vec![0usize; n + 1];
@@ -274,35 +398,50 @@ fn propagate(
         at[b as usize] += 1;
     }
     drop(at);
-    // the top point of each tree (largest z, then smallest index), then a breadth-first walk
+    drop(tree);
+    // the top point of each tree (largest z, then smallest index), in the caller's numbering
     let mut top: Vec<u32> = vec![u32::MAX; n];
-    for i in 0..n {
-        let c = comp[i] as usize;
+    for (i, p) in points.iter().enumerate() {
+        let c = comp[rank[i] as usize] as usize;
         let t = top[c];
-        if t == u32::MAX || points[i].z > points[t as usize].z {
+        if t == u32::MAX || p.z > points[t as usize].z {
             top[c] = i as u32;
         }
     }
+    // A breadth-first walk from each top decides which normals keep their sign: a normal
+    // agrees with its parent's, `⟨±n_parent, n⟩ ≥ 0` (the sign only negates the dot product,
+    // exactly).
+    let normal: Vec<DVec3> = order
+        .par_iter()
+        .map(|&i| frames[i as usize].normal)
+        .collect();
+    let mut keep = vec![false; n];
     let mut done = vec![false; n];
-    let mut queue = std::collections::VecDeque::new();
+    let mut queue: Vec<u32> = Vec::with_capacity(n);
     for seed in top.into_iter().filter(|&t| t != u32::MAX) {
-        let seed = seed as usize;
-        let up = frames[seed].normal.z >= 0.0;
-        flip(&mut frames[seed], up);
+        let seed = rank[seed as usize] as usize;
+        keep[seed] = normal[seed].z >= 0.0;
         done[seed] = true;
-        queue.push_back(seed);
-        while let Some(i) = queue.pop_front() {
-            for &j in &tadj[tdeg[i]..tdeg[i + 1]] {
-                let j = j as usize;
-                if !done[j] {
-                    let agree = frames[i].normal.dot(frames[j].normal) >= 0.0;
-                    flip(&mut frames[j], agree);
-                    done[j] = true;
-                    queue.push_back(j);
+        let mut head = queue.len();
+        queue.push(seed as u32);
+        while head < queue.len() {
+            let u = queue[head] as usize;
+            head += 1;
+            for &v in &tadj[tdeg[u]..tdeg[u + 1]] {
+                let v = v as usize;
+                if !done[v] {
+                    let d = normal[u].dot(normal[v]);
+                    keep[v] = if keep[u] { d >= 0.0 } else { d <= 0.0 };
+                    done[v] = true;
+                    queue.push(v as u32);
                 }
             }
         }
     }
+    frames
+        .par_iter_mut()
+        .zip(&rank)
+        .for_each(|(f, &r)| flip(f, keep[r as usize]));
     Ok(())
 }
 
