@@ -208,7 +208,7 @@ mod tests {
     use crate::geometry::neighbors::neighbor_table;
     use crate::query::Neighborhood;
     use crate::shapes::metrics::unsigned_angle_deg;
-    use crate::shapes::{sample, Shape, Sphere, Torus};
+    use crate::shapes::{sample, Sphere, Torus};
 
     #[test]
     fn plane_normal_and_degenerate_cases() {

@@ -7,7 +7,7 @@ use crate::error::{NbhdError, Result};
 use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
 /// How to orient the (sign-free) covariance normals.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -101,7 +101,8 @@ const PLACE_MASK: u64 = (1 << PLACE_BITS) - 1;
 /// threads nor on the order the edges are visited in.
 #[inline]
 fn edge_key(w: f32, place: usize) -> u64 {
-    let q = (w.clamp(0.0, 1.0) * ((1 << 24) - 1) as f32) as u64;
+    // in [0, 2^24) or NaN (then 0): `as i32` gives what `as u64` would, with fewer steps
+    let q = (w.clamp(0.0, 1.0) * ((1 << 24) - 1) as f32) as i32 as u64;
     (q << PLACE_BITS) | (PLACE_MASK - place as u64)
 }
 
@@ -183,72 +184,74 @@ fn locality_order(points: &[DVec3]) -> (Vec<u32>, Vec<u32>) {
     (order, rank)
 }
 
-/// Rows per block of [`Block`]s.
+/// Rows per parallel task of the Borůvka sweeps.
 const BLOCK_ROWS: usize = 2048;
 
-/// The edges of a run of consecutive rows (points in the [`locality_order`]) between different
-/// components of the growing forest, as compressed rows: row `r` is `to[off[r]..off[r + 1]]`
-/// with its keys.
-struct Block {
-    /// Number (in the locality order) of the first row.
-    start: usize,
-    /// Row boundaries, one more than there are rows.
+/// The neighbour graph in the locality order as compressed rows: row `u` (the point
+/// `order[u]`) is `to[off[u]..off[u] + live[u]]` with its keys; the sweeps drop an edge by
+/// moving the row's last live edge into its place.
+struct EdgeRows {
+    /// Row starts, one more than there are rows.
     off: Vec<usize>,
+    /// Live edges of each row.
+    live: Vec<u32>,
     /// Other end of each edge, in the locality order.
     to: Vec<u32>,
     /// [`edge_key`] of each edge.
     key: Vec<u64>,
 }
 
-/// The neighbour graph in the locality order: the table's entries `i → j` (`j ≠ i`) as edges
-/// from `rank[i]` to `rank[j]` keyed by [`edge_key`] of `|⟨n_i, n_j⟩|` (the normals rounded to
-/// f32) and the entry's place in the table. Each entry is one edge; an entry and its reverse
-/// are two parallel edges of the same weight.
-fn edge_blocks(
+/// The table's entries `i → j` as edges from `rank[i]` to `rank[j]` keyed by [`edge_key`] of
+/// `|⟨n_i, n_j⟩|` (the normals rounded to f32) and the entry's place in the table. Each entry
+/// is one edge; an entry and its reverse are two parallel edges of the same weight; an entry
+/// `i → i` is a loop (key 0) that the first sweep drops. The table is read in its own order
+/// and each row written to its place in the locality order, so the random reads (one per
+/// entry, of the other end's normal and rank) do not wait for one another.
+fn edge_rows(
     table: &NeighborTable<f64>,
     order: &[u32],
     rank: &[u32],
     frames: &[LocalFrame],
-) -> Vec<Block> {
-    // the normals alone, compact and in the locality order: the weights read them at random
-    let unit: Vec<glam::Vec3> = order
-        .par_iter()
-        .map(|&i| frames[i as usize].normal.as_vec3())
-        .collect();
+) -> EdgeRows {
     let n = order.len();
-    (0..n)
-        .step_by(BLOCK_ROWS)
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .map(|start| {
-            let rows = start..(start + BLOCK_ROWS).min(n);
-            let len = rows
-                .clone()
-                .map(|u| table.indices_of(order[u] as usize).len())
-                .sum();
-            let mut b = Block {
-                start,
-                off: Vec::with_capacity(rows.len() + 1),
-                to: Vec::with_capacity(len),
-                key: Vec::with_capacity(len),
-            };
-            b.off.push(0);
-            for u in rows {
-                let i = order[u] as usize;
-                let at = table.offsets()[i];
-                for (t, &j) in table.indices_of(i).iter().enumerate() {
-                    if j as usize != i {
-                        let v = rank[j as usize];
-                        b.to.push(v);
-                        let w = unit[u].dot(unit[v as usize]).abs();
-                        b.key.push(edge_key(w, at + t));
-                    }
-                }
-                b.off.push(b.to.len());
+    let lens: Vec<u32> = order
+        .par_iter()
+        .map(|&i| table.indices_of(i as usize).len() as u32)
+        .collect();
+    let mut off = Vec::with_capacity(n + 1);
+    off.push(0usize);
+    for &l in &lens {
+        off.push(off.last().copied().unwrap_or(0) + l as usize);
+    }
+    // each point's normal and rank side by side: one read per entry
+    let ends: Vec<(glam::Vec3, u32)> = frames
+        .par_iter()
+        .zip(rank)
+        .map(|(f, &r)| (f.normal.as_vec3(), r))
+        .collect();
+    let m = off[n];
+    let to: Vec<AtomicU32> = (0..m).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+    let key: Vec<AtomicU64> = (0..m).into_par_iter().map(|_| AtomicU64::new(0)).collect();
+    (0..n).into_par_iter().with_min_len(256).for_each(|i| {
+        let (ni, ri) = ends[i];
+        let (at, base) = (table.offsets()[i], off[ri as usize]);
+        for (t, &j) in table.indices_of(i).iter().enumerate() {
+            let (nj, rj) = ends[j as usize];
+            // distinct places: every slot is written once (a plain store)
+            if j as usize == i {
+                to[base + t].store(ri, Relaxed);
+            } else {
+                to[base + t].store(rj, Relaxed);
+                key[base + t].store(edge_key(ni.dot(nj).abs(), at + t), Relaxed);
             }
-            b
-        })
-        .collect()
+        }
+    });
+    EdgeRows {
+        off,
+        live: lens,
+        to: to.into_iter().map(AtomicU32::into_inner).collect(),
+        key: key.into_iter().map(AtomicU64::into_inner).collect(),
+    }
 }
 
 /// Raises `best` to `key` if it is lower: read first — once a component's best is high most
@@ -260,38 +263,45 @@ fn offer(best: &AtomicU64, key: u64) {
     }
 }
 
-/// One Borůvka sweep over a block: drops the edges inside a component (in place) and offers
-/// every other edge to the best of both its components. Returns the edges kept.
-fn sweep(b: &mut Block, comp: &[u32], best: &[AtomicU64]) -> usize {
-    let rows = b.off.len() - 1;
-    let (mut from, mut kept) = (b.off[0], 0);
-    for r in 0..rows {
-        let end = b.off[r + 1];
-        b.off[r] = kept;
-        let cu = comp[b.start + r];
-        let mut top = 0;
-        for e in from..end {
-            let (v, key) = (b.to[e], b.key[e]);
-            let cv = comp[v as usize];
-            if cv != cu {
-                b.to[kept] = v;
-                b.key[kept] = key;
-                kept += 1;
-                top = top.max(key);
-                offer(&best[cv as usize], key);
+/// One Borůvka sweep over the rows `start..` whose edges are `to`/`key` (from `off[start]`
+/// on): drops the edges inside a component (in place) and offers every other edge to the best
+/// of both its components. Returns the edges kept.
+fn sweep(
+    start: usize,
+    off: &[usize],
+    live: &mut [u32],
+    to: &mut [u32],
+    key: &mut [u64],
+    comp: &[u32],
+    best: &[AtomicU64],
+) -> usize {
+    let base = off[start];
+    let mut kept = 0;
+    for (r, live) in live.iter_mut().enumerate() {
+        let a = off[start + r] - base;
+        let (to, key) = (
+            &mut to[a..a + *live as usize],
+            &mut key[a..a + *live as usize],
+        );
+        let cu = comp[start + r];
+        let (mut len, mut e, mut top) = (to.len(), 0, 0);
+        while e < len {
+            let cv = comp[to[e] as usize];
+            if cv == cu {
+                len -= 1;
+                to[e] = to[len];
+                key[e] = key[len];
+            } else {
+                top = top.max(key[e]);
+                offer(&best[cv as usize], key[e]);
+                e += 1;
             }
         }
         if top != 0 {
             offer(&best[cu as usize], top);
         }
-        from = end;
-    }
-    b.off[rows] = kept;
-    b.to.truncate(kept);
-    b.key.truncate(kept);
-    if kept < b.to.capacity() / 4 {
-        b.to.shrink_to_fit();
-        b.key.shrink_to_fit();
+        *live = len as u32;
+        kept += len;
     }
     kept
 }
@@ -328,7 +338,7 @@ fn propagate(
     }
     let (order, rank) = locality_order(points);
     report(0.05)?;
-    let mut blocks = edge_blocks(table, &order, &rank, frames);
+    let mut rows = edge_rows(table, &order, &rank, frames);
     report(0.1)?;
     // the ends of the edge a key names, in the locality order: the row of a place is its
     // quotient by k when every row has k entries
@@ -351,7 +361,26 @@ fn propagate(
     let best: Vec<AtomicU64> = (0..n).map(|_| AtomicU64::new(0)).collect();
     let mut tree: Vec<(u32, u32)> = Vec::with_capacity(n);
     loop {
-        let live: usize = blocks.par_iter_mut().map(|b| sweep(b, &comp, &best)).sum();
+        let live: usize = {
+            // the rows cut into blocks, each with its own edges
+            let EdgeRows { off, live, to, key } = &mut rows;
+            let (mut live, mut to, mut key) = (&mut live[..], &mut to[..], &mut key[..]);
+            let mut blocks = Vec::with_capacity(n.div_ceil(BLOCK_ROWS));
+            for start in (0..n).step_by(BLOCK_ROWS) {
+                let end = (start + BLOCK_ROWS).min(n);
+                let len = off[end] - off[start];
+                let (l, l_rest) = std::mem::take(&mut live).split_at_mut(end - start);
+                let (t, t_rest) = std::mem::take(&mut to).split_at_mut(len);
+                let (k, k_rest) = std::mem::take(&mut key).split_at_mut(len);
+                blocks.push((start, l, t, k));
+                (live, to, key) = (l_rest, t_rest, k_rest);
+            }
+            let (off, comp, best) = (&off[..], &comp[..], &best[..]);
+            blocks
+                .into_par_iter()
+                .map(|(start, l, t, k)| sweep(start, off, l, t, k, comp, best))
+                .sum()
+        };
         if live == 0 {
             break;
         }
@@ -378,7 +407,7 @@ fn propagate(
         roots.retain(|&r| parent[r as usize] == r);
         report(0.1 + 0.8 * (1.0 - roots.len() as f64 / n as f64))?;
     }
-    drop(blocks);
+    drop(rows);
     drop(best);
     // the forest as adjacency lists
     let mut tdeg = vec![0usize; n + 1];
@@ -524,6 +553,99 @@ mod tests {
         for (fr, &p) in f.iter().zip(&s.points) {
             assert!(fr.normal.dot(v - p) >= 0.0);
             assert!(fr.major.cross(fr.minor).dot(fr.normal) > 0.999);
+        }
+    }
+
+    /// The forest of a plain Kruskal over every table entry sorted by key (the definition the
+    /// Borůvka rounds must meet), then the same walk from each tree's top point.
+    fn kruskal_orientation(
+        points: &[DVec3],
+        table: &NeighborTable<f64>,
+        frames: &mut [LocalFrame],
+    ) {
+        let n = points.len();
+        let mut edges = Vec::new();
+        for i in 0..n {
+            for (t, &j) in table.indices_of(i).iter().enumerate() {
+                let w = frames[i]
+                    .normal
+                    .as_vec3()
+                    .dot(frames[j as usize].normal.as_vec3());
+                edges.push((edge_key(w.abs(), table.offsets()[i] + t), i as u32, j));
+            }
+        }
+        edges.sort_unstable_by_key(|e| std::cmp::Reverse(e.0));
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut adj = vec![Vec::new(); n];
+        for (_, i, j) in edges {
+            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            if a != b {
+                parent[a as usize] = b;
+                adj[i as usize].push(j as usize);
+                adj[j as usize].push(i as usize);
+            }
+        }
+        let mut top: Vec<Option<usize>> = vec![None; n];
+        for i in 0..n {
+            let r = find(&mut parent, i as u32) as usize;
+            if top[r].is_none_or(|t| points[i].z > points[t].z) {
+                top[r] = Some(i);
+            }
+        }
+        let mut done = vec![false; n];
+        for seed in top.into_iter().flatten() {
+            let up = frames[seed].normal.z >= 0.0;
+            flip(&mut frames[seed], up);
+            done[seed] = true;
+            let mut stack = vec![seed];
+            while let Some(i) = stack.pop() {
+                for &j in &adj[i] {
+                    if !done[j] {
+                        let agree = frames[i].normal.dot(frames[j].normal) >= 0.0;
+                        flip(&mut frames[j], agree);
+                        done[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn propagation_is_kruskals_forest_on_knn_and_radius_tables() {
+        // two spheres far apart (two trees), a noisy plane with ties of weight 1, one lone point
+        let mut points = sample(&Sphere::new(1.0), 1500, 11).points;
+        points.extend(
+            sample(&Sphere::new(0.5), 700, 12)
+                .points
+                .iter()
+                .map(|p| *p + DVec3::X * 5.0),
+        );
+        points.extend(
+            (0..400).map(|i| DVec3::new((i % 20) as f64 * 0.1, (i / 20) as f64 * 0.1, -4.0)),
+        );
+        points.push(DVec3::splat(40.0));
+        for nbhd in [
+            Neighborhood::Knn { k: 9 },
+            Neighborhood::Radius {
+                radius: 0.2,
+                sorted: true,
+            },
+        ] {
+            let table = neighbor_table(&points, nbhd, true).unwrap();
+            let frames = local_frames(&points, &table).unwrap();
+            let mut want = frames.clone();
+            kruskal_orientation(&points, &table, &mut want);
+            for threads in [1, 2, 3] {
+                let mut got = frames.clone();
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| orient(&points, &table, &mut got, Orientation::Propagate))
+                    .unwrap();
+                assert_eq!(got, want, "{nbhd:?}, {threads} threads");
+            }
         }
     }
 }
