@@ -318,7 +318,7 @@ fn sweep(
 /// [`edge_key`] is strict, so the forest is unique — the one Prim's algorithm grows from any
 /// seed — and the result does not depend on the number of threads. The rounds run over the
 /// points in a [`locality_order`], where the edge list is kept as compressed rows
-/// ([`edge_blocks`]) and a component's best edge and the points' components are read from
+/// ([`edge_rows`]) and a component's best edge and the points' components are read from
 /// nearby memory; the keys, and so the forest, are those of the caller's numbering.
 fn propagate(
     points: &[DVec3],
