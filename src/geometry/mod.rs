@@ -6,11 +6,11 @@ pub mod curvature;
 mod eigen;
 pub mod neighbors;
 pub mod normals;
+pub mod orientation;
 pub mod robust_plane;
 
 pub use curvature::{
     directional_curvature, principal_curvatures, DensityForm, PrincipalCurvatures, PrincipalFormula,
 };
-pub use normals::{
-    local_frame, local_frames, orient, orient_with_progress, LocalFrame, Orientation,
-};
+pub use normals::{local_frame, local_frames, LocalFrame};
+pub use orientation::{orient, orient_with_progress, Orientation};
