@@ -14,6 +14,10 @@
  *   fault. No function aborts or unwinds into C on bad input: NULL and misaligned pointers,
  *   out-of-range enum values, NaN or infinite coordinates and empty inputs are reported as
  *   statuses, and an internal Rust panic is caught and reported as NBHD_STATUS_INTERNAL.
+ *   One rule for an enum field holding no value of its enum: in an options struct
+ *   (nbhd_*_options) it is NBHD_STATUS_INVALID_OPTION, like any other option out of range; in
+ *   any other struct (nbhd_points, nbhd_neighborhood_spec, nbhd_normals_output) it is
+ *   NBHD_STATUS_INVALID_ARGUMENT. The message names the field and the value.
  *
  * Ownership
  *   - nbhd_tree_build makes an nbhd_tree* that you free with nbhd_tree_free.
@@ -226,7 +230,8 @@ typedef enum {
      */
     NBHD_STATUS_MISALIGNED_POINTER = 2,
     /**
-     * An argument has a value outside its range: an enum field holding no value of its
+     * An argument has a value outside its range: an enum field of an argument struct
+     * (nbhd_points, nbhd_neighborhood_spec, nbhd_normals_output) holding no value of its
      * enum, a row or index beyond its range, or a points description whose byte size
      * overflows the address space (`dim * sizeof(scalar)` or `(count - 1) * stride`; the
      * message names the argument and the values passed).
@@ -284,7 +289,8 @@ typedef enum {
      */
     NBHD_STATUS_SKIPPED_POINT = 15,
     /**
-     * A build or table option is out of range (the message names it).
+     * A field of an options struct (nbhd_*_options) is out of range, an enum field holding
+     * no value of its enum included (the message names the option and the value).
      */
     NBHD_STATUS_INVALID_OPTION = 16,
     /**
@@ -704,7 +710,8 @@ typedef struct {
      */
     nbhd_orientation orientation;
     /**
-     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite). Default
+     * (0, 0, 0).
      */
     double orientation_point[3];
     /**
@@ -726,7 +733,7 @@ typedef struct {
      * nbhd_build_options: REJECT (the default) refuses the input with NON_FINITE; SKIP
      * computes on the finite points only, and a skipped point keeps its index, is left
      * unmoved (its coordinates are copied to `out_coords` as they are) and gets NaN geometry
-     * with `normal_flags` 8.
+     * with `normal_flags` 8. Default REJECT.
      */
     nbhd_non_finite_policy non_finite;
 } nbhd_smooth_options;
@@ -855,7 +862,8 @@ typedef struct {
      */
     nbhd_orientation orientation;
     /**
-     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite). Default
+     * (0, 0, 0).
      */
     double orientation_point[3];
     /**
@@ -865,8 +873,9 @@ typedef struct {
      */
     nbhd_non_finite_policy non_finite;
     /**
-     * Worker threads: 0 the shared pool, n >= 1 a pool of n threads made for this call.
-     * Results are identical for every value. Default 0.
+     * Worker threads: 0 the shared pool, n >= 1 a pool of n threads made for this call (at
+     * most NBHD_MAX_THREADS, else NBHD_STATUS_INVALID_OPTION). Results are identical for
+     * every value. Default 0.
      */
     size_t threads;
     /**
@@ -970,7 +979,8 @@ typedef struct {
      */
     nbhd_orientation orientation;
     /**
-     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+     * The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite). Default
+     * (0, 0, 0).
      */
     double orientation_point[3];
     /**
@@ -1360,14 +1370,15 @@ nbhd_smooth_options nbhd_smooth_options_default(void);
  * threads.
  *
  * Errors: NULL_POINTER (`points`, `points->data`, `out_coords`), MISALIGNED_POINTER,
- * INVALID_ARGUMENT (dimension other than 3, an enum field out of range, a buffer size that
- * overflows), ZERO_DIMENSION (dimension 0), EMPTY_INPUT (also: no finite point left to SKIP),
- * STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT; the message names the point),
- * INVALID_K, INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two
- * distinct points, ...), DEGENERATE (no neighbourhood reached 3 points: ε far below the
- * spacing — check `epsilon_units`; the message gives ε in the points' units), OUT_OF_MEMORY
- * (the neighbourhoods of `k` do not fit in memory, e.g. k = SIZE_MAX on a large set),
- * THREAD_POOL, CANCELLED (the progress callback returned false).
+ * INVALID_ARGUMENT (dimension other than 3, `points->scalar_type` out of range, a buffer
+ * size that overflows), ZERO_DIMENSION (dimension 0), EMPTY_INPUT (also: no finite point
+ * left to SKIP), STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT;
+ * the message names the point), INVALID_K, INVALID_OPTION (an enum field of `options` out of
+ * range, ε or λ not > 0, τ negative, relative units on a set without two distinct points,
+ * more than NBHD_MAX_THREADS threads, ...), DEGENERATE (no neighbourhood reached 3 points: ε
+ * far below the spacing — check `epsilon_units`; the message gives ε in the points' units),
+ * OUT_OF_MEMORY (the neighbourhoods of `k` do not fit in memory, e.g. k = SIZE_MAX on a
+ * large set), THREAD_POOL, CANCELLED (the progress callback returned false).
  *
  * # Safety
  * `points` must describe readable memory (see nbhd_points); `out_coords` must be writable
@@ -1417,13 +1428,14 @@ nbhd_normal_options nbhd_normal_options_default(void);
  * units). Nothing is written unless the call succeeds.
  *
  * Errors: NULL_POINTER (`points`, `points->data`, `out`, `out->normals`),
- * MISALIGNED_POINTER, INVALID_ARGUMENT (dimension other than 3, an enum field out of range,
- * an output stride smaller than its values or one that overflows), ZERO_DIMENSION (dimension
- * 0), EMPTY_INPUT, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite REJECT), INVALID_K,
- * INVALID_OPTION (ε not > 0, relative units on a set without two distinct points, a
- * non-finite orientation point), DEGENERATE (no neighbourhood reached 3 points, or every
- * normal is flagged: usually ε far too small — check `epsilon_units`; the message gives ε in
- * the points' units), OUT_OF_MEMORY, THREAD_POOL, CANCELLED.
+ * MISALIGNED_POINTER, INVALID_ARGUMENT (dimension other than 3, `out->scalar_type` out of
+ * range, an output stride smaller than its values or one that overflows), ZERO_DIMENSION
+ * (dimension 0), EMPTY_INPUT, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite
+ * REJECT), INVALID_K, INVALID_OPTION (an enum field of `options` out of range, ε not > 0,
+ * relative units on a set without two distinct points, a non-finite orientation point,
+ * more than NBHD_MAX_THREADS threads), DEGENERATE (no neighbourhood reached 3 points, or
+ * every normal is flagged: usually ε far too small — check `epsilon_units`; the message
+ * gives ε in the points' units), OUT_OF_MEMORY, THREAD_POOL, CANCELLED.
  *
  * # Safety
  * `points` must describe readable memory; `out` must point to a readable

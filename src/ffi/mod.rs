@@ -11,17 +11,23 @@
 //! - every export runs inside a panic guard ([`status`]): a Rust panic becomes
 //!   `NBHD_STATUS_INTERNAL` with its message, and no unwinding ever reaches C;
 //! - every pointer is checked for NULL and for the alignment of the type it is read or
-//!   written as, before anything is read; C enum values inside structs are read as integers
-//!   and checked, so an out-of-range value is an error, never undefined behaviour;
+//!   written as, before anything is read; structs from C are read field by field ([`fields`]),
+//!   C enum values as integers checked against [`enums`], so an out-of-range value is an
+//!   error (one rule for which status, in [`fields`]), never undefined behaviour;
+//! - the C options structs carry nothing the core's options do not: each reader converts
+//!   field by field into the core's options (threads included) and calls the core;
 //! - `unsafe` appears only in this module, each block with a `// SAFETY:` comment.
 #![allow(non_camel_case_types)]
 #![deny(unsafe_op_in_unsafe_fn)]
 #![warn(clippy::undocumented_unsafe_blocks)]
 
 // The header follows the order of these modules (cbindgen reads them in turn): errors first,
-// then the plain types, the tree, single queries, tables, and normals, curvatures and
-// smoothing. Blank lines keep rustfmt from sorting them.
+// then every enum, the plain types, the tree, single queries, tables, and normals, curvatures
+// and smoothing (their shared outputs and callback first). Blank lines keep rustfmt from
+// sorting them.
 pub mod status;
+
+pub mod enums;
 
 pub mod types;
 
@@ -30,6 +36,8 @@ pub mod tree;
 pub mod query;
 
 pub mod table;
+
+pub mod smoothing_io;
 
 pub mod smooth;
 
@@ -41,11 +49,15 @@ pub mod prepared;
 
 mod args;
 
+mod fields;
+
+pub use enums::*;
 pub use normals::*;
 pub use prepared::*;
 pub use query::*;
 pub use robust::*;
 pub use smooth::*;
+pub use smoothing_io::*;
 pub use status::*;
 pub use table::*;
 pub use tree::*;

@@ -7,17 +7,15 @@
 
 use std::ffi::c_void;
 
-use super::args::{check_aligned, check_optional, check_ptr};
-use super::smooth::{
-    length, nbhd_orientation, nbhd_progress_fn, nbhd_units, orientation_to_c, read_orientation,
-    read_points, run_with_progress, units_of_length,
-};
+use super::args::{check_aligned, check_optional};
+use super::enums::{nbhd_non_finite_policy, nbhd_orientation, nbhd_scalar_type, nbhd_units};
+use super::fields::{c_field, CStruct};
+use super::smoothing_io::{nbhd_progress_fn, read_points, Progress};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::types::read_enum;
-use super::types::{c_enum_field, c_field, nbhd_non_finite_policy, nbhd_points, nbhd_scalar_type};
+use super::types::nbhd_points;
 use crate::error::NbhdError;
 use crate::scalar::ScalarType;
-use crate::smooth::{self, Curvature, SmoothOptions};
+use crate::smooth::{self, Curvature, PointOutput, SmoothOptions};
 
 /// Options of nbhd_estimate_normals. Start from nbhd_normal_options_default() and change
 /// what you need.
@@ -47,14 +45,16 @@ pub struct nbhd_normal_options {
     /// Orientation of the normals. Default unoriented. NBHD_ORIENTATION_TOWARD_POINT with the
     /// sensor position is PCL's flipNormalTowardsViewpoint: dot(viewpoint − p, n) >= 0.
     pub orientation: nbhd_orientation,
-    /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+    /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite). Default
+    /// (0, 0, 0).
     pub orientation_point: [f64; 3],
     /// Points with a NaN or infinite coordinate: REJECT (the default) refuses the input with
     /// NON_FINITE; SKIP leaves them out — they keep their index and get a NaN normal (and
     /// curvature) and flag 8.
     pub non_finite: nbhd_non_finite_policy,
-    /// Worker threads: 0 the shared pool, n >= 1 a pool of n threads made for this call.
-    /// Results are identical for every value. Default 0.
+    /// Worker threads: 0 the shared pool, n >= 1 a pool of n threads made for this call (at
+    /// most NBHD_MAX_THREADS, else NBHD_STATUS_INVALID_OPTION). Results are identical for
+    /// every value. Default 0.
     pub threads: usize,
     /// Called with the progress of the run; NULL for none. Default NULL.
     pub progress: nbhd_progress_fn,
@@ -91,21 +91,22 @@ pub struct nbhd_normals_output {
     pub flags: *mut u8,
 }
 
-/// The C defaults of the normal options: those of the core ([`SmoothOptions::default`]).
-fn default_options() -> nbhd_normal_options {
-    let d = SmoothOptions::default();
-    let (epsilon_units, epsilon) = units_of_length(d.epsilon);
-    let (orientation, orientation_point) = orientation_to_c(d.orientation);
-    nbhd_normal_options {
-        k: d.k,
-        epsilon,
-        epsilon_units,
-        orientation,
-        orientation_point,
-        non_finite: d.non_finite.into(),
-        threads: 0,
-        progress: None,
-        progress_user_data: std::ptr::null_mut(),
+/// The C form of the core's options that the normals read, with no progress callback.
+impl From<SmoothOptions> for nbhd_normal_options {
+    fn from(d: SmoothOptions) -> Self {
+        let (epsilon_units, epsilon) = nbhd_units::of_length(d.epsilon);
+        let (orientation, orientation_point) = nbhd_orientation::of_core(d.orientation);
+        Self {
+            k: d.k,
+            epsilon,
+            epsilon_units,
+            orientation,
+            orientation_point,
+            non_finite: d.non_finite.into(),
+            threads: d.threads,
+            progress: None,
+            progress_user_data: std::ptr::null_mut(),
+        }
     }
 }
 
@@ -114,58 +115,35 @@ fn default_options() -> nbhd_normal_options {
 /// progress callback.
 #[no_mangle]
 pub extern "C" fn nbhd_normal_options_default() -> nbhd_normal_options {
-    guard_value(
-        "nbhd_normal_options_default",
-        default_options(),
-        default_options,
-    )
+    let d = || SmoothOptions::default().into();
+    guard_value("nbhd_normal_options_default", d(), d)
 }
 
-/// The options of one call read from C.
-struct NormalArgs {
-    core: SmoothOptions,
-    threads: usize,
-    progress: nbhd_progress_fn,
-    user_data: *mut c_void,
-}
-
-/// Reads `*options` field by field (NULL gives the defaults).
+/// Reads `*options` field by field (NULL gives the defaults) into the core's options of an
+/// analysis without steps, and the call's progress callback.
 ///
 /// # Safety
 /// `options` must be NULL or point to a readable `nbhd_normal_options`.
-unsafe fn read_options(options: *const nbhd_normal_options) -> Result<NormalArgs, FfiError> {
-    let defaults = default_options();
-    let o: *const nbhd_normal_options = if options.is_null() {
-        &defaults
-    } else {
-        check_ptr(options, "options")?;
-        options
-    };
-    let epsilon = length(
-        c_enum_field!(o, epsilon_units, nbhd_units),
-        c_field!(o, epsilon),
-    );
-    let orientation = read_orientation(
-        c_enum_field!(o, orientation, nbhd_orientation),
-        c_field!(o, orientation_point),
-    )?;
+unsafe fn read_options(
+    options: *const nbhd_normal_options,
+) -> Result<(SmoothOptions, Progress), FfiError> {
+    let defaults = SmoothOptions::default().into();
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
     let core = SmoothOptions {
-        k: c_field!(o, k),
-        epsilon,
+        k: c_field!(o.k),
+        epsilon: c_field!(o.epsilon_units as enum)?.length(c_field!(o.epsilon)),
         steps: 0,
         // the normals do not read λ; absolute, it needs no spacing (coincident points)
         lambda: Curvature::Absolute(1.0),
-        orientation,
-        non_finite: c_enum_field!(o, non_finite, nbhd_non_finite_policy).into(),
+        orientation: c_field!(o.orientation as enum)?.to_core(c_field!(o.orientation_point))?,
+        non_finite: c_field!(o.non_finite as enum)?.into(),
         outputs: true,
+        threads: c_field!(o.threads),
         ..SmoothOptions::default()
     };
-    Ok(NormalArgs {
-        core,
-        threads: c_field!(o, threads),
-        progress: c_field!(o, progress),
-        user_data: c_field!(o, progress_user_data),
-    })
+    let progress = Progress::new(c_field!(o.progress), c_field!(o.progress_user_data));
+    Ok((core, progress))
 }
 
 /// One strided output array: where, how far apart, how many values per point.
@@ -232,6 +210,76 @@ impl Strided {
     }
 }
 
+/// The caller's nbhd_normals_output, read and checked for `count` points.
+struct NormalsOut {
+    normals: Strided,
+    curvature: Option<Strided>,
+    flags: *mut u8,
+}
+
+impl NormalsOut {
+    /// Reads `*out` field by field and checks its pointers, strides and spans.
+    ///
+    /// # Safety
+    /// `out` must be NULL or point to a readable nbhd_normals_output.
+    unsafe fn read(out: *const nbhd_normals_output, count: usize) -> Result<Self, FfiError> {
+        // SAFETY: forwarded from the caller.
+        let o = unsafe { CStruct::argument(out, "out") }?;
+        let (normals, curvature, flags) = (
+            c_field!(o.normals),
+            c_field!(o.curvature),
+            c_field!(o.flags),
+        );
+        let scalar = ScalarType::from(c_field!(o.scalar_type as enum)?);
+        check_aligned(normals.cast_const(), 1, "out->normals")?;
+        check_optional(flags.cast_const(), "out->flags")?;
+        let stride = c_field!(o.normals_stride);
+        let normals = Strided::new(normals, stride, scalar, 3, count, "normals")?;
+        let curvature = match curvature.is_null() {
+            true => None,
+            false => {
+                let stride = c_field!(o.curvature_stride);
+                Some(Strided::new(
+                    curvature,
+                    stride,
+                    scalar,
+                    1,
+                    count,
+                    "curvature",
+                )?)
+            }
+        };
+        Ok(Self {
+            normals,
+            curvature,
+            flags,
+        })
+    }
+
+    /// Writes the normal, curvature and flags of every point.
+    ///
+    /// # Safety
+    /// The arrays must be writable for `outputs.len()` points in the layouts checked by
+    /// [`NormalsOut::read`], and no Rust borrow of them may be live.
+    unsafe fn write(&self, outputs: &[PointOutput]) {
+        for (i, o) in outputs.iter().enumerate() {
+            // SAFETY: forwarded from the caller.
+            unsafe {
+                self.normals.write(i, &o.normal.to_array());
+                if let Some(c) = &self.curvature {
+                    c.write(i, &[o.covariance_quotient]);
+                }
+            }
+        }
+        if !self.flags.is_null() {
+            let f: Vec<u8> = outputs.iter().map(|o| o.normal_flags).collect();
+            // SAFETY: `flags` is non-NULL and writable for the points' bytes (caller); it
+            // cannot overlap `f`, nbhd's own memory.
+            unsafe { std::ptr::copy_nonoverlapping(f.as_ptr(), self.flags, f.len()) };
+        }
+    }
+}
+
 /// Estimates the normal of every point (thesis eq. 2.8–2.10: the eigenvector of the smallest
 /// eigenvalue of the covariance of the point and its ε-k-neighbourhood), oriented as
 /// `options->orientation` asks, and writes it into the caller's layout `*out` (see
@@ -243,13 +291,14 @@ impl Strided {
 /// units). Nothing is written unless the call succeeds.
 ///
 /// Errors: NULL_POINTER (`points`, `points->data`, `out`, `out->normals`),
-/// MISALIGNED_POINTER, INVALID_ARGUMENT (dimension other than 3, an enum field out of range,
-/// an output stride smaller than its values or one that overflows), ZERO_DIMENSION (dimension
-/// 0), EMPTY_INPUT, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite REJECT), INVALID_K,
-/// INVALID_OPTION (ε not > 0, relative units on a set without two distinct points, a
-/// non-finite orientation point), DEGENERATE (no neighbourhood reached 3 points, or every
-/// normal is flagged: usually ε far too small — check `epsilon_units`; the message gives ε in
-/// the points' units), OUT_OF_MEMORY, THREAD_POOL, CANCELLED.
+/// MISALIGNED_POINTER, INVALID_ARGUMENT (dimension other than 3, `out->scalar_type` out of
+/// range, an output stride smaller than its values or one that overflows), ZERO_DIMENSION
+/// (dimension 0), EMPTY_INPUT, STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (non_finite
+/// REJECT), INVALID_K, INVALID_OPTION (an enum field of `options` out of range, ε not > 0,
+/// relative units on a set without two distinct points, a non-finite orientation point,
+/// more than NBHD_MAX_THREADS threads), DEGENERATE (no neighbourhood reached 3 points, or
+/// every normal is flagged: usually ε far too small — check `epsilon_units`; the message
+/// gives ε in the points' units), OUT_OF_MEMORY, THREAD_POOL, CANCELLED.
 ///
 /// # Safety
 /// `points` must describe readable memory; `out` must point to a readable
@@ -264,60 +313,14 @@ pub unsafe extern "C" fn nbhd_estimate_normals(
     guard("nbhd_estimate_normals", || {
         // SAFETY: forwarded from the caller.
         let (_, pts) = unsafe { read_points(points) }?;
-        check_ptr(out, "out")?;
-        // SAFETY: `out` is non-NULL and aligned (checked above) and readable (caller); its
-        // fields are read through raw places, the enum as `int` and checked.
-        let (normals, normals_stride, scalar, curvature, curvature_stride, flags) = unsafe {
-            (
-                std::ptr::addr_of!((*out).normals).read(),
-                std::ptr::addr_of!((*out).normals_stride).read(),
-                read_enum::<nbhd_scalar_type>(std::ptr::addr_of!((*out).scalar_type)).map_err(
-                    |v| super::types::invalid_enum::<nbhd_scalar_type>("out", "scalar_type", v),
-                )?,
-                std::ptr::addr_of!((*out).curvature).read(),
-                std::ptr::addr_of!((*out).curvature_stride).read(),
-                std::ptr::addr_of!((*out).flags).read(),
-            )
-        };
-        let scalar = ScalarType::from(scalar);
-        check_aligned(normals.cast_const(), 1, "out->normals")?;
-        check_optional(flags.cast_const(), "out->flags")?;
-        let n = pts.len();
-        let normals = Strided::new(normals, normals_stride, scalar, 3, n, "normals")?;
-        let curvature = if curvature.is_null() {
-            None
-        } else {
-            Some(Strided::new(
-                curvature,
-                curvature_stride,
-                scalar,
-                1,
-                n,
-                "curvature",
-            )?)
-        };
         // SAFETY: forwarded from the caller.
-        let args = unsafe { read_options(options) }?;
-        let core = args.core;
-        let result = run_with_progress(args.threads, args.progress, args.user_data, |p| {
-            smooth::smooth_with_progress(&pts, &core, p)
-        })?;
-        for (i, o) in result.outputs.iter().enumerate() {
-            // SAFETY: the arrays are writable for `n` points in the checked layouts (caller);
-            // the input view was dropped in `read_points`, so nothing borrowed overlaps.
-            unsafe {
-                normals.write(i, &o.normal.to_array());
-                if let Some(c) = &curvature {
-                    c.write(i, &[o.covariance_quotient]);
-                }
-            }
-        }
-        if !flags.is_null() {
-            let f: Vec<u8> = result.outputs.iter().map(|o| o.normal_flags).collect();
-            // SAFETY: `flags` is non-NULL and writable for `n` bytes (caller); it cannot
-            // overlap `f`, nbhd's own memory.
-            unsafe { std::ptr::copy_nonoverlapping(f.as_ptr(), flags, f.len()) };
-        }
+        let out = unsafe { NormalsOut::read(out, pts.len()) }?;
+        // SAFETY: forwarded from the caller.
+        let (opts, mut progress) = unsafe { read_options(options) }?;
+        let result = smooth::smooth_with_progress(&pts, &opts, &mut |f, s| progress.report(f, s))?;
+        // SAFETY: the arrays are writable for the points in the checked layouts (caller); the
+        // input view was dropped in `read_points`, so nothing borrowed overlaps.
+        unsafe { out.write(&result.outputs) };
         Ok(())
     })
 }
@@ -330,15 +333,15 @@ mod tests {
     #[test]
     fn defaults_mirror_the_core() {
         // SAFETY: NULL asks for the defaults.
-        let a = unsafe { read_options(std::ptr::null()) }.unwrap();
+        let (a, _) = unsafe { read_options(std::ptr::null()) }.unwrap();
         let d = SmoothOptions::default();
-        assert_eq!((a.core.k, a.core.epsilon), (d.k, d.epsilon));
-        assert_eq!(a.core.non_finite, d.non_finite);
-        assert_eq!((a.core.steps, a.core.outputs), (0, true));
+        assert_eq!((a.k, a.epsilon, a.threads), (d.k, d.epsilon, d.threads));
+        assert_eq!(a.non_finite, d.non_finite);
+        assert_eq!((a.steps, a.outputs), (0, true));
         let c = nbhd_normal_options_default();
         // SAFETY: a live, initialised options struct.
-        let b = unsafe { read_options(&c) }.unwrap();
-        assert_eq!(a.core, b.core);
+        let (b, _) = unsafe { read_options(&c) }.unwrap();
+        assert_eq!(a, b);
     }
 
     #[test]

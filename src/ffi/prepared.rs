@@ -6,26 +6,26 @@
 
 use std::ffi::c_void;
 
-use super::args::{check_aligned, check_optional, check_ptr, deref};
-use super::smooth::{
-    nbhd_point_geometry, nbhd_smooth_options, nbhd_smooth_summary, read_options, read_points,
-    run_with_progress, write_coords, write_outputs,
-};
+use glam::DVec3;
+
+use super::args::deref;
+use super::robust::nbhd_robust_options;
+use super::smooth::nbhd_smooth_options;
+use super::smoothing_io::{nbhd_point_geometry, nbhd_smooth_summary, read_points, Outputs};
 use super::status::{guard, nbhd_status, FfiError};
 use super::table::nbhd_neighborhoods;
 use super::tree::{nbhd_tree, with_tree};
 use super::types::nbhd_points;
-use crate::scalar::ScalarType;
 use crate::smooth::robust::{smooth_robust_from, RobustOptions};
 use crate::smooth::source::tree_neighbors;
 use crate::smooth::{smooth_from, Neighbors, SmoothOptions, SmoothResult};
 use crate::table::NeighborTable;
-use glam::DVec3;
 
-/// Which smoothing a call runs.
+/// Which smoothing a call runs, with its options pointer.
 enum Method {
+    /// nbhd_smooth, or with `true` nbhd_estimate_curvatures (no step, all outputs).
     Faithful(*const nbhd_smooth_options, bool),
-    Robust(*const super::robust::nbhd_robust_options),
+    Robust(*const nbhd_robust_options),
 }
 
 impl Method {
@@ -36,7 +36,7 @@ impl Method {
     unsafe fn table_k(&self) -> Result<usize, FfiError> {
         Ok(match *self {
             // SAFETY: forwarded from the caller.
-            Method::Faithful(o, _) => unsafe { read_options(o) }?.core.k,
+            Method::Faithful(o, _) => unsafe { super::smooth::read_options(o) }?.0.k,
             // SAFETY: forwarded from the caller.
             Method::Robust(o) => unsafe { super::robust::read_options(o) }?.0.k_plane,
         })
@@ -52,87 +52,73 @@ impl Method {
         table: &NeighborTable<f64>,
         outputs: bool,
     ) -> Result<SmoothResult, FfiError> {
+        let rows = Neighbors::Table(table);
         match *self {
             Method::Faithful(o, analyze_only) => {
                 // SAFETY: forwarded from the caller.
-                let args = unsafe { read_options(o) }?;
+                let (core, mut progress) = unsafe { super::smooth::read_options(o) }?;
                 let opts = SmoothOptions {
-                    steps: if analyze_only { 0 } else { args.core.steps },
+                    steps: if analyze_only { 0 } else { core.steps },
                     outputs: outputs || analyze_only,
-                    ..args.core
+                    ..core
                 };
-                run_with_progress(args.threads, args.progress, args.user_data, |progress| {
-                    smooth_from(points, Neighbors::Table(table), &opts, progress)
-                })
+                Ok(smooth_from(points, rows, &opts, &mut |f, s| {
+                    progress.report(f, s)
+                })?)
             }
             Method::Robust(o) => {
                 // SAFETY: forwarded from the caller.
-                let (core, threads, callback, user_data) =
-                    unsafe { super::robust::read_options(o) }?;
+                let (core, mut progress) = unsafe { super::robust::read_options(o) }?;
                 let opts = RobustOptions { outputs, ..core };
-                run_with_progress(threads, callback, user_data, |progress| {
-                    smooth_robust_from(points, Neighbors::Table(table), &opts, progress)
-                        .map(|r| r.result)
-                })
+                let report =
+                    smooth_robust_from(points, rows, &opts, &mut |f, s| progress.report(f, s))?;
+                Ok(report.result)
             }
         }
     }
 }
 
-/// The tree's points and their k-nearest table, then the method.
+/// The tree's points and their k-nearest table, then the method; writes `out` with the
+/// coordinates packed in the tree's scalar type.
 ///
 /// # Safety
-/// `tree` must be NULL or a live tree; the options pointer NULL or readable.
-unsafe fn on_tree(
-    tree: *const nbhd_tree,
-    method: &Method,
-    outputs: bool,
-) -> Result<(ScalarType, SmoothResult), FfiError> {
+/// `tree` must be NULL or a live tree; the options pointer NULL or readable; the outputs
+/// writable for the tree's point count.
+unsafe fn on_tree(tree: *const nbhd_tree, method: &Method, out: &Outputs) -> Result<(), FfiError> {
     // SAFETY: forwarded from the caller.
     let tree = unsafe { deref(tree, "tree") }?;
     // SAFETY: forwarded from the caller.
     let k = unsafe { method.table_k() }?;
     let (points, table) = with_tree!(&tree.inner, t => tree_neighbors(t, k))?;
     // SAFETY: forwarded from the caller.
-    let result = unsafe { method.run(&points, &table, outputs) }?;
-    Ok((tree.inner.scalar_type(), result))
+    let result = unsafe { method.run(&points, &table, out.wants_geometry()) }?;
+    let scalar = tree.inner.scalar_type();
+    // SAFETY: forwarded from the caller; packed: three values a point.
+    unsafe { out.write(&result, scalar, 3 * scalar.size()) };
+    Ok(())
 }
 
-/// The caller's points and table, then the method.
+/// The caller's points and table, then the method; writes `out` with the input's layout.
 ///
 /// # Safety
 /// `points` must describe readable memory; `table` NULL or a live table; the options pointer
-/// NULL or readable.
+/// NULL or readable; the outputs writable for `points->count` points.
 unsafe fn on_table(
     points: *const nbhd_points,
     table: *const nbhd_neighborhoods,
     method: &Method,
-    outputs: bool,
-) -> Result<(super::types::PointsArg, SmoothResult), FfiError> {
+    out: &Outputs,
+) -> Result<(), FfiError> {
     // SAFETY: forwarded from the caller.
     let (arg, pts) = unsafe { read_points(points) }?;
     // SAFETY: forwarded from the caller.
     let table = unsafe { deref(table, "table") }?;
     let rows = table.rows_in_f64(&pts)?;
     // SAFETY: forwarded from the caller.
-    let result = unsafe { method.run(&pts, &rows, outputs) }?;
-    Ok((arg, result))
-}
-
-/// Writes `points` packed, three coordinates of `scalar` each, to `out`.
-///
-/// # Safety
-/// `out` must be non-NULL and writable for `3 * points.len()` values of `scalar`.
-unsafe fn write_packed(scalar: ScalarType, points: &[DVec3], out: *mut c_void) {
-    for (i, v) in points.iter().flat_map(|p| p.to_array()).enumerate() {
-        // SAFETY: `out` holds 3 * points.len() values (caller); writes are unaligned.
-        unsafe {
-            match scalar {
-                ScalarType::F32 => out.cast::<f32>().add(i).write_unaligned(v as f32),
-                ScalarType::F64 => out.cast::<f64>().add(i).write_unaligned(v),
-            }
-        }
-    }
+    let result = unsafe { method.run(&pts, &rows, out.wants_geometry()) }?;
+    // SAFETY: forwarded from the caller; the input view was dropped in `read_points`.
+    unsafe { out.write(&result, arg.scalar, arg.stride) };
+    Ok(())
 }
 
 /// nbhd_smooth on the points a built tree holds, with the tree's own search for the
@@ -156,16 +142,9 @@ pub unsafe extern "C" fn nbhd_smooth_tree(
     out_summary: *mut nbhd_smooth_summary,
 ) -> nbhd_status {
     guard("nbhd_smooth_tree", || {
-        check_aligned(out_coords.cast_const(), 1, "out_coords")?;
-        check_optional(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
-        let method = Method::Faithful(options, false);
+        let out = Outputs::smoothing(out_coords, out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let (scalar, result) = unsafe { on_tree(tree, &method, !out_geometry.is_null()) }?;
-        // SAFETY: `out_coords` is non-NULL and holds 3 × count values (caller).
-        unsafe { write_packed(scalar, &result.points, out_coords) };
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        unsafe { on_tree(tree, &Method::Faithful(options, false), &out) }
     })
 }
 
@@ -183,12 +162,9 @@ pub unsafe extern "C" fn nbhd_estimate_curvatures_tree(
     out_summary: *mut nbhd_smooth_summary,
 ) -> nbhd_status {
     guard("nbhd_estimate_curvatures_tree", || {
-        check_ptr(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
+        let out = Outputs::curvatures(out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let (_, result) = unsafe { on_tree(tree, &Method::Faithful(options, true), true) }?;
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        unsafe { on_tree(tree, &Method::Faithful(options, true), &out) }
     })
 }
 
@@ -200,22 +176,15 @@ pub unsafe extern "C" fn nbhd_estimate_curvatures_tree(
 #[no_mangle]
 pub unsafe extern "C" fn nbhd_smooth_robust_tree(
     tree: *const nbhd_tree,
-    options: *const super::robust::nbhd_robust_options,
+    options: *const nbhd_robust_options,
     out_coords: *mut c_void,
     out_geometry: *mut nbhd_point_geometry,
     out_summary: *mut nbhd_smooth_summary,
 ) -> nbhd_status {
     guard("nbhd_smooth_robust_tree", || {
-        check_aligned(out_coords.cast_const(), 1, "out_coords")?;
-        check_optional(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
-        let method = Method::Robust(options);
+        let out = Outputs::smoothing(out_coords, out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let (scalar, result) = unsafe { on_tree(tree, &method, !out_geometry.is_null()) }?;
-        // SAFETY: `out_coords` is non-NULL and holds 3 × count values (caller).
-        unsafe { write_packed(scalar, &result.points, out_coords) };
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        unsafe { on_tree(tree, &Method::Robust(options), &out) }
     })
 }
 
@@ -240,17 +209,9 @@ pub unsafe extern "C" fn nbhd_smooth_table(
     out_summary: *mut nbhd_smooth_summary,
 ) -> nbhd_status {
     guard("nbhd_smooth_table", || {
-        check_aligned(out_coords.cast_const(), 1, "out_coords")?;
-        check_optional(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
-        let method = Method::Faithful(options, false);
+        let out = Outputs::smoothing(out_coords, out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let (arg, result) = unsafe { on_table(points, table, &method, !out_geometry.is_null()) }?;
-        // SAFETY: `out_coords` is non-NULL and writable with the input's layout (caller); the
-        // input view was dropped in `read_points`.
-        unsafe { write_coords(&arg, &result.points, out_coords) };
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        unsafe { on_table(points, table, &Method::Faithful(options, false), &out) }
     })
 }
 
@@ -267,13 +228,9 @@ pub unsafe extern "C" fn nbhd_estimate_curvatures_table(
     out_summary: *mut nbhd_smooth_summary,
 ) -> nbhd_status {
     guard("nbhd_estimate_curvatures_table", || {
-        check_ptr(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
-        let method = Method::Faithful(options, true);
+        let out = Outputs::curvatures(out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let (_, result) = unsafe { on_table(points, table, &method, true) }?;
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        unsafe { on_table(points, table, &Method::Faithful(options, true), &out) }
     })
 }
 
@@ -286,21 +243,14 @@ pub unsafe extern "C" fn nbhd_estimate_curvatures_table(
 pub unsafe extern "C" fn nbhd_smooth_robust_table(
     points: *const nbhd_points,
     table: *const nbhd_neighborhoods,
-    options: *const super::robust::nbhd_robust_options,
+    options: *const nbhd_robust_options,
     out_coords: *mut c_void,
     out_geometry: *mut nbhd_point_geometry,
     out_summary: *mut nbhd_smooth_summary,
 ) -> nbhd_status {
     guard("nbhd_smooth_robust_table", || {
-        check_aligned(out_coords.cast_const(), 1, "out_coords")?;
-        check_optional(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
-        let method = Method::Robust(options);
+        let out = Outputs::smoothing(out_coords, out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let (arg, result) = unsafe { on_table(points, table, &method, !out_geometry.is_null()) }?;
-        // SAFETY: `out_coords` is non-NULL and writable with the input's layout (caller).
-        unsafe { write_coords(&arg, &result.points, out_coords) };
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        unsafe { on_table(points, table, &Method::Robust(options), &out) }
     })
 }

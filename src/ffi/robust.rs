@@ -4,14 +4,12 @@
 
 use std::ffi::c_void;
 
-use super::args::{check_aligned, check_optional, check_ptr};
-use super::smooth::{
-    length, nbhd_orientation, nbhd_point_geometry, nbhd_progress_fn, nbhd_smooth_summary,
-    nbhd_units, orientation_to_c, read_orientation, read_points, run_with_progress,
-    units_of_length, write_coords, write_outputs,
-};
+use super::enums::{nbhd_non_finite_policy, nbhd_orientation, nbhd_units};
+use super::fields::{c_field, CStruct};
+use super::smoothing_io::{nbhd_point_geometry, nbhd_progress_fn, nbhd_smooth_summary};
+use super::smoothing_io::{read_points, Outputs, Progress};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::types::{c_enum_field, c_field, nbhd_non_finite_policy, nbhd_points};
+use super::types::nbhd_points;
 use crate::smooth::{self, RobustOptions};
 
 /// Options of nbhd_smooth_robust. Start from nbhd_robust_options_default(); the defaults are
@@ -43,7 +41,8 @@ pub struct nbhd_robust_options {
     pub tau: f64,
     /// Orientation of the normals written to the outputs. Default unoriented.
     pub orientation: nbhd_orientation,
-    /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+    /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite). Default
+    /// (0, 0, 0).
     pub orientation_point: [f64; 3],
     /// Worker threads: 0 the shared pool, n >= 1 a pool of n threads for this call (at most
     /// NBHD_MAX_THREADS, else NBHD_STATUS_INVALID_OPTION). Results are identical for every
@@ -58,26 +57,28 @@ pub struct nbhd_robust_options {
     pub non_finite: nbhd_non_finite_policy,
 }
 
-fn default_options() -> nbhd_robust_options {
-    let d = RobustOptions::default();
-    let (epsilon_units, epsilon) = units_of_length(d.epsilon);
-    let (orientation, orientation_point) = orientation_to_c(d.orientation);
-    nbhd_robust_options {
-        k: d.k,
-        k_plane: d.k_plane,
-        epsilon,
-        epsilon_units,
-        max_iterations: d.max_iterations,
-        tolerance: d.tolerance,
-        inlier_width: d.inlier_width,
-        feature_angle: d.feature_angle,
-        tau: d.tau,
-        orientation,
-        orientation_point,
-        threads: 0,
-        progress: None,
-        progress_user_data: std::ptr::null_mut(),
-        non_finite: d.non_finite.into(),
+/// The C form of the core's options, with no progress callback.
+impl From<RobustOptions> for nbhd_robust_options {
+    fn from(d: RobustOptions) -> Self {
+        let (epsilon_units, epsilon) = nbhd_units::of_length(d.epsilon);
+        let (orientation, orientation_point) = nbhd_orientation::of_core(d.orientation);
+        Self {
+            k: d.k,
+            k_plane: d.k_plane,
+            epsilon,
+            epsilon_units,
+            max_iterations: d.max_iterations,
+            tolerance: d.tolerance,
+            inlier_width: d.inlier_width,
+            feature_angle: d.feature_angle,
+            tau: d.tau,
+            orientation,
+            orientation_point,
+            threads: d.threads,
+            progress: None,
+            progress_user_data: std::ptr::null_mut(),
+            non_finite: d.non_finite.into(),
+        }
     }
 }
 
@@ -85,54 +86,37 @@ fn default_options() -> nbhd_robust_options {
 /// iterations stopped when the noise estimate falls by less than 5 %, no callback.
 #[no_mangle]
 pub extern "C" fn nbhd_robust_options_default() -> nbhd_robust_options {
-    guard_value(
-        "nbhd_robust_options_default",
-        default_options(),
-        default_options,
-    )
+    let d = || RobustOptions::default().into();
+    guard_value("nbhd_robust_options_default", d(), d)
 }
 
-/// Reads `*options` field by field (NULL gives the defaults).
+/// Reads `*options` field by field into the core's options and the call's progress callback
+/// (NULL gives the defaults).
 ///
 /// # Safety
 /// `options` must be NULL or point to a readable `nbhd_robust_options`.
 pub(super) unsafe fn read_options(
     options: *const nbhd_robust_options,
-) -> Result<(RobustOptions, usize, nbhd_progress_fn, *mut c_void), FfiError> {
-    let defaults = default_options();
-    let o: *const nbhd_robust_options = if options.is_null() {
-        &defaults
-    } else {
-        check_ptr(options, "options")?;
-        options
-    };
-    let epsilon = length(
-        c_enum_field!(o, epsilon_units, nbhd_units),
-        c_field!(o, epsilon),
-    );
-    let orientation = read_orientation(
-        c_enum_field!(o, orientation, nbhd_orientation),
-        c_field!(o, orientation_point),
-    )?;
+) -> Result<(RobustOptions, Progress), FfiError> {
+    let defaults = RobustOptions::default().into();
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
     let core = RobustOptions {
-        k: c_field!(o, k),
-        k_plane: c_field!(o, k_plane),
-        epsilon,
-        max_iterations: c_field!(o, max_iterations),
-        tolerance: c_field!(o, tolerance),
-        inlier_width: c_field!(o, inlier_width),
-        feature_angle: c_field!(o, feature_angle),
-        tau: c_field!(o, tau),
-        orientation,
-        non_finite: c_enum_field!(o, non_finite, nbhd_non_finite_policy).into(),
+        k: c_field!(o.k),
+        k_plane: c_field!(o.k_plane),
+        epsilon: c_field!(o.epsilon_units as enum)?.length(c_field!(o.epsilon)),
+        max_iterations: c_field!(o.max_iterations),
+        tolerance: c_field!(o.tolerance),
+        inlier_width: c_field!(o.inlier_width),
+        feature_angle: c_field!(o.feature_angle),
+        tau: c_field!(o.tau),
+        orientation: c_field!(o.orientation as enum)?.to_core(c_field!(o.orientation_point))?,
+        non_finite: c_field!(o.non_finite as enum)?.into(),
+        threads: c_field!(o.threads),
         ..RobustOptions::default()
     };
-    Ok((
-        core,
-        c_field!(o, threads),
-        c_field!(o, progress),
-        c_field!(o, progress_user_data),
-    ))
+    let progress = Progress::new(c_field!(o.progress), c_field!(o.progress_user_data));
+    Ok((core, progress))
 }
 
 /// Smooths 3-D points with the robust mode and writes the smoothed coordinates to
@@ -162,20 +146,16 @@ pub unsafe extern "C" fn nbhd_smooth_robust(
     guard("nbhd_smooth_robust", || {
         // SAFETY: forwarded from the caller.
         let (arg, pts) = unsafe { read_points(points) }?;
-        check_aligned(out_coords.cast_const(), 1, "out_coords")?;
-        check_optional(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
+        let out = Outputs::smoothing(out_coords, out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let (mut core, threads, callback, user_data) = unsafe { read_options(options) }?;
-        core.outputs = !out_geometry.is_null();
-        let result = run_with_progress(threads, callback, user_data, |progress| {
-            smooth::smooth_robust_with_progress(&pts, &core, progress)
-        })?;
-        // SAFETY: `out_coords` is non-NULL (checked above) and writable with the input's
-        // layout (caller); the input view was dropped in `read_points`.
-        unsafe { write_coords(&arg, &result.points, out_coords) };
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        let (mut opts, mut progress) = unsafe { read_options(options) }?;
+        opts.outputs = out.wants_geometry();
+        let result =
+            smooth::smooth_robust_with_progress(&pts, &opts, &mut |f, s| progress.report(f, s))?;
+        // SAFETY: the outputs are writable with the input's layout / for `count` elements
+        // (caller); the input view was dropped in `read_points`.
+        unsafe { out.write(&result, arg.scalar, arg.stride) };
+        Ok(())
     })
 }
 
@@ -189,10 +169,10 @@ mod tests {
     #[test]
     fn defaults_mirror_the_core() {
         // SAFETY: NULL asks for the defaults.
-        let (core, threads, cb, _) = unsafe { read_options(std::ptr::null()) }.unwrap();
+        let (core, progress) = unsafe { read_options(std::ptr::null()) }.unwrap();
         assert_eq!(core, RobustOptions::default());
-        assert_eq!(threads, 0);
-        assert!(cb.is_none());
+        assert_eq!(core.threads, 0);
+        assert!(progress.is_none());
         let c = nbhd_robust_options_default();
         // SAFETY: a live, initialised options struct.
         let (core, ..) = unsafe { read_options(&c) }.unwrap();

@@ -1,129 +1,22 @@
 //! Normals, curvatures and point-set smoothing (thesis Chapter 2) for C: an options struct
 //! with a defaults initializer, a progress callback that can cancel, and outputs in caller
-//! buffers. Each export converts its arguments and calls [`crate::smooth::smooth_with_progress`]
-//! or [`crate::smooth::analyze`]; nothing is computed here.
+//! buffers. Each export converts its arguments and calls [`crate::smooth::smooth_with_progress`];
+//! nothing is computed here. What the smoothing exports share is in [`super::smoothing_io`].
 
-use std::ffi::{c_int, c_void};
+use std::ffi::c_void;
 
-use glam::DVec3;
-
-use super::args::{check_aligned, check_optional, check_ptr};
+use super::enums::{nbhd_feature_criterion, nbhd_non_finite_policy, nbhd_orientation};
+use super::enums::{nbhd_units, nbhd_weighting};
+use super::fields::{c_field, CStruct};
+use super::smoothing_io::{nbhd_point_geometry, nbhd_progress_fn, nbhd_smooth_summary};
+use super::smoothing_io::{read_points, Outputs, Progress};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::types::{c_bool_field, c_enum, c_enum_field, c_field, CEnum, PointsArg};
-use super::types::{nbhd_non_finite_policy, nbhd_points};
-use crate::geometry::Orientation;
-use crate::points::PointsView;
-use crate::scalar::ScalarType;
-use crate::smooth::{
-    self, Curvature, FeatureCriterion, Length, PointOutput, SmoothOptions, SmoothResult, Stage,
-    Weighting,
-};
+use super::types::nbhd_points;
+use crate::smooth::{self, SmoothOptions};
 
-/// Whether a length or curvature option is absolute or relative to the mean spacing `h` of
-/// the input (the mean distance of a point to its nearest other point, estimated by nbhd).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_units {
-    /// A length in multiples of `h`, a curvature in multiples of `1/h`: the same settings suit
-    /// a metre and a millimetre scan. The default.
-    Relative = 0,
-    /// In the points' own units (a curvature in inverse units).
-    Absolute = 1,
-}
-c_enum!(nbhd_units, [Relative, Absolute]);
-
-/// The weights `g_ij` of the smoothing step (thesis eq. 2.30–2.32).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_weighting {
-    /// `g = 1`: isotropic Laplacian fairing (eq. 2.16).
-    Isotropic = 0,
-    /// `g_sharp` (eq. 2.31): 1 where the directional curvature `|κ_ij|` is below `lambda`, 0
-    /// from it on. The default.
-    Sharp = 1,
-    /// `g_cont` (eq. 2.32): 1 below `lambda`, `λ²/(λ² + 10(|κ| − λ)²)` from it on.
-    Continuous = 2,
-}
-c_enum!(nbhd_weighting, [Isotropic, Sharp, Continuous]);
-
-/// Which points are smoothed anisotropically (thesis eq. 2.33–2.35); the others are smoothed
-/// isotropically.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_feature_criterion {
-    /// Every point. The default.
-    AllPoints = 0,
-    /// Edge quotient Q (eq. 2.33): `min(|k1|,|k2|) / max(|k1|,|k2|) < feature_threshold`.
-    EdgeQuotient = 1,
-    /// Principal curvature K (eq. 2.34): `max(|k1|,|k2|) > feature_threshold`.
-    PrincipalCurvature = 2,
-    /// Directional curvature D (eq. 2.35): some neighbour has `|κ_ij| > feature_threshold`.
-    DirectionalCurvature = 3,
-}
-c_enum!(
-    nbhd_feature_criterion,
-    [
-        AllPoints,
-        EdgeQuotient,
-        PrincipalCurvature,
-        DirectionalCurvature
-    ]
-);
-
-/// How the sign-free covariance normals are oriented in the outputs.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_orientation {
-    /// The eigen-solver's sign: arbitrary but deterministic. The default.
-    Unoriented = 0,
-    /// Every normal points toward `orientation_point` (a scanner's viewpoint).
-    TowardPoint = 1,
-    /// Every normal points away from `orientation_point` (outward for star-shaped surfaces).
-    AwayFromPoint = 2,
-    /// One consistent orientation spread over the neighbour graph along smooth paths
-    /// (Hoppe et al. 1992); in each connected part the highest point's normal has `z >= 0`.
-    Propagate = 3,
-}
-c_enum!(
-    nbhd_orientation,
-    [Unoriented, TowardPoint, AwayFromPoint, Propagate]
-);
-
-/// What a smoothing run is doing when it calls the progress callback.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_stage {
-    /// Neighbourhood search and the spacing estimate.
-    Neighbors = 0,
-    /// Normals and curvatures of a step.
-    Geometry = 1,
-    /// Moving the points.
-    Step = 2,
-    /// Per-point geometry of the result.
-    Outputs = 3,
-    /// Finished (fraction 1).
-    Done = 4,
-}
-
-impl From<Stage> for nbhd_stage {
-    fn from(s: Stage) -> Self {
-        match s {
-            Stage::Neighbors => nbhd_stage::Neighbors,
-            Stage::Geometry => nbhd_stage::Geometry,
-            Stage::Step => nbhd_stage::Step,
-            Stage::Outputs => nbhd_stage::Outputs,
-            Stage::Done => nbhd_stage::Done,
-        }
-    }
-}
-
-/// A progress callback: `fraction` grows from 0 to 1 over the run; return `true` to go on,
-/// `false` to stop the run, which then returns NBHD_STATUS_CANCELLED and writes no output.
-/// It is called from the thread that runs the computation (the calling thread when
-/// `threads` is 0, otherwise a worker of the call's own pool), never from two threads at
-/// once, and must return normally (no longjmp, no C++ exception).
-pub type nbhd_progress_fn =
-    Option<unsafe extern "C" fn(fraction: f64, stage: nbhd_stage, user_data: *mut c_void) -> bool>;
+/// The `interior_threshold` C shows while `constrain_interior` is off (the core has none
+/// then), so that switching it on alone gives a usable threshold.
+const INTERIOR_THRESHOLD: f64 = 0.01;
 
 /// Options of nbhd_smooth and nbhd_estimate_curvatures (nbhd_estimate_normals has its own,
 /// nbhd_normal_options). Start from nbhd_smooth_options_default() and change what you need.
@@ -176,7 +69,8 @@ pub struct nbhd_smooth_options {
     /// Orientation of the normals written to the outputs (smoothing itself uses |κ| and does
     /// not depend on it). Default unoriented.
     pub orientation: nbhd_orientation,
-    /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite).
+    /// The point of NBHD_ORIENTATION_TOWARD_POINT / _AWAY_FROM_POINT (finite). Default
+    /// (0, 0, 0).
     pub orientation_point: [f64; 3],
     /// Worker threads: 0 the shared pool with a thread per core, n >= 1 a pool of n threads
     /// made for this call (at most NBHD_MAX_THREADS, else NBHD_STATUS_INVALID_OPTION). Results
@@ -190,140 +84,40 @@ pub struct nbhd_smooth_options {
     /// nbhd_build_options: REJECT (the default) refuses the input with NON_FINITE; SKIP
     /// computes on the finite points only, and a skipped point keeps its index, is left
     /// unmoved (its coordinates are copied to `out_coords` as they are) and gets NaN geometry
-    /// with `normal_flags` 8.
+    /// with `normal_flags` 8. Default REJECT.
     pub non_finite: nbhd_non_finite_policy,
 }
 
-/// The per-point geometry the thesis' program colours by (Section 7.3), on the final points.
-/// Curvatures are signed relative to the reported normal.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct nbhd_point_geometry {
-    /// Unit normal (eq. 2.10), oriented as the options ask.
-    pub normal: [f64; 3],
-    /// Larger principal curvature k1 (Weingarten estimate, eq. 2.25–2.29).
-    pub k1: f64,
-    /// Smaller principal curvature k2.
-    pub k2: f64,
-    /// Unit principal direction of k1.
-    pub dir1: [f64; 3],
-    /// Unit principal direction of k2.
-    pub dir2: [f64; 3],
-    /// 'Mean': (k1 + k2) / 2.
-    pub mean_curvature: f64,
-    /// 'Max Princ': max(|k1|, |k2|).
-    pub max_principal_curvature: f64,
-    /// 'CovQuotient': λ0/(λ0 + λ1 + λ2) of the covariance (0 flat, at most 1/3).
-    pub covariance_quotient: f64,
-    /// 'MeanAni': Σ g κ / Σ g over the neighbours, with the chosen weights (0 if all vanish).
-    pub anisotropic_mean_curvature: f64,
-    /// 'PrincQuotient': min(|k1|,|k2|) / max(|k1|,|k2|) in [0, 1].
-    pub principal_curvature_quotient: f64,
-    /// 'MaxCov': the largest covariance eigenvalue over the neighbourhood size.
-    pub max_covariance: f64,
-    /// Why the normal is not to be trusted, 0 if it is: 1 fewer than 3 points, 2 collinear or
-    /// coincident points, 4 the normal is not unique (isotropic neighbourhood), 8 the point
-    /// was skipped for a NaN or infinite coordinate (everything else is NaN then).
-    pub normal_flags: u8,
-    /// Whether the feature criterion selects the point.
-    pub feature: bool,
-    /// Whether 'constrain interior' holds the point fixed.
-    pub interior: bool,
-}
-
-/// Scalars a run resolved: the spacing estimate and the absolute thresholds it used.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct nbhd_smooth_summary {
-    /// Mean nearest-neighbour spacing h of the input.
-    pub spacing: f64,
-    /// The absolute ε used.
-    pub epsilon: f64,
-    /// The absolute λ used.
-    pub lambda: f64,
-    /// 'Min Neighbors': the smallest neighbourhood size |N_i| of the input.
-    pub min_neighbors: usize,
-}
-
-/// The core's length for a C value and its units.
-pub(super) fn length(u: nbhd_units, v: f64) -> Length {
-    match u {
-        nbhd_units::Relative => Length::Relative(v),
-        nbhd_units::Absolute => Length::Absolute(v),
-    }
-}
-
-/// The C units and value of the core's length.
-pub(super) fn units_of_length(l: Length) -> (nbhd_units, f64) {
-    match l {
-        Length::Relative(v) => (nbhd_units::Relative, v),
-        Length::Absolute(v) => (nbhd_units::Absolute, v),
-    }
-}
-
-fn curvature(u: nbhd_units, v: f64) -> Curvature {
-    match u {
-        nbhd_units::Relative => Curvature::Relative(v),
-        nbhd_units::Absolute => Curvature::Absolute(v),
-    }
-}
-
-fn units_of_curvature(c: Curvature) -> (nbhd_units, f64) {
-    match c {
-        Curvature::Relative(v) => (nbhd_units::Relative, v),
-        Curvature::Absolute(v) => (nbhd_units::Absolute, v),
-    }
-}
-
-/// The C defaults: the core's [`SmoothOptions::default`].
-fn default_options() -> nbhd_smooth_options {
-    let d = SmoothOptions::default();
-    let (epsilon_units, epsilon) = units_of_length(d.epsilon);
-    let (lambda_units, lambda) = units_of_curvature(d.lambda);
-    let (feature, feature_threshold, feature_units) = match d.feature {
-        FeatureCriterion::AllPoints => {
-            (nbhd_feature_criterion::AllPoints, 0.5, nbhd_units::Relative)
+/// The C form of the core's options, with no progress callback.
+impl From<SmoothOptions> for nbhd_smooth_options {
+    fn from(d: SmoothOptions) -> Self {
+        let (epsilon_units, epsilon) = nbhd_units::of_length(d.epsilon);
+        let (lambda_units, lambda) = nbhd_units::of_curvature(d.lambda);
+        let (feature, feature_threshold, feature_units) =
+            nbhd_feature_criterion::of_core(d.feature);
+        let (orientation, orientation_point) = nbhd_orientation::of_core(d.orientation);
+        Self {
+            k: d.k,
+            epsilon,
+            epsilon_units,
+            steps: d.steps,
+            tau: d.tau,
+            weighting: d.weighting.into(),
+            lambda,
+            lambda_units,
+            feature,
+            feature_threshold,
+            feature_units,
+            constrain_interior: d.constrain_interior.is_some(),
+            interior_threshold: d.constrain_interior.unwrap_or(INTERIOR_THRESHOLD),
+            update_neighbors: d.update_neighbors,
+            orientation,
+            orientation_point,
+            threads: d.threads,
+            progress: None,
+            progress_user_data: std::ptr::null_mut(),
+            non_finite: d.non_finite.into(),
         }
-        FeatureCriterion::EdgeQuotient(q) => (
-            nbhd_feature_criterion::EdgeQuotient,
-            q,
-            nbhd_units::Relative,
-        ),
-        FeatureCriterion::PrincipalCurvature(c) => {
-            let (u, v) = units_of_curvature(c);
-            (nbhd_feature_criterion::PrincipalCurvature, v, u)
-        }
-        FeatureCriterion::DirectionalCurvature(c) => {
-            let (u, v) = units_of_curvature(c);
-            (nbhd_feature_criterion::DirectionalCurvature, v, u)
-        }
-    };
-    let (orientation, orientation_point) = orientation_to_c(d.orientation);
-    nbhd_smooth_options {
-        k: d.k,
-        epsilon,
-        epsilon_units,
-        steps: d.steps,
-        tau: d.tau,
-        weighting: match d.weighting {
-            Weighting::Isotropic => nbhd_weighting::Isotropic,
-            Weighting::Sharp => nbhd_weighting::Sharp,
-            Weighting::Continuous => nbhd_weighting::Continuous,
-        },
-        lambda,
-        lambda_units,
-        feature,
-        feature_threshold,
-        feature_units,
-        constrain_interior: d.constrain_interior.is_some(),
-        interior_threshold: d.constrain_interior.unwrap_or(0.01),
-        update_neighbors: d.update_neighbors,
-        orientation,
-        orientation_point,
-        threads: 0,
-        progress: None,
-        progress_user_data: std::ptr::null_mut(),
-        non_finite: d.non_finite.into(),
     }
 }
 
@@ -332,279 +126,40 @@ fn default_options() -> nbhd_smooth_options {
 /// callback, the shared thread pool.
 #[no_mangle]
 pub extern "C" fn nbhd_smooth_options_default() -> nbhd_smooth_options {
-    guard_value(
-        "nbhd_smooth_options_default",
-        default_options(),
-        default_options,
-    )
+    let d = || SmoothOptions::default().into();
+    guard_value("nbhd_smooth_options_default", d(), d)
 }
 
-/// The core's orientation for a C orientation and its point (which must be finite when used).
-pub(super) fn read_orientation(
-    o: nbhd_orientation,
-    point: [f64; 3],
-) -> Result<Orientation, FfiError> {
-    Ok(match o {
-        nbhd_orientation::Unoriented => Orientation::Unoriented,
-        nbhd_orientation::Propagate => Orientation::Propagate,
-        o @ (nbhd_orientation::TowardPoint | nbhd_orientation::AwayFromPoint) => {
-            if !point.iter().all(|c| c.is_finite()) {
-                return Err(crate::NbhdError::InvalidOption {
-                    name: "orientation_point",
-                    reason: format!("{point:?} must be finite"),
-                }
-                .into());
-            }
-            let p = DVec3::from_array(point);
-            if o == nbhd_orientation::TowardPoint {
-                Orientation::TowardViewpoint(p)
-            } else {
-                Orientation::AwayFrom(p)
-            }
-        }
-    })
-}
-
-/// The C form of the core's orientation.
-pub(super) fn orientation_to_c(o: Orientation) -> (nbhd_orientation, [f64; 3]) {
-    match o {
-        Orientation::Unoriented => (nbhd_orientation::Unoriented, [0.0; 3]),
-        Orientation::TowardViewpoint(p) => (nbhd_orientation::TowardPoint, p.to_array()),
-        Orientation::AwayFrom(p) => (nbhd_orientation::AwayFromPoint, p.to_array()),
-        Orientation::Propagate => (nbhd_orientation::Propagate, [0.0; 3]),
-    }
-}
-
-/// The options of one call after reading them from C.
-pub(super) struct SmoothArgs {
-    pub(super) core: SmoothOptions,
-    pub(super) threads: usize,
-    pub(super) progress: nbhd_progress_fn,
-    pub(super) user_data: *mut c_void,
-}
-
-/// Reads `*options` field by field (NULL gives the defaults); enum fields are read as `int`
-/// and checked, bools as bytes.
+/// Reads `*options` field by field into the core's options and the call's progress callback
+/// (NULL gives the defaults).
 ///
 /// # Safety
 /// `options` must be NULL or point to a readable `nbhd_smooth_options`.
 pub(super) unsafe fn read_options(
     options: *const nbhd_smooth_options,
-) -> Result<SmoothArgs, FfiError> {
-    let defaults = default_options();
-    let o: *const nbhd_smooth_options = if options.is_null() {
-        &defaults
-    } else {
-        check_ptr(options, "options")?;
-        options
-    };
-    let epsilon_units = c_enum_field!(o, epsilon_units, nbhd_units);
-    let lambda_units = c_enum_field!(o, lambda_units, nbhd_units);
-    let feature_units = c_enum_field!(o, feature_units, nbhd_units);
-    let weighting = match c_enum_field!(o, weighting, nbhd_weighting) {
-        nbhd_weighting::Isotropic => Weighting::Isotropic,
-        nbhd_weighting::Sharp => Weighting::Sharp,
-        nbhd_weighting::Continuous => Weighting::Continuous,
-    };
-    let threshold: f64 = c_field!(o, feature_threshold);
-    let feature = match c_enum_field!(o, feature, nbhd_feature_criterion) {
-        nbhd_feature_criterion::AllPoints => FeatureCriterion::AllPoints,
-        nbhd_feature_criterion::EdgeQuotient => FeatureCriterion::EdgeQuotient(threshold),
-        nbhd_feature_criterion::PrincipalCurvature => {
-            FeatureCriterion::PrincipalCurvature(curvature(feature_units, threshold))
-        }
-        nbhd_feature_criterion::DirectionalCurvature => {
-            FeatureCriterion::DirectionalCurvature(curvature(feature_units, threshold))
-        }
-    };
-    let orientation = read_orientation(
-        c_enum_field!(o, orientation, nbhd_orientation),
-        c_field!(o, orientation_point),
-    )?;
-    let constrain_interior =
-        c_bool_field!(o, constrain_interior).then(|| c_field!(o, interior_threshold));
+) -> Result<(SmoothOptions, Progress), FfiError> {
+    let defaults = SmoothOptions::default().into();
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    let feature_units = c_field!(o.feature_units as enum)?;
     let core = SmoothOptions {
-        k: c_field!(o, k),
-        epsilon: length(epsilon_units, c_field!(o, epsilon)),
-        steps: c_field!(o, steps),
-        tau: c_field!(o, tau),
-        weighting,
-        lambda: curvature(lambda_units, c_field!(o, lambda)),
-        feature,
-        constrain_interior,
-        update_neighbors: c_bool_field!(o, update_neighbors),
-        orientation,
-        non_finite: c_enum_field!(o, non_finite, nbhd_non_finite_policy).into(),
+        k: c_field!(o.k),
+        epsilon: c_field!(o.epsilon_units as enum)?.length(c_field!(o.epsilon)),
+        steps: c_field!(o.steps),
+        tau: c_field!(o.tau),
+        weighting: c_field!(o.weighting as enum)?.into(),
+        lambda: c_field!(o.lambda_units as enum)?.curvature(c_field!(o.lambda)),
+        feature: c_field!(o.feature as enum)?.to_core(c_field!(o.feature_threshold), feature_units),
+        constrain_interior: c_field!(o.constrain_interior as bool)
+            .then(|| c_field!(o.interior_threshold)),
+        update_neighbors: c_field!(o.update_neighbors as bool),
+        orientation: c_field!(o.orientation as enum)?.to_core(c_field!(o.orientation_point))?,
+        non_finite: c_field!(o.non_finite as enum)?.into(),
+        threads: c_field!(o.threads),
         ..SmoothOptions::default()
     };
-    Ok(SmoothArgs {
-        core,
-        threads: c_field!(o, threads),
-        progress: c_field!(o, progress),
-        user_data: c_field!(o, progress_user_data),
-    })
-}
-
-/// Reads the caller's points into 3-D double positions (the smoothing computes in double).
-///
-/// # Safety
-/// `points` must be NULL or describe readable memory (see nbhd_points).
-pub(super) unsafe fn read_points(
-    points: *const nbhd_points,
-) -> Result<(PointsArg, Vec<DVec3>), FfiError> {
-    // SAFETY: forwarded from the caller.
-    let arg = unsafe { PointsArg::read(points, "points") }?;
-    // SAFETY: the caller's description of the point memory is true (contract above); the
-    // view is dropped before this function returns, so later writes to an aliasing output
-    // buffer never overlap a live borrow.
-    let view: PointsView<'_> = unsafe { arg.view() }?;
-    if view.dim() != 3 {
-        return Err(FfiError::InvalidArgument(format!(
-            "points->dim is {}; normals, curvatures and smoothing need 3-D points",
-            view.dim()
-        )));
-    }
-    let mut xyz = [0.0f64; 3];
-    let pts = (0..view.len())
-        .map(|i| {
-            view.read_point(i, &mut xyz);
-            DVec3::from_array(xyz)
-        })
-        .collect();
-    Ok((arg, pts))
-}
-
-/// Runs `core` on `threads` workers, handing it a progress closure that calls the C callback
-/// (if any) with `user_data`.
-pub(super) fn run_with_progress<R: Send>(
-    threads: usize,
-    callback: nbhd_progress_fn,
-    user_data: *mut c_void,
-    core: impl FnOnce(&mut dyn FnMut(f64, Stage) -> bool) -> crate::Result<R> + Send,
-) -> Result<R, FfiError> {
-    struct Callback(nbhd_progress_fn, *mut c_void);
-    // SAFETY: the callback and its user data are the caller's; the header tells C that the
-    // callback may run on a worker thread of the call (never on two threads at once), which
-    // is all that moving them to that thread needs.
-    unsafe impl Send for Callback {}
-    let cb = Callback(callback, user_data);
-    let result = crate::parallel::with_threads(threads, move || {
-        let cb = cb;
-        let mut progress = |fraction: f64, stage: Stage| match cb.0 {
-            // SAFETY: a C function pointer the caller gave for this purpose, called with the
-            // user data it gave and plain values.
-            Some(f) => unsafe { f(fraction, stage.into(), cb.1) },
-            None => true,
-        };
-        core(&mut progress)
-    })?;
-    Ok(result?)
-}
-
-/// Runs the faithful method (or only its analysis) with the options' threads and callback.
-fn run(points: &[DVec3], args: &SmoothArgs, analyze_only: bool) -> Result<SmoothResult, FfiError> {
-    let opts = if analyze_only {
-        SmoothOptions {
-            steps: 0,
-            outputs: true,
-            ..args.core
-        }
-    } else {
-        args.core
-    };
-    run_with_progress(args.threads, args.progress, args.user_data, |progress| {
-        smooth::smooth_with_progress(points, &opts, progress)
-    })
-}
-
-/// Writes the smoothed `points` to `out` with the input's layout (`arg`).
-///
-/// # Safety
-/// `out` must be non-NULL and writable for the layout `arg` describes (checked by
-/// [`read_points`]), and no Rust borrow of that memory may be live.
-pub(super) unsafe fn write_coords(arg: &PointsArg, points: &[DVec3], out: *mut c_void) {
-    let size = arg.scalar.size();
-    for (i, p) in points.iter().enumerate() {
-        for (c, v) in p.to_array().into_iter().enumerate() {
-            let offset = i * arg.stride + c * size;
-            // SAFETY: `out` is writable with the input's layout (caller), whose size
-            // `read_points` checked, and `offset` stays inside it; the writes are unaligned;
-            // no borrow of the memory is live (caller).
-            unsafe {
-                let at = out.cast::<u8>().add(offset);
-                match arg.scalar {
-                    ScalarType::F32 => at.cast::<f32>().write_unaligned(v as f32),
-                    ScalarType::F64 => at.cast::<f64>().write_unaligned(v),
-                }
-            }
-        }
-    }
-}
-
-impl From<&PointOutput> for nbhd_point_geometry {
-    fn from(o: &PointOutput) -> Self {
-        Self {
-            normal: o.normal.to_array(),
-            k1: o.principal.k1,
-            k2: o.principal.k2,
-            dir1: o.principal.dir1.to_array(),
-            dir2: o.principal.dir2.to_array(),
-            mean_curvature: o.mean_curvature,
-            max_principal_curvature: o.max_principal_curvature,
-            covariance_quotient: o.covariance_quotient,
-            anisotropic_mean_curvature: o.anisotropic_mean_curvature,
-            principal_curvature_quotient: o.principal_curvature_quotient,
-            max_covariance: o.max_covariance,
-            normal_flags: o.normal_flags,
-            feature: o.feature,
-            interior: o.interior,
-        }
-    }
-}
-
-impl From<&SmoothResult> for nbhd_smooth_summary {
-    fn from(r: &SmoothResult) -> Self {
-        Self {
-            spacing: r.spacing,
-            epsilon: r.epsilon,
-            lambda: r.lambda,
-            min_neighbors: r.min_neighbors,
-        }
-    }
-}
-
-/// Writes `values` to `out[0..values.len()]`.
-///
-/// # Safety
-/// `out` must be NULL or point to `values.len()` writable `T`s; it is checked for NULL and
-/// alignment here.
-unsafe fn write_all<T: Copy>(out: *mut T, values: &[T], arg: &str) -> Result<(), FfiError> {
-    check_ptr(out.cast_const(), arg)?;
-    // SAFETY: `out` is non-NULL and aligned (checked above) and holds `values.len()` writable
-    // elements (caller); it cannot overlap `values`, which is nbhd's own memory.
-    unsafe { std::ptr::copy_nonoverlapping(values.as_ptr(), out, values.len()) };
-    Ok(())
-}
-
-/// Writes `geometry` (if not NULL) and `summary` (if not NULL) from a result.
-///
-/// # Safety
-/// Each pointer must be NULL or writable for `result.outputs.len()` / one element.
-pub(super) unsafe fn write_outputs(
-    result: &SmoothResult,
-    geometry: *mut nbhd_point_geometry,
-    summary: *mut nbhd_smooth_summary,
-) -> Result<(), FfiError> {
-    if !geometry.is_null() {
-        let g: Vec<nbhd_point_geometry> = result.outputs.iter().map(Into::into).collect();
-        // SAFETY: forwarded from the caller.
-        unsafe { write_all(geometry, &g, "out_geometry") }?;
-    }
-    if !summary.is_null() {
-        // SAFETY: forwarded from the caller.
-        unsafe { write_all(summary, &[nbhd_smooth_summary::from(result)], "out_summary") }?;
-    }
-    Ok(())
+    let progress = Progress::new(c_field!(o.progress), c_field!(o.progress_user_data));
+    Ok((core, progress))
 }
 
 /// Smooths 3-D points (thesis Chapter 2) and writes the smoothed coordinates to `out_coords`.
@@ -621,14 +176,15 @@ pub(super) unsafe fn write_outputs(
 /// threads.
 ///
 /// Errors: NULL_POINTER (`points`, `points->data`, `out_coords`), MISALIGNED_POINTER,
-/// INVALID_ARGUMENT (dimension other than 3, an enum field out of range, a buffer size that
-/// overflows), ZERO_DIMENSION (dimension 0), EMPTY_INPUT (also: no finite point left to SKIP),
-/// STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT; the message names the point),
-/// INVALID_K, INVALID_OPTION (ε or λ not > 0, τ negative, relative units on a set without two
-/// distinct points, ...), DEGENERATE (no neighbourhood reached 3 points: ε far below the
-/// spacing — check `epsilon_units`; the message gives ε in the points' units), OUT_OF_MEMORY
-/// (the neighbourhoods of `k` do not fit in memory, e.g. k = SIZE_MAX on a large set),
-/// THREAD_POOL, CANCELLED (the progress callback returned false).
+/// INVALID_ARGUMENT (dimension other than 3, `points->scalar_type` out of range, a buffer
+/// size that overflows), ZERO_DIMENSION (dimension 0), EMPTY_INPUT (also: no finite point
+/// left to SKIP), STRIDE_TOO_SMALL, TOO_MANY_POINTS, NON_FINITE (with `non_finite` REJECT;
+/// the message names the point), INVALID_K, INVALID_OPTION (an enum field of `options` out of
+/// range, ε or λ not > 0, τ negative, relative units on a set without two distinct points,
+/// more than NBHD_MAX_THREADS threads, ...), DEGENERATE (no neighbourhood reached 3 points: ε
+/// far below the spacing — check `epsilon_units`; the message gives ε in the points' units),
+/// OUT_OF_MEMORY (the neighbourhoods of `k` do not fit in memory, e.g. k = SIZE_MAX on a
+/// large set), THREAD_POOL, CANCELLED (the progress callback returned false).
 ///
 /// # Safety
 /// `points` must describe readable memory (see nbhd_points); `out_coords` must be writable
@@ -645,20 +201,16 @@ pub unsafe extern "C" fn nbhd_smooth(
     guard("nbhd_smooth", || {
         // SAFETY: forwarded from the caller.
         let (arg, pts) = unsafe { read_points(points) }?;
-        // Coordinates are written unaligned, as the input is read: only NULL is refused.
-        check_aligned(out_coords.cast_const(), 1, "out_coords")?;
-        check_optional(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
+        let out = Outputs::smoothing(out_coords, out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let mut args = unsafe { read_options(options) }?;
-        args.core.outputs = !out_geometry.is_null();
-        let result = run(&pts, &args, false)?;
-        // SAFETY: `out_coords` is non-NULL (checked above) and writable with the input's
-        // layout (caller); the input view was dropped in `read_points`, so writing in place
+        let (mut opts, mut progress) = unsafe { read_options(options) }?;
+        opts.outputs = out.wants_geometry();
+        let result = smooth::smooth_with_progress(&pts, &opts, &mut |f, s| progress.report(f, s))?;
+        // SAFETY: the outputs are writable with the input's layout / for `count` elements
+        // (caller); the input view was dropped in `read_points`, so smoothing in place
         // overlaps no live borrow.
-        unsafe { write_coords(&arg, &result.points, out_coords) };
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        unsafe { out.write(&result, arg.scalar, arg.stride) };
+        Ok(())
     })
 }
 
@@ -682,22 +234,28 @@ pub unsafe extern "C" fn nbhd_estimate_curvatures(
 ) -> nbhd_status {
     guard("nbhd_estimate_curvatures", || {
         // SAFETY: forwarded from the caller.
-        let (_, pts) = unsafe { read_points(points) }?;
-        check_ptr(out_geometry.cast_const(), "out_geometry")?;
-        check_optional(out_summary.cast_const(), "out_summary")?;
+        let (arg, pts) = unsafe { read_points(points) }?;
+        let out = Outputs::curvatures(out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
-        let args = unsafe { read_options(options) }?;
-        let result = run(&pts, &args, true)?;
-        // SAFETY: forwarded from the caller.
-        unsafe { write_outputs(&result, out_geometry, out_summary) }
+        let (opts, mut progress) = unsafe { read_options(options) }?;
+        let opts = SmoothOptions {
+            steps: 0,
+            outputs: true,
+            ..opts
+        };
+        let result = smooth::smooth_with_progress(&pts, &opts, &mut |f, s| progress.report(f, s))?;
+        // SAFETY: the outputs are writable for `count` elements / one element (caller).
+        unsafe { out.write(&result, arg.scalar, arg.stride) };
+        Ok(())
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ffi::nbhd_scalar_type;
+    use crate::ffi::{nbhd_scalar_type, nbhd_stage};
     use crate::shapes::{sample, Sphere};
+    use glam::DVec3;
 
     fn sphere_points() -> Vec<f32> {
         sample(&Sphere::new(1.0), 600, 3)
@@ -720,13 +278,50 @@ mod tests {
     #[test]
     fn defaults_mirror_the_core() {
         // SAFETY: NULL asks for the defaults.
-        let args = unsafe { read_options(std::ptr::null()) }.unwrap();
-        assert_eq!(args.core, SmoothOptions::default());
+        let (core, progress) = unsafe { read_options(std::ptr::null()) }.unwrap();
+        assert_eq!(core, SmoothOptions::default());
+        assert!(progress.is_none());
         let c = nbhd_smooth_options_default();
         // SAFETY: a live, initialised options struct.
-        let args = unsafe { read_options(&c) }.unwrap();
-        assert_eq!(args.core, SmoothOptions::default());
-        assert_eq!(args.threads, 0);
+        let (core, _) = unsafe { read_options(&c) }.unwrap();
+        assert_eq!(core, SmoothOptions::default());
+        assert_eq!(core.threads, 0);
+    }
+
+    unsafe extern "C" fn record_pool_size(_: f64, _: nbhd_stage, seen: *mut c_void) -> bool {
+        // SAFETY: the test passes a pointer to its usize.
+        unsafe { *seen.cast::<usize>() = rayon::current_num_threads() };
+        true
+    }
+
+    #[test]
+    fn the_threads_option_reaches_the_core_and_changes_no_bit() {
+        let data = sphere_points();
+        let run = |threads: usize| {
+            let mut o = nbhd_smooth_options_default();
+            let mut pool = 0usize;
+            o.threads = threads;
+            o.progress = Some(record_pool_size);
+            o.progress_user_data = (&mut pool as *mut usize).cast();
+            let mut out = vec![0f32; data.len()];
+            // SAFETY: the descriptor matches `data`; `out` has its layout; `pool` outlives
+            // the call.
+            let s = unsafe {
+                nbhd_smooth(
+                    &desc(&data),
+                    &o,
+                    out.as_mut_ptr().cast(),
+                    std::ptr::null_mut(),
+                    std::ptr::null_mut(),
+                )
+            };
+            assert_eq!(s, nbhd_status::Ok);
+            (out, pool)
+        };
+        let (one, pool1) = run(1);
+        let (three, pool3) = run(3);
+        assert_eq!((pool1, pool3), (1, 3));
+        assert_eq!(one, three);
     }
 
     #[test]
@@ -809,6 +404,7 @@ mod tests {
         let s = unsafe {
             nbhd_estimate_curvatures(&desc(&data), &o, geo.as_mut_ptr(), std::ptr::null_mut())
         };
-        assert_eq!(s, nbhd_status::InvalidArgument);
+        // an enum field of an options struct out of range is an option out of range
+        assert_eq!(s, nbhd_status::InvalidOption);
     }
 }

@@ -19,7 +19,8 @@ pub enum nbhd_status {
     NullPointer = 1,
     /// A pointer argument is not aligned for the type it points to (the message names it).
     MisalignedPointer = 2,
-    /// An argument has a value outside its range: an enum field holding no value of its
+    /// An argument has a value outside its range: an enum field of an argument struct
+    /// (nbhd_points, nbhd_neighborhood_spec, nbhd_normals_output) holding no value of its
     /// enum, a row or index beyond its range, or a points description whose byte size
     /// overflows the address space (`dim * sizeof(scalar)` or `(count - 1) * stride`; the
     /// message names the argument and the values passed).
@@ -51,7 +52,8 @@ pub enum nbhd_status {
     IndexOutOfRange = 14,
     /// A query by stored index names a point skipped at build time (non-finite).
     SkippedPoint = 15,
-    /// A build or table option is out of range (the message names it).
+    /// A field of an options struct (nbhd_*_options) is out of range, an enum field holding
+    /// no value of its enum included (the message names the option and the value).
     InvalidOption = 16,
     /// A pool of worker threads could not be created.
     ThreadPool = 17,

@@ -5,7 +5,7 @@ use std::ffi::c_void;
 
 use super::args::{deref, init_out};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::tree::nbhd_tree;
+use super::tree::{nbhd_tree, with_tree};
 use super::types::{
     nbhd_neighborhood_spec, nbhd_points, nbhd_table_options, read_table_options, NbhdArg, PointsArg,
 };
@@ -38,6 +38,18 @@ impl nbhd_neighborhoods {
 enum AnyTable {
     F32(NeighborTable<f32>),
     F64(NeighborTable<f64>),
+}
+
+impl From<NeighborTable<f32>> for AnyTable {
+    fn from(t: NeighborTable<f32>) -> Self {
+        AnyTable::F32(t)
+    }
+}
+
+impl From<NeighborTable<f64>> for AnyTable {
+    fn from(t: NeighborTable<f64>) -> Self {
+        AnyTable::F64(t)
+    }
 }
 
 macro_rules! with_table {
@@ -105,14 +117,8 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods(
                 read_table_options(options)?,
             )
         };
-        let table = match &tree.inner {
-            super::tree::AnyTree::F32(t) => {
-                AnyTable::F32(t.neighborhoods(nbhd.to_core()?, &options)?)
-            }
-            super::tree::AnyTree::F64(t) => {
-                AnyTable::F64(t.neighborhoods(nbhd.to_core()?, &options)?)
-            }
-        };
+        let table: AnyTable =
+            with_tree!(&tree.inner, t => t.neighborhoods(nbhd.to_core()?, &options)?.into());
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out(out, table) };
         Ok(())
@@ -158,14 +164,9 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods_of(
         };
         // SAFETY: the caller's description of the query memory is true (contract above).
         let view = unsafe { queries.view() }?;
-        let table = match &tree.inner {
-            super::tree::AnyTree::F32(t) => {
-                AnyTable::F32(t.neighborhoods_of(&view, nbhd.to_core()?, &options)?)
-            }
-            super::tree::AnyTree::F64(t) => {
-                AnyTable::F64(t.neighborhoods_of(&view, nbhd.to_core()?, &options)?)
-            }
-        };
+        let table: AnyTable = with_tree!(&tree.inner, t => {
+            t.neighborhoods_of(&view, nbhd.to_core()?, &options)?.into()
+        });
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out(out, table) };
         Ok(())
@@ -308,6 +309,44 @@ pub unsafe extern "C" fn nbhd_neighborhoods_row(
     guard("nbhd_neighborhoods_row", || {
         // Every usable out-pointer gets its "nothing" value before any error is returned.
         // SAFETY: the out-pointers are NULL or writable (caller).
+        let outs = unsafe { RowOut::init(indices, sq_dists, len) }?;
+        // SAFETY: `table` is NULL or a live handle (caller).
+        let table = unsafe { deref(table, "table") }?;
+        let (ids, dists, n) = with_table!(&table.table, t => {
+            if row >= t.len() {
+                return Err(FfiError::InvalidArgument(format!(
+                    "row {row} is out of range (the table has {} rows)",
+                    t.len()
+                )));
+            }
+            let ids = t.indices_of(row);
+            (ids.as_ptr(), t.sq_dists_of(row).as_ptr().cast::<c_void>(), ids.len())
+        });
+        // SAFETY: the out-pointers were checked by `RowOut::init`.
+        unsafe { outs.write(ids, dists, n) };
+        Ok(())
+    })
+}
+
+/// The out-pointers of nbhd_neighborhoods_row, checked and set to "nothing".
+struct RowOut {
+    indices: *mut *const u32,
+    sq_dists: Option<*mut *const c_void>,
+    len: *mut usize,
+}
+
+impl RowOut {
+    /// Checks every out-pointer and stores its "nothing" value (NULL, 0) in each usable one,
+    /// before the first error is returned.
+    ///
+    /// # Safety
+    /// Each pointer must be NULL or writable.
+    unsafe fn init(
+        indices: *mut *const u32,
+        sq_dists: *mut *const c_void,
+        len: *mut usize,
+    ) -> Result<Self, FfiError> {
+        // SAFETY: forwarded from the caller.
         let (len, indices, sq_dists) = unsafe {
             (
                 init_out(len, "len", 0),
@@ -319,28 +358,25 @@ pub unsafe extern "C" fn nbhd_neighborhoods_row(
                 },
             )
         };
-        let (len, indices, sq_dists) = (len?, indices?, sq_dists?);
-        // SAFETY: `table` is NULL or a live handle (caller).
-        let table = unsafe { deref(table, "table") }?;
-        let (ids, dists, n) = with_table!(&table.table, t => {
-            if row >= t.len() {
-                return Err(FfiError::InvalidArgument(format!(
-                    "row {row} is out of range (the table has {} rows)",
-                    t.len()
-                )));
-            }
-            let ids = t.indices_of(row);
-            let dists = t.sq_dists_of(row);
-            (ids.as_ptr(), dists.as_ptr().cast::<c_void>(), ids.len())
-        });
-        // SAFETY: the out-pointers were checked by `init_out`.
+        Ok(Self {
+            len: len?,
+            indices: indices?,
+            sq_dists: sq_dists?,
+        })
+    }
+
+    /// Writes a row.
+    ///
+    /// # Safety
+    /// The pointers must still be writable (checked by `init`).
+    unsafe fn write(&self, ids: *const u32, dists: *const c_void, n: usize) {
+        // SAFETY: checked by `init_out`, writable (caller).
         unsafe {
-            indices.write(ids);
-            if let Some(p) = sq_dists {
+            self.indices.write(ids);
+            if let Some(p) = self.sq_dists {
                 p.write(dists);
             }
-            len.write(n);
+            self.len.write(n);
         }
-        Ok(())
-    })
+    }
 }

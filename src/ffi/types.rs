@@ -1,273 +1,20 @@
-//! The plain C types of the ABI: enums for the core's choices, the points descriptor, the
-//! build and table options, tree statistics, and their conversions to and from the core.
-//!
-//! C may store any integer in an enum-typed field, and a Rust enum holding a value outside
-//! its variants is undefined behaviour; so structs coming from C are never read as Rust
-//! values of these types. Their fields are read one by one through raw pointers, enum fields
-//! as `int` (see [`read_enum`]), and then checked.
+//! The plain C structs of the ABI that are not about smoothing: the points descriptor, the
+//! build and table options, tree statistics and the neighbourhood spec, with their
+//! conversions to and from the core. Their enums live in [`super::enums`]; structs coming
+//! from C are read field by field with [`super::fields`].
 
-use std::ffi::{c_int, c_void};
+use std::ffi::c_void;
 
-use super::args::check_ptr;
+use super::enums::{nbhd_median_algorithm, nbhd_non_finite_policy, nbhd_pivot_policy};
+use super::enums::{nbhd_neighborhood_kind, nbhd_scalar_type};
+use super::fields::{c_field, CStruct};
 use super::status::FfiError;
 use crate::error::NbhdError;
 use crate::points::PointsView;
 use crate::scalar::ScalarType;
 use crate::table::TableOptions;
-use crate::tree::{BuildOptions, MedianAlgorithm, PivotPolicy, TreeStats};
-use crate::{NonFinitePolicy, Scalar};
-
-/// A C enum of this ABI: its values and name, to check an integer read from C.
-pub(crate) trait CEnum: Copy + 'static {
-    /// The C name of the enum, for messages.
-    const C_NAME: &'static str;
-    /// Every variant.
-    const ALL: &'static [Self];
-    /// The integer value of a variant.
-    fn value(self) -> c_int;
-    /// The variant with integer value `raw`, if any.
-    fn from_value(raw: c_int) -> Option<Self> {
-        Self::ALL.iter().copied().find(|v| v.value() == raw)
-    }
-}
-
-macro_rules! c_enum {
-    ($ty:ident, [$($var:ident),+ $(,)?]) => {
-        impl CEnum for $ty {
-            const C_NAME: &'static str = stringify!($ty);
-            const ALL: &'static [Self] = &[$($ty::$var),+];
-            fn value(self) -> c_int {
-                self as c_int
-            }
-        }
-        const _: () = assert!(std::mem::size_of::<$ty>() == std::mem::size_of::<c_int>());
-    };
-}
-pub(crate) use c_enum;
-
-/// Reads field `$f` of the C struct behind the raw pointer `$o` through a raw place (never the
-/// struct as a Rust value). `$o` must have been checked to be non-NULL and aligned, and must be
-/// readable (the export's contract).
-macro_rules! c_field {
-    ($o:expr, $f:ident) => {
-        // SAFETY: `$o` is non-NULL, aligned (checked by the caller) and readable (the
-        // export's contract); the field is read through a raw place.
-        unsafe { std::ptr::addr_of!((*$o).$f).read() }
-    };
-}
-pub(crate) use c_field;
-
-/// Reads the enum field `$f` of the options struct behind `$o` as the `int` C stored there and
-/// checks it is a value of `$ty`; otherwise returns an INVALID_ARGUMENT error naming the field.
-/// Same contract as [`c_field`].
-macro_rules! c_enum_field {
-    ($o:expr, $f:ident, $ty:ty) => {
-        // SAFETY: as for `c_field!`; the enum is read as `int` and checked.
-        unsafe { $crate::ffi::types::read_enum(std::ptr::addr_of!((*$o).$f)) }
-            .map_err(|v| $crate::ffi::types::invalid_enum::<$ty>("options", stringify!($f), v))?
-    };
-}
-pub(crate) use c_enum_field;
-
-/// Reads the `bool` field `$f` of the struct behind `$o` as a byte, so any value C stored is
-/// sound (non-zero is true). Same contract as [`c_field`].
-macro_rules! c_bool_field {
-    ($o:expr, $f:ident) => {
-        // SAFETY: as for `c_field!`; the bool is read as a byte.
-        unsafe { std::ptr::addr_of!((*$o).$f).cast::<u8>().read() != 0 }
-    };
-}
-pub(crate) use c_bool_field;
-
-/// Reads the enum field at `field` as the `int` C stored there: the variant of `E` it
-/// names, or the raw value if it names none.
-///
-/// # Safety
-/// `field` must point to a readable, aligned field of type `E` inside a struct given by C.
-pub(crate) unsafe fn read_enum<E: CEnum>(field: *const E) -> Result<E, c_int> {
-    // SAFETY: the caller guarantees `field` is readable and aligned; `E` has the size of
-    // `int` (asserted by `c_enum!`) and at least its alignment, and any bit pattern is a
-    // valid `int`.
-    let raw = unsafe { field.cast::<c_int>().read() };
-    E::from_value(raw).ok_or(raw)
-}
-
-/// The error for an enum field of an argument struct that holds no value of `E`.
-pub(crate) fn invalid_enum<E: CEnum>(arg: &str, field: &str, value: c_int) -> FfiError {
-    FfiError::InvalidArgument(format!(
-        "{arg}->{field} is {value}, not a value of {}",
-        E::C_NAME
-    ))
-}
-
-/// The error for an enum field of an options struct that holds no value of `E`.
-fn invalid_option<E: CEnum>(name: &'static str, value: c_int) -> FfiError {
-    FfiError::Core(NbhdError::InvalidOption {
-        name,
-        reason: format!("{value} is not a value of {}", E::C_NAME),
-    })
-}
-
-/// Coordinate type of a point buffer, of a tree and of its distances.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum nbhd_scalar_type {
-    /// 32-bit IEEE 754 `float`.
-    #[default]
-    F32 = 0,
-    /// 64-bit IEEE 754 `double`.
-    F64 = 1,
-}
-c_enum!(nbhd_scalar_type, [F32, F64]);
-
-impl From<nbhd_scalar_type> for ScalarType {
-    fn from(s: nbhd_scalar_type) -> Self {
-        match s {
-            nbhd_scalar_type::F32 => ScalarType::F32,
-            nbhd_scalar_type::F64 => ScalarType::F64,
-        }
-    }
-}
-
-impl From<ScalarType> for nbhd_scalar_type {
-    fn from(s: ScalarType) -> Self {
-        match s {
-            ScalarType::F32 => nbhd_scalar_type::F32,
-            ScalarType::F64 => nbhd_scalar_type::F64,
-        }
-    }
-}
-
-/// How a tree node chooses its splitting dimension and pivot (thesis Sections 3.2 and 5.4).
-/// Every policy splits by the composite (lexicographic) order, so duplicates never make the
-/// tree degenerate.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_pivot_policy {
-    /// Dimensions in turn (depth mod d), split at the median (thesis Algorithm 4). Balanced.
-    CyclicMedian = 0,
-    /// Median of the dimension of largest spread (Omohundro). Balanced.
-    SpreadMedian = 1,
-    /// The point closest to the middle of the most spread dimension (Moore). Not balanced.
-    ClosestToMiddle = 2,
-    /// Sliding midpoint (ANN, nanoflann, FLANN). The default.
-    SlidingMidpoint = 3,
-}
-c_enum!(
-    nbhd_pivot_policy,
-    [CyclicMedian, SpreadMedian, ClosestToMiddle, SlidingMidpoint]
-);
-
-impl From<nbhd_pivot_policy> for PivotPolicy {
-    fn from(p: nbhd_pivot_policy) -> Self {
-        match p {
-            nbhd_pivot_policy::CyclicMedian => PivotPolicy::CyclicMedian,
-            nbhd_pivot_policy::SpreadMedian => PivotPolicy::SpreadMedian,
-            nbhd_pivot_policy::ClosestToMiddle => PivotPolicy::ClosestToMiddle,
-            nbhd_pivot_policy::SlidingMidpoint => PivotPolicy::SlidingMidpoint,
-        }
-    }
-}
-
-impl From<PivotPolicy> for nbhd_pivot_policy {
-    fn from(p: PivotPolicy) -> Self {
-        match p {
-            PivotPolicy::CyclicMedian => nbhd_pivot_policy::CyclicMedian,
-            PivotPolicy::SpreadMedian => nbhd_pivot_policy::SpreadMedian,
-            PivotPolicy::ClosestToMiddle => nbhd_pivot_policy::ClosestToMiddle,
-            PivotPolicy::SlidingMidpoint => nbhd_pivot_policy::SlidingMidpoint,
-        }
-    }
-}
-
-/// How the pivot of a node is found (thesis Section 3.3 and Chapter 6). For one pivot policy
-/// every algorithm builds the identical tree; they differ in speed only.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_median_algorithm {
-    /// Lists presorted once per dimension, kept sorted by stable partitions (Algorithm 6).
-    Presorted = 0,
-    /// Sort the node's points, then pick.
-    Sort = 1,
-    /// Randomised quickselect with a median-of-three pivot (Algorithm 10).
-    Quickselect = 2,
-    /// Floyd-Rivest selection. The default.
-    FloydRivest = 3,
-    /// Deterministic median of medians (Algorithm 11).
-    MedianOfMedians = 4,
-}
-c_enum!(
-    nbhd_median_algorithm,
-    [Presorted, Sort, Quickselect, FloydRivest, MedianOfMedians]
-);
-
-impl From<nbhd_median_algorithm> for MedianAlgorithm {
-    fn from(m: nbhd_median_algorithm) -> Self {
-        match m {
-            nbhd_median_algorithm::Presorted => MedianAlgorithm::Presorted,
-            nbhd_median_algorithm::Sort => MedianAlgorithm::Sort,
-            nbhd_median_algorithm::Quickselect => MedianAlgorithm::Quickselect,
-            nbhd_median_algorithm::FloydRivest => MedianAlgorithm::FloydRivest,
-            nbhd_median_algorithm::MedianOfMedians => MedianAlgorithm::MedianOfMedians,
-        }
-    }
-}
-
-impl From<MedianAlgorithm> for nbhd_median_algorithm {
-    fn from(m: MedianAlgorithm) -> Self {
-        match m {
-            MedianAlgorithm::Presorted => nbhd_median_algorithm::Presorted,
-            MedianAlgorithm::Sort => nbhd_median_algorithm::Sort,
-            MedianAlgorithm::Quickselect => nbhd_median_algorithm::Quickselect,
-            MedianAlgorithm::FloydRivest => nbhd_median_algorithm::FloydRivest,
-            MedianAlgorithm::MedianOfMedians => nbhd_median_algorithm::MedianOfMedians,
-        }
-    }
-}
-
-/// What a build does with points that have a NaN or infinite coordinate.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_non_finite_policy {
-    /// Refuse the input with NBHD_STATUS_NON_FINITE; the message names the first such point.
-    /// The default.
-    Reject = 0,
-    /// Leave such points out; the others keep their indices. Queries by the index of a
-    /// skipped point fail with NBHD_STATUS_SKIPPED_POINT; tables give them empty rows.
-    Skip = 1,
-}
-c_enum!(nbhd_non_finite_policy, [Reject, Skip]);
-
-impl From<nbhd_non_finite_policy> for NonFinitePolicy {
-    fn from(p: nbhd_non_finite_policy) -> Self {
-        match p {
-            nbhd_non_finite_policy::Reject => NonFinitePolicy::Reject,
-            nbhd_non_finite_policy::Skip => NonFinitePolicy::Skip,
-        }
-    }
-}
-
-impl From<NonFinitePolicy> for nbhd_non_finite_policy {
-    fn from(p: NonFinitePolicy) -> Self {
-        match p {
-            NonFinitePolicy::Reject => nbhd_non_finite_policy::Reject,
-            NonFinitePolicy::Skip => nbhd_non_finite_policy::Skip,
-        }
-    }
-}
-
-/// Which neighbourhood a table holds for every row.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum nbhd_neighborhood_kind {
-    /// The k nearest points (`k` >= 1).
-    Knn = 0,
-    /// All points within `radius` (inclusive), sorted by (squared distance, index).
-    Radius = 1,
-    /// The k nearest among the points within `radius` (the epsilon-k-neighbourhood).
-    KnnRadius = 2,
-}
-c_enum!(nbhd_neighborhood_kind, [Knn, Radius, KnnRadius]);
+use crate::tree::{BuildOptions, TreeStats};
+use crate::Scalar;
 
 /// Describes `count` points of dimension `dim` in a caller's buffer, read in place (the tree
 /// copies what it needs; the buffer may be freed once nbhd_tree_build returns).
@@ -313,21 +60,15 @@ impl PointsArg {
         points: *const nbhd_points,
         arg: &'static str,
     ) -> Result<Self, FfiError> {
-        check_ptr(points, arg)?;
-        // SAFETY: `points` is non-NULL and aligned (checked above) and readable (caller); the
-        // fields are read through raw places, never as a whole `nbhd_points` value.
-        let (data, count, dim, stride) = unsafe {
-            (
-                std::ptr::addr_of!((*points).data).read(),
-                std::ptr::addr_of!((*points).count).read(),
-                std::ptr::addr_of!((*points).dim).read(),
-                std::ptr::addr_of!((*points).stride).read(),
-            )
-        };
-        // SAFETY: as above, for the enum field.
-        let scalar: nbhd_scalar_type =
-            unsafe { read_enum(std::ptr::addr_of!((*points).scalar_type)) }
-                .map_err(|v| invalid_enum::<nbhd_scalar_type>(arg, "scalar_type", v))?;
+        // SAFETY: forwarded from the caller.
+        let p = unsafe { CStruct::argument(points, arg) }?;
+        let (data, count, dim, stride) = (
+            c_field!(p.data),
+            c_field!(p.count),
+            c_field!(p.dim),
+            c_field!(p.stride),
+        );
+        let scalar = c_field!(p.scalar_type as enum)?;
         if data.is_null() {
             return Err(FfiError::Null(format!("{arg}->data")));
         }
@@ -413,27 +154,16 @@ impl From<BuildOptions> for nbhd_build_options {
 pub(crate) unsafe fn read_build_options(
     options: *const nbhd_build_options,
 ) -> Result<BuildOptions, FfiError> {
-    if options.is_null() {
-        return Ok(BuildOptions::default());
-    }
-    check_ptr(options, "options")?;
-    // SAFETY: `options` is non-NULL and aligned (checked above) and readable (caller); each
-    // field is read through a raw place, the enums as `int` and then checked.
-    unsafe {
-        let pivot = read_enum(std::ptr::addr_of!((*options).pivot))
-            .map_err(|v| invalid_option::<nbhd_pivot_policy>("pivot", v))?;
-        let median = read_enum(std::ptr::addr_of!((*options).median))
-            .map_err(|v| invalid_option::<nbhd_median_algorithm>("median", v))?;
-        let non_finite = read_enum(std::ptr::addr_of!((*options).non_finite))
-            .map_err(|v| invalid_option::<nbhd_non_finite_policy>("non_finite", v))?;
-        Ok(BuildOptions {
-            pivot: pivot.into(),
-            median: median.into(),
-            leaf_size: std::ptr::addr_of!((*options).leaf_size).read(),
-            non_finite: non_finite.into(),
-            threads: std::ptr::addr_of!((*options).threads).read(),
-        })
-    }
+    let defaults = nbhd_build_options::from(BuildOptions::default());
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    Ok(BuildOptions {
+        pivot: c_field!(o.pivot as enum)?.into(),
+        median: c_field!(o.median as enum)?.into(),
+        leaf_size: c_field!(o.leaf_size),
+        non_finite: c_field!(o.non_finite as enum)?.into(),
+        threads: c_field!(o.threads),
+    })
 }
 
 /// Shape and memory of a built tree (filled by nbhd_tree_stats).
@@ -532,20 +262,14 @@ impl NbhdArg {
     /// # Safety
     /// `spec` must be NULL or point to a readable `nbhd_neighborhood_spec`.
     pub(crate) unsafe fn read(spec: *const nbhd_neighborhood_spec) -> Result<Self, FfiError> {
-        check_ptr(spec, "spec")?;
-        // SAFETY: `spec` is non-NULL and aligned (checked above) and readable (caller); the
-        // fields are read through raw places, the enum as `int` and then checked.
-        unsafe {
-            let kind = read_enum(std::ptr::addr_of!((*spec).kind))
-                .map_err(|v| invalid_enum::<nbhd_neighborhood_kind>("spec", "kind", v))?;
-            let k = std::ptr::addr_of!((*spec).k).read();
-            let radius = std::ptr::addr_of!((*spec).radius).read();
-            Ok(match kind {
-                nbhd_neighborhood_kind::Knn => NbhdArg::Knn(k),
-                nbhd_neighborhood_kind::Radius => NbhdArg::Radius(radius),
-                nbhd_neighborhood_kind::KnnRadius => NbhdArg::KnnRadius(k, radius),
-            })
-        }
+        // SAFETY: forwarded from the caller.
+        let s = unsafe { CStruct::argument(spec, "spec") }?;
+        let (k, radius) = (c_field!(s.k), c_field!(s.radius));
+        Ok(match c_field!(s.kind as enum)? {
+            nbhd_neighborhood_kind::Knn => NbhdArg::Knn(k),
+            nbhd_neighborhood_kind::Radius => NbhdArg::Radius(radius),
+            nbhd_neighborhood_kind::KnnRadius => NbhdArg::KnnRadius(k, radius),
+        })
     }
 }
 
@@ -578,58 +302,11 @@ impl From<TableOptions> for nbhd_table_options {
 pub(crate) unsafe fn read_table_options(
     options: *const nbhd_table_options,
 ) -> Result<TableOptions, FfiError> {
-    if options.is_null() {
-        return Ok(TableOptions::default());
-    }
-    check_ptr(options, "options")?;
-    // SAFETY: `options` is non-NULL and aligned (checked above) and readable (caller); the
-    // bool is read as a byte, so any value C stored there is sound (non-zero is true).
-    unsafe {
-        Ok(TableOptions {
-            exclude_self: std::ptr::addr_of!((*options).exclude_self)
-                .cast::<u8>()
-                .read()
-                != 0,
-            threads: std::ptr::addr_of!((*options).threads).read(),
-        })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn enums_round_trip_to_the_core_and_reject_other_values() {
-        for p in PivotPolicy::ALL {
-            assert_eq!(PivotPolicy::from(nbhd_pivot_policy::from(p)), p);
-        }
-        for m in MedianAlgorithm::ALL {
-            assert_eq!(MedianAlgorithm::from(nbhd_median_algorithm::from(m)), m);
-        }
-        assert_eq!(nbhd_pivot_policy::ALL.len(), PivotPolicy::ALL.len());
-        assert_eq!(nbhd_median_algorithm::ALL.len(), MedianAlgorithm::ALL.len());
-        assert_eq!(nbhd_scalar_type::from_value(1), Some(nbhd_scalar_type::F64));
-        assert_eq!(nbhd_scalar_type::from_value(2), None);
-        assert_eq!(nbhd_pivot_policy::from_value(-1), None);
-    }
-
-    #[test]
-    fn out_of_range_enum_in_options_is_an_invalid_option() {
-        let mut raw = std::mem::MaybeUninit::new(nbhd_build_options::from(BuildOptions::default()));
-        let p = raw.as_mut_ptr();
-        // SAFETY: writes an int into the int-sized enum field, as C may; the memory is only
-        // read again through `read_build_options`, never as a Rust `nbhd_build_options`.
-        unsafe {
-            std::ptr::addr_of_mut!((*p).median)
-                .cast::<c_int>()
-                .write(99)
-        };
-        // SAFETY: `p` points to a live, aligned nbhd_build_options-sized buffer.
-        let err = unsafe { read_build_options(p) }.unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            "option median: 99 is not a value of nbhd_median_algorithm"
-        );
-    }
+    let defaults = nbhd_table_options::from(TableOptions::default());
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    Ok(TableOptions {
+        exclude_self: c_field!(o.exclude_self as bool),
+        threads: c_field!(o.threads),
+    })
 }

@@ -177,6 +177,10 @@ pub struct SmoothOptions {
     /// index, is left unmoved, and its outputs are NaN with
     /// [`crate::geometry::normals::FLAG_SKIPPED`].
     pub non_finite: NonFinitePolicy,
+    /// Worker threads: 0 uses the current rayon pool (rayon's global pool has a thread per
+    /// core), n ≥ 1 a pool of n threads ([`crate::parallel::with_threads`]); at most
+    /// [`crate::parallel::MAX_THREADS`]. The result is bit-identical for every value.
+    pub threads: usize,
 }
 
 impl Default for SmoothOptions {
@@ -196,6 +200,7 @@ impl Default for SmoothOptions {
             orientation: Orientation::Unoriented,
             outputs: true,
             non_finite: NonFinitePolicy::Reject,
+            threads: 0,
         }
     }
 }
@@ -462,8 +467,10 @@ pub fn smooth(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult>
     smooth_with_progress(points, options, &mut |_, _| true)
 }
 
-/// [`smooth`] with a progress callback, called on the calling thread with the fraction done
-/// (0 to 1) and the stage; returning `false` stops the run with [`NbhdError::Cancelled`].
+/// [`smooth`] with a progress callback, called with the fraction done (0 to 1) and the stage
+/// on the thread that runs the computation (the calling thread, or with `options.threads` ≥ 1
+/// a worker of the call's pool), never on two at once; returning `false` stops the run with
+/// [`NbhdError::Cancelled`].
 ///
 /// Errors besides the options' own: [`NbhdError::NonFinite`] (unless
 /// `options.non_finite` skips such points), [`NbhdError::EmptyInput`],
@@ -473,7 +480,7 @@ pub fn smooth(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult>
 pub fn smooth_with_progress(
     points: &[DVec3],
     options: &SmoothOptions,
-    progress: &mut dyn FnMut(f64, Stage) -> bool,
+    progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
 ) -> Result<SmoothResult> {
     smooth_from(points, Neighbors::default(), options, progress)
 }
@@ -481,8 +488,20 @@ pub fn smooth_with_progress(
 /// [`smooth_with_progress`] with the neighbourhoods from `neighbors`: a search of the call's own
 /// (k-d tree, PCA sweep or brute force: the same result from each) or a table the caller
 /// already has (see [`source`]). With `update_neighbors`, the later searches use the k-d tree
-/// unless `neighbors` names another method.
+/// unless `neighbors` names another method. Runs on the pool of `options.threads`.
 pub fn smooth_from(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &SmoothOptions,
+    progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
+) -> Result<SmoothResult> {
+    crate::parallel::with_threads(options.threads, || {
+        smooth_on_pool(points, neighbors, options, progress)
+    })?
+}
+
+/// [`smooth_from`] on the pool it runs on.
+fn smooth_on_pool(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
     options: &SmoothOptions,

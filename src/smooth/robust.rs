@@ -127,6 +127,10 @@ pub struct RobustOptions {
     /// Points with a NaN or infinite coordinate: rejected, or skipped (left unmoved, NaN
     /// outputs and normals), as [`SmoothOptions::non_finite`].
     pub non_finite: crate::NonFinitePolicy,
+    /// Worker threads: 0 uses the current rayon pool, n ≥ 1 a pool of n threads; at most
+    /// [`crate::parallel::MAX_THREADS`], as [`SmoothOptions::threads`]. The result is
+    /// bit-identical for every value. Default 0.
+    pub threads: usize,
 }
 
 impl Default for RobustOptions {
@@ -143,6 +147,7 @@ impl Default for RobustOptions {
             orientation: Orientation::Unoriented,
             outputs: true,
             non_finite: crate::NonFinitePolicy::Reject,
+            threads: 0,
         }
     }
 }
@@ -213,13 +218,14 @@ pub fn smooth_robust(points: &[DVec3], options: &RobustOptions) -> Result<Smooth
     smooth_robust_with_progress(points, options, &mut |_, _| true)
 }
 
-/// [`smooth_robust`] with a progress callback, called on the calling thread with the fraction
-/// done (0 to 1, counted against `max_iterations`) and the stage; returning `false` stops the
-/// run with [`NbhdError::Cancelled`].
+/// [`smooth_robust`] with a progress callback, called with the fraction done (0 to 1, counted
+/// against `max_iterations`) and the stage on the thread that runs the computation (the
+/// calling thread, or with `options.threads` ≥ 1 a worker of the call's pool); returning
+/// `false` stops the run with [`NbhdError::Cancelled`].
 pub fn smooth_robust_with_progress(
     points: &[DVec3],
     options: &RobustOptions,
-    progress: &mut dyn FnMut(f64, Stage) -> bool,
+    progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
 ) -> Result<SmoothResult> {
     smooth_robust_report(points, options, progress).map(|r| r.result)
 }
@@ -233,7 +239,7 @@ pub fn smooth_robust_with_progress(
 pub fn smooth_robust_report(
     points: &[DVec3],
     options: &RobustOptions,
-    progress: &mut dyn FnMut(f64, Stage) -> bool,
+    progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
 ) -> Result<RobustReport> {
     smooth_robust_from(points, Neighbors::default(), options, progress)
 }
@@ -241,8 +247,20 @@ pub fn smooth_robust_report(
 /// [`smooth_robust_report`] with the neighbourhoods from `neighbors`: a search of the call's
 /// own (k-d tree, PCA sweep or brute force: the same result from each) or a table the caller
 /// already has, of which the first `k_plane` of each row are taken (see
-/// [`super::source`]).
+/// [`super::source`]). Runs on the pool of `options.threads`.
 pub fn smooth_robust_from(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &RobustOptions,
+    progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
+) -> Result<RobustReport> {
+    crate::parallel::with_threads(options.threads, || {
+        robust_on_pool(points, neighbors, options, progress)
+    })?
+}
+
+/// [`smooth_robust_from`] on the pool it runs on.
+fn robust_on_pool(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
     options: &RobustOptions,
