@@ -2,6 +2,7 @@
 //! covariance of each neighbourhood (eq. 2.8–2.10), directional curvatures (eq. 2.20) and the
 //! Weingarten-map estimate of principal curvatures and directions (eq. 2.26–2.29, 2.25).
 
+mod covariance;
 pub mod curvature;
 mod eigen;
 pub mod neighbors;

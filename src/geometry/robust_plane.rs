@@ -1,8 +1,9 @@
 //! Weighted plane fits for the robust smoothing: Tukey's biweight of a plane distance and the
 //! normal of a weighted covariance (eq. 2.8–2.10 with a weight per point).
 
+use super::covariance::OuterSum;
 use super::eigen::{sym_eigen3_fast, sym_eigen3_smallest};
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 
 /// Tukey's biweight `(1 − (d/width)²)²` for `|d| < width`, 0 from there on (and 0 for
 /// `width ≤ 0`). A robust inlier weight: smooth, 1 on the plane, and exactly 0 for outliers.
@@ -21,33 +22,21 @@ pub fn biweight(d: f64, width: f64) -> f64 {
 pub fn weighted_plane_normal(points: &[DVec3], weight: impl Fn(DVec3) -> f64) -> Option<DVec3> {
     let origin = *points.first()?;
     let (mut ws, mut sum) = (0.0, DVec3::ZERO);
-    // the upper triangle of the symmetric sum
-    let [mut xx, mut xy, mut xz, mut yy, mut yz, mut zz] = [0.0f64; 6];
+    let mut outer = OuterSum::default();
     for &x in points {
         let w = weight(x);
         if w > 0.0 {
             let d = x - origin;
-            let wd = w * d;
             ws += w;
-            sum += wd;
-            xx += wd.x * d.x;
-            xy += wd.x * d.y;
-            xz += wd.x * d.z;
-            yy += wd.y * d.y;
-            yz += wd.y * d.z;
-            zz += wd.z * d.z;
+            sum += w * d;
+            outer.add_weighted(w, d);
         }
     }
     if !(ws > 0.0 && ws.is_finite()) {
         return None;
     }
     // Σ w (d − c)(d − c)ᵀ = Σ w d dᵀ − ws c cᵀ with c = sum/ws
-    let c = sum / ws;
-    let m = DMat3::from_cols(
-        DVec3::new(xx, xy, xz) - ws * c * c.x,
-        DVec3::new(xy, yy, yz) - ws * c * c.y,
-        DVec3::new(xz, yz, zz) - ws * c * c.z,
-    );
+    let m = outer.matrix_less(ws, sum / ws);
     // closed form, or the Jacobi iteration where the two smallest eigenvalues are close
     let normal = sym_eigen3_smallest(m).map_or_else(|| sym_eigen3_fast(m).1[0], |(_, n)| n);
     normal.is_finite().then_some(normal)

@@ -3,7 +3,7 @@
 //! O(log k). It borrows the caller's result vector, so a query allocates nothing once that
 //! vector has grown to `k`.
 
-use super::Neighbor;
+use super::{order, Neighbor};
 use crate::scalar::Scalar;
 
 /// The k best `(sq_dist, index)` pairs seen so far, within a squared radius.
@@ -62,13 +62,24 @@ impl<'a, T: Scalar> NeighborHeap<'a, T> {
     /// Offers a candidate.
     #[inline]
     pub fn push(&mut self, index: u32, sq_dist: T) {
+        let admitted = if self.items.len() < self.k {
+            sq_dist <= self.sq_radius
+        } else {
+            order::precedes((sq_dist, index), self.items[0].key())
+        };
+        if admitted {
+            self.insert(index, sq_dist);
+        }
+    }
+
+    /// Adds a candidate that precedes [`Self::worst_key`] (checked by the caller).
+    #[inline(always)]
+    pub(crate) fn insert(&mut self, index: u32, sq_dist: T) {
         let cand = Neighbor { index, sq_dist };
         if self.items.len() < self.k {
-            if sq_dist <= self.sq_radius {
-                self.items.push(cand);
-                self.sift_up(self.items.len() - 1);
-            }
-        } else if cand.precedes(&self.items[0]) {
+            self.items.push(cand);
+            self.sift_up(self.items.len() - 1);
+        } else {
             self.items[0] = cand;
             self.sift_down(0);
         }

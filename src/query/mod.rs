@@ -12,7 +12,9 @@
 
 pub mod brute;
 mod heap;
+pub(crate) mod order;
 pub mod pca_sweep;
+pub(crate) mod result_set;
 
 use crate::error::{NbhdError, Result};
 use crate::scalar::Scalar;
@@ -30,19 +32,23 @@ pub struct Neighbor<T> {
 }
 
 impl<T: Scalar> Neighbor<T> {
-    /// The `(sq_dist, index)` order every sorted result uses.
-    #[inline]
+    /// The `(sq_dist, index)` order every sorted result uses (defined in
+    /// `src/query/order.rs`).
+    #[inline(always)]
     pub fn precedes(&self, other: &Self) -> bool {
-        self.sq_dist < other.sq_dist || (self.sq_dist == other.sq_dist && self.index < other.index)
+        order::precedes(self.key(), other.key())
     }
 
     /// Total order by `(sq_dist, index)` (distances are never NaN).
     #[inline]
     pub fn cmp_by_distance(&self, other: &Self) -> std::cmp::Ordering {
-        self.sq_dist
-            .partial_cmp(&other.sq_dist)
-            .unwrap_or(std::cmp::Ordering::Equal)
-            .then(self.index.cmp(&other.index))
+        order::cmp(self.key(), other.key())
+    }
+
+    /// The `(sq_dist, index)` pair the order compares.
+    #[inline(always)]
+    pub(crate) fn key(&self) -> (T, u32) {
+        (self.sq_dist, self.index)
     }
 }
 

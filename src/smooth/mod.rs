@@ -19,12 +19,12 @@
 
 use crate::error::{NbhdError, Result};
 use crate::geometry::curvature::{
-    all_principal_curvatures, directional_curvature, offset_curvature,
-    offsets_principal_curvatures, DensityForm, PrincipalCurvatures, PrincipalFormula,
+    all_principal_curvatures, offset_curvature, offsets_principal_curvatures, DensityForm,
+    PrincipalCurvatures, PrincipalFormula,
 };
 use crate::geometry::neighbors::mean_spacing_of;
 use crate::geometry::normals::{
-    local_frames, offsets_frame, offsets_normal, orient_with_progress, LocalFrame, Orientation,
+    local_frames, offsets_frame, offsets_normal, orient_with_progress, Orientation,
 };
 use crate::table::NeighborTable;
 use crate::NonFinitePolicy;
@@ -94,19 +94,36 @@ pub enum Weighting {
 }
 
 impl Weighting {
-    /// `g` for `|κ| = abs_kappa` and threshold `lambda`.
+    /// `g_ij` of the neighbour at offset `d = x_j − p_i` of a point with unit normal `n`, for
+    /// the threshold `lambda`: 1 (eq. 2.16), `g_sharp` (eq. 2.31), or `g_cont` (eq. 2.32) in
+    /// `|κ_ij|` of eq. 2.20.
     #[inline]
-    pub fn weight(self, abs_kappa: f64, lambda: f64) -> f64 {
+    pub fn weight(self, n: DVec3, d: DVec3, lambda: f64) -> f64 {
         match self {
             Weighting::Isotropic => 1.0,
-            _ if abs_kappa < lambda => 1.0,
+            Weighting::Sharp if g_sharp(n, d, lambda) => 1.0,
             Weighting::Sharp => 0.0,
             Weighting::Continuous => {
-                let l2 = lambda * lambda;
-                l2 / (l2 + 10.0 * (abs_kappa - lambda).powi(2))
+                let abs_kappa = offset_curvature(n, d).abs();
+                if abs_kappa < lambda {
+                    1.0
+                } else {
+                    let l2 = lambda * lambda;
+                    l2 / (l2 + 10.0 * (abs_kappa - lambda).powi(2))
+                }
             }
         }
     }
+}
+
+/// `g_sharp` of eq. 2.31 as a keep/drop decision: whether the neighbour at offset
+/// `d = x_j − p_i` of a point with unit normal `n` has `|κ_ij| < λ` (eq. 2.20), evaluated
+/// without the division of eq. 2.20 as `2|⟨n, d⟩| < λ‖d‖²`; a neighbour at `d = 0` has
+/// `κ_ij = 0` (as [`offset_curvature`] says) and is kept.
+#[inline(always)]
+pub(crate) fn g_sharp(n: DVec3, d: DVec3, lambda: f64) -> bool {
+    let d2 = d.length_squared();
+    2.0 * n.dot(d).abs() < lambda * d2 || d2 == 0.0
 }
 
 /// Which points are features, smoothed anisotropically (the others isotropically).
@@ -317,11 +334,78 @@ pub struct SmoothResult {
     pub min_neighbors: usize,
 }
 
-/// Thresholds resolved to absolute values.
-#[derive(Clone, Copy)]
-struct Resolved {
-    lambda: f64,
-    feature: FeatureCriterion,
+/// The weights and criteria of a run with every threshold absolute: what the step and the
+/// per-point outputs read, from [`SmoothOptions`] or from the robust method
+/// ([`robust::RobustOptions`]), which has no options of its own for them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Criteria {
+    /// The anisotropic weights `g_ij` (eq. 2.30–2.32).
+    pub(crate) weighting: Weighting,
+    /// Curvature threshold λ of (2.31)/(2.32), absolute.
+    pub(crate) lambda: f64,
+    /// Feature criterion (2.33–2.35), thresholds absolute.
+    pub(crate) feature: FeatureCriterion,
+    /// 'Constrain interior' threshold of the covariance quotient (Section 7.3).
+    pub(crate) constrain_interior: Option<f64>,
+    /// Density form of eq. 2.27.
+    pub(crate) density: DensityForm,
+    /// How principal curvatures are read off the Weingarten estimate.
+    pub(crate) formula: PrincipalFormula,
+}
+
+impl Criteria {
+    /// The criteria of `options` for mean spacing `h`.
+    fn of(options: &SmoothOptions, h: f64) -> Self {
+        Self {
+            weighting: options.weighting,
+            lambda: options.lambda.resolve(h),
+            feature: match options.feature {
+                FeatureCriterion::PrincipalCurvature(c) => {
+                    FeatureCriterion::PrincipalCurvature(Curvature::Absolute(c.resolve(h)))
+                }
+                FeatureCriterion::DirectionalCurvature(c) => {
+                    FeatureCriterion::DirectionalCurvature(Curvature::Absolute(c.resolve(h)))
+                }
+                f => f,
+            },
+            constrain_interior: options.constrain_interior,
+            density: options.density,
+            formula: options.formula,
+        }
+    }
+
+    /// Whether the feature criterion selects a point: the edge quotient (2.33)
+    /// `min(|k1|,|k2|)/max(|k1|,|k2|) < Q` and the principal curvature (2.34)
+    /// `max(|k1|,|k2|) > K` read its principal curvatures `principal`, the directional
+    /// curvature (2.35) `|κ_ij| > D` for some neighbour reads `abs_kappas`, the `|κ_ij|` of its
+    /// neighbours (eq. 2.20), as far as it needs them. Every point is a feature for
+    /// [`FeatureCriterion::AllPoints`], and when the principal curvatures a criterion reads are
+    /// not given.
+    #[inline]
+    fn is_feature(
+        &self,
+        principal: Option<&PrincipalCurvatures>,
+        mut abs_kappas: impl Iterator<Item = f64>,
+    ) -> bool {
+        match (self.feature, principal) {
+            (FeatureCriterion::EdgeQuotient(q), Some(pc)) => pc.quotient() < q,
+            (FeatureCriterion::PrincipalCurvature(k), Some(pc)) => pc.max_abs() > k.resolve(1.0),
+            (FeatureCriterion::DirectionalCurvature(d), _) => {
+                let d = d.resolve(1.0);
+                abs_kappas.any(|k| k > d)
+            }
+            _ => true,
+        }
+    }
+
+    /// 'Constrain interior' (Section 7.3): whether a point whose covariance (eq. 2.8) has the
+    /// ascending eigenvalues `values` is an interior point of a flat surface, held fixed: its
+    /// covariance quotient `λ0/(λ0 + λ1 + λ2)` is below the threshold.
+    #[inline]
+    fn is_interior(&self, values: DVec3) -> bool {
+        self.constrain_interior
+            .is_some_and(|t| quotient_of(values) < t)
+    }
 }
 
 /// The finite points of `points` as `policy` asks: `None` when every point is finite (use
@@ -424,6 +508,19 @@ pub(crate) fn check_not_degenerate(
             epsilon,
             spacing: h,
             relative,
+        });
+    }
+    Ok(())
+}
+
+/// Refuses relative parameters (`relative`) when the mean spacing `h` cannot scale them
+/// (not > 0 or not finite: fewer than two distinct points).
+pub(crate) fn check_spacing(h: f64, relative: bool) -> Result<()> {
+    if relative && !(h > 0.0 && h.is_finite()) {
+        return Err(NbhdError::InvalidOption {
+            name: "epsilon",
+            reason: "relative parameters need a mean spacing > 0 (at least two distinct points)"
+                .into(),
         });
     }
     Ok(())
@@ -540,26 +637,9 @@ fn smooth_finite(
         Neighbors::Table(_) => Neighbors::default(),
     };
     let h = mean_spacing_of(&knn);
-    if options.needs_relative() && !(h > 0.0 && h.is_finite()) {
-        return Err(NbhdError::InvalidOption {
-            name: "epsilon",
-            reason: "relative parameters need a mean spacing > 0 (at least two distinct points)"
-                .into(),
-        });
-    }
+    check_spacing(h, options.needs_relative())?;
     let eps = options.epsilon.resolve(h);
-    let res = Resolved {
-        lambda: options.lambda.resolve(h),
-        feature: match options.feature {
-            FeatureCriterion::PrincipalCurvature(c) => {
-                FeatureCriterion::PrincipalCurvature(Curvature::Absolute(c.resolve(h)))
-            }
-            FeatureCriterion::DirectionalCurvature(c) => {
-                FeatureCriterion::DirectionalCurvature(Curvature::Absolute(c.resolve(h)))
-            }
-            f => f,
-        },
-    };
+    let criteria = Criteria::of(options, h);
     let mut table = cut_to(knn, eps);
     let relative_eps = matches!(options.epsilon, Length::Relative(_));
     check_not_degenerate(&table, None, eps, h, relative_eps)?;
@@ -581,7 +661,7 @@ fn smooth_finite(
             }
             report(base + 0.1, Stage::Geometry)?;
             report(base + 0.5, Stage::Step)?;
-            step_into(&stored, &rows, options, &res, &mut next);
+            step_into(&stored, &rows, &criteria, options.tau, &mut next);
             std::mem::swap(&mut stored, &mut next);
         }
         unpermute(&stored, &order, &mut cur);
@@ -592,7 +672,7 @@ fn smooth_finite(
             table = cut_to(knn_rows(&cur, research, options.k)?.0, eps);
         }
         let base = options.steps as f64 + 0.2;
-        let outputs = point_outputs_reporting(&cur, &table, options, &res, &mut |f| {
+        let outputs = point_outputs(&cur, &table, &criteria, options.orientation, &mut |f| {
             report(base + 0.7 * f, Stage::Outputs).is_ok()
         })?;
         if options.steps == 0 {
@@ -608,7 +688,7 @@ fn smooth_finite(
         outputs,
         spacing: h,
         epsilon: eps,
-        lambda: res.lambda,
+        lambda: criteria.lambda,
         min_neighbors,
     })
 }
@@ -719,12 +799,6 @@ fn unpermute(stored: &[DVec3], order: &[u32], out: &mut [DVec3]) {
     }
 }
 
-/// Normals and principal curvatures of one state, computed only when needed.
-struct Geometry {
-    frames: Option<Vec<LocalFrame>>,
-    principal: Option<Vec<PrincipalCurvatures>>,
-}
-
 /// One explicit Euler step `p_i ← p_i + τ Δ_i` (eq. 2.18) of every point of `cur` into `next`,
 /// with the uniform-umbrella Laplacian `Δ_i = (1/|N_i|) Σ_j g_ij (x_j − p_i)` (eq. 2.16, and
 /// eq. 2.30 with `g_ij` of eq. 2.31/2.32 in `|κ_ij|` of eq. 2.20 for feature points).
@@ -735,25 +809,14 @@ struct Geometry {
 /// stored; principal curvatures (eq. 2.25–2.29) only for the criteria (2.33)/(2.34) that read
 /// them. Every point reads `cur` only and sums in row order: bit-identical for any number of
 /// threads.
-fn step_into(
-    cur: &[DVec3],
-    rows: &Rows,
-    options: &SmoothOptions,
-    res: &Resolved,
-    next: &mut [DVec3],
-) {
-    let aniso = options.weighting != Weighting::Isotropic;
-    let needs_normal = aniso || options.constrain_interior.is_some();
+fn step_into(cur: &[DVec3], rows: &Rows, criteria: &Criteria, tau: f64, next: &mut [DVec3]) {
+    let aniso = criteria.weighting != Weighting::Isotropic;
+    let needs_normal = aniso || criteria.constrain_interior.is_some();
     let needs_principal = aniso
         && matches!(
-            res.feature,
+            criteria.feature,
             FeatureCriterion::EdgeQuotient(_) | FeatureCriterion::PrincipalCurvature(_)
         );
-    let interior = |values: DVec3| {
-        options
-            .constrain_interior
-            .is_some_and(|t| quotient_of(values) < t)
-    };
     next.par_iter_mut()
         .enumerate()
         .for_each_init(Vec::new, |buf: &mut Vec<DVec3>, (i, out)| {
@@ -767,7 +830,7 @@ fn step_into(
                 let acc = row
                     .iter()
                     .fold(DVec3::ZERO, |acc, &j| acc + (cur[j as usize] - p));
-                *out = p + options.tau * acc / row.len() as f64;
+                *out = p + tau * acc / row.len() as f64;
                 return;
             }
             // rows never hold the point itself (`exclude_self`), so no filter is needed
@@ -778,94 +841,49 @@ fn step_into(
                 *d = cur[j as usize] - p;
                 sum += *d;
             }
-            let (mut n, mut feature) = (DVec3::ZERO, aniso);
-            if needs_principal {
+            let (n, feature) = if needs_principal {
                 let frame = offsets_frame(buf);
-                if interior(frame.eigenvalues) {
+                if criteria.is_interior(frame.eigenvalues) {
                     return;
                 }
                 let pc = offsets_principal_curvatures(
                     &frame,
                     buf.iter().copied(),
-                    options.density,
-                    options.formula,
+                    criteria.density,
+                    criteria.formula,
                 );
-                feature = match res.feature {
-                    FeatureCriterion::EdgeQuotient(q) => pc.quotient() < q,
-                    FeatureCriterion::PrincipalCurvature(k) => pc.max_abs() > k.resolve(1.0),
-                    _ => true,
-                };
-                n = frame.normal;
-            } else if needs_normal {
-                let (normal, values, _) = offsets_normal(buf, sum);
-                if interior(values) {
+                (
+                    frame.normal,
+                    criteria.is_feature(Some(&pc), std::iter::empty()),
+                )
+            } else {
+                let (n, values, _) = offsets_normal(buf, sum);
+                if criteria.is_interior(values) {
                     return;
                 }
-                n = normal;
-                if let (true, FeatureCriterion::DirectionalCurvature(d)) = (aniso, res.feature) {
-                    let d = d.resolve(1.0);
-                    feature = buf.iter().any(|&x| offset_curvature(n, x).abs() > d);
-                }
-            }
+                let kappas = buf.iter().map(|&x| offset_curvature(n, x).abs());
+                (n, aniso && criteria.is_feature(None, kappas))
+            };
             let mut acc = DVec3::ZERO;
-            if feature && options.weighting == Weighting::Sharp {
-                // g_sharp (2.31) keeps a neighbour iff |κ_ij| < λ, i.e. 2|⟨n, d⟩| < λ‖d‖²
-                // (eq. 2.20 without its division; d = 0 adds nothing either way)
+            if feature && criteria.weighting == Weighting::Sharp {
                 for &d in buf.iter() {
-                    let keep = 2.0 * n.dot(d).abs() < res.lambda * d.length_squared();
-                    acc += if keep { d } else { DVec3::ZERO };
+                    acc += if g_sharp(n, d, criteria.lambda) {
+                        d
+                    } else {
+                        DVec3::ZERO
+                    };
                 }
             } else if feature {
                 for &d in buf.iter() {
-                    let g = options
-                        .weighting
-                        .weight(offset_curvature(n, d).abs(), res.lambda);
-                    acc += g * d;
+                    acc += criteria.weighting.weight(n, d, criteria.lambda) * d;
                 }
             } else {
                 for &d in buf.iter() {
                     acc += d;
                 }
             }
-            *out = p + options.tau * acc / row.len() as f64;
+            *out = p + tau * acc / row.len() as f64;
         });
-}
-
-impl Geometry {
-    fn interior(&self, i: usize, options: &SmoothOptions) -> bool {
-        match (&self.frames, options.constrain_interior) {
-            (Some(f), Some(t)) => covariance_quotient(&f[i]) < t,
-            _ => false,
-        }
-    }
-
-    fn feature(
-        &self,
-        i: usize,
-        points: &[DVec3],
-        table: &NeighborTable<f64>,
-        res: &Resolved,
-    ) -> bool {
-        let pc = self.principal.as_ref().map(|v| v[i]);
-        match (res.feature, pc) {
-            (FeatureCriterion::AllPoints, _) => true,
-            (FeatureCriterion::EdgeQuotient(q), Some(pc)) => pc.quotient() < q,
-            (FeatureCriterion::PrincipalCurvature(k), Some(pc)) => pc.max_abs() > k.resolve(1.0),
-            (FeatureCriterion::DirectionalCurvature(d), _) => {
-                let (p, d) = (points[i], d.resolve(1.0));
-                let n = self.frames.as_ref().map_or(DVec3::ZERO, |f| f[i].normal);
-                table
-                    .indices_of(i)
-                    .iter()
-                    .any(|&j| directional_curvature(p, n, points[j as usize]).abs() > d)
-            }
-            _ => true,
-        }
-    }
-}
-
-fn covariance_quotient(f: &LocalFrame) -> f64 {
-    quotient_of(f.eigenvalues)
 }
 
 /// `λ0/(λ0 + λ1 + λ2)` of ascending eigenvalues, 0 when they all vanish.
@@ -878,64 +896,55 @@ fn quotient_of(values: DVec3) -> f64 {
     }
 }
 
-fn point_outputs_with(
+/// The per-point outputs (Section 7.3) of `points` with the neighbourhoods `table`: the
+/// faithful method's and the robust method's (which replaces the normals afterwards).
+/// `progress` gets the fraction of the outputs' work done, mostly the orientation (the part
+/// that can take long, see [`orient_with_progress`]); `false` cancels.
+pub(crate) fn point_outputs(
     points: &[DVec3],
     table: &NeighborTable<f64>,
-    options: &SmoothOptions,
-    res: &Resolved,
-) -> Result<Vec<PointOutput>> {
-    point_outputs_reporting(points, table, options, res, &mut |_| true)
-}
-
-/// [`point_outputs_with`] that reports the progress of the orientation (the part that can take
-/// long, see [`orient_with_progress`]) as a fraction of the outputs' work.
-fn point_outputs_reporting(
-    points: &[DVec3],
-    table: &NeighborTable<f64>,
-    options: &SmoothOptions,
-    res: &Resolved,
+    criteria: &Criteria,
+    orientation: Orientation,
     progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<Vec<PointOutput>> {
     let mut frames = local_frames(points, table)?;
     if !progress(0.3) {
         return Err(NbhdError::Cancelled);
     }
-    orient_with_progress(points, table, &mut frames, options.orientation, &mut |f| {
+    orient_with_progress(points, table, &mut frames, orientation, &mut |f| {
         progress(0.3 + 0.5 * f)
     })?;
     let principal =
-        all_principal_curvatures(points, table, &frames, options.density, options.formula)?;
-    let geo = Geometry {
-        frames: Some(frames),
-        principal: Some(principal),
-    };
-    let (frames, principal) = (
-        geo.frames.as_deref().unwrap_or_default(),
-        geo.principal.as_deref().unwrap_or_default(),
-    );
+        all_principal_curvatures(points, table, &frames, criteria.density, criteria.formula)?;
     Ok((0..points.len())
         .into_par_iter()
         .map(|i| {
             let (f, pc, p) = (&frames[i], principal[i], points[i]);
+            let n = f.normal;
             let (mut gs, mut gk) = (0.0, 0.0);
             for &j in table.indices_of(i) {
-                let kappa = directional_curvature(p, f.normal, points[j as usize]);
-                let g = options.weighting.weight(kappa.abs(), res.lambda);
+                let d = points[j as usize] - p;
+                let kappa = offset_curvature(n, d);
+                let g = criteria.weighting.weight(n, d, criteria.lambda);
                 gs += g;
                 gk += g * kappa;
             }
+            let kappas = table
+                .indices_of(i)
+                .iter()
+                .map(|&j| offset_curvature(n, points[j as usize] - p).abs());
             PointOutput {
-                normal: f.normal,
+                normal: n,
                 mean_curvature: pc.mean(),
                 max_principal_curvature: pc.max_abs(),
-                covariance_quotient: covariance_quotient(f),
+                covariance_quotient: quotient_of(f.eigenvalues),
                 anisotropic_mean_curvature: if gs > 0.0 { gk / gs } else { 0.0 },
                 principal_curvature_quotient: pc.quotient(),
                 max_covariance: f.eigenvalues.z / f.count as f64,
                 principal: pc,
                 normal_flags: f.flags,
-                feature: geo.feature(i, points, table, res),
-                interior: geo.interior(i, options),
+                feature: criteria.is_feature(Some(&pc), kappas),
+                interior: criteria.is_interior(f.eigenvalues),
             }
         })
         .collect())

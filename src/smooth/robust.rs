@@ -76,9 +76,8 @@ mod rows;
 mod step;
 
 use super::source::{knn_rows, Neighbors, SearchMethod};
-use super::{check_points, point_outputs_with, progress_in_units, Length, Resolved};
-use super::{FeatureCriterion, Weighting};
-use super::{SmoothOptions, SmoothResult, Stage};
+use super::{check_points, check_spacing, point_outputs, progress_in_units, Criteria, Length};
+use super::{FeatureCriterion, SmoothResult, Stage, Weighting};
 use crate::error::{NbhdError, Result};
 use crate::geometry::neighbors::mean_spacing_of_nearest;
 use crate::geometry::normals::Orientation;
@@ -312,13 +311,7 @@ fn robust_finite(
     };
     let h = mean_spacing_of_nearest(nearest.into_iter());
     let relative = matches!(options.epsilon, Length::Relative(_));
-    if relative && !(h > 0.0 && h.is_finite()) {
-        return Err(NbhdError::InvalidOption {
-            name: "epsilon",
-            reason: "relative parameters need a mean spacing > 0 (at least two distinct points)"
-                .into(),
-        });
-    }
+    check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
     // the points and their neighbour rows in tree order (rows.rs); back in input order at the end
     let mut cur: Vec<DVec3> = order.iter().map(|&o| points[o as usize]).collect();
@@ -382,20 +375,23 @@ fn robust_finite(
         report(options.max_iterations as f64 + 0.2, Stage::Outputs)?;
         let narrow = rows.narrow_table(&cur, options.k, &order);
         drop(rows); // the wide rows are done with: their memory goes to the outputs
-        let so = SmoothOptions {
-            k: options.k,
-            epsilon: Length::Absolute(eps.max(f64::MIN_POSITIVE)),
+                    // the outputs of the faithful method's defaults, with the noise-adapted threshold
+        let defaults = super::SmoothOptions::default();
+        let criteria = Criteria {
             weighting: Weighting::Sharp,
-            lambda: super::Curvature::Absolute(lambda.max(f64::MIN_POSITIVE)),
-            feature: FeatureCriterion::AllPoints,
-            orientation: options.orientation,
-            ..SmoothOptions::default()
-        };
-        let res = Resolved {
             lambda: lambda.max(f64::MIN_POSITIVE),
             feature: FeatureCriterion::AllPoints,
+            constrain_interior: None,
+            density: defaults.density,
+            formula: defaults.formula,
         };
-        let mut out = point_outputs_with(&points_out, &narrow, &so, &res)?;
+        let mut out = point_outputs(
+            &points_out,
+            &narrow,
+            &criteria,
+            options.orientation,
+            &mut |_| true,
+        )?;
         for (o, &n) in out.iter_mut().zip(&normals) {
             // the robust normal, on the side the oriented covariance normal points to
             o.normal = if n.dot(o.normal) < 0.0 { -n } else { n };

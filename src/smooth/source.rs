@@ -258,7 +258,7 @@ pub fn table_in_f64<T: Scalar>(
                 }),
         );
         if T::TYPE != ScalarType::F64 {
-            row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            row.sort_by(|&a, &b| crate::query::order::cmp(a, b));
         }
         index.extend(row.iter().map(|e| e.1));
         sq_dist.extend(row.iter().map(|e| e.0));

@@ -25,7 +25,8 @@ use std::ops::Range;
 use super::node::Node;
 use super::search::TreeView;
 use crate::error::Result;
-use crate::query::{Neighbor, NeighborHeap, Neighborhood};
+use crate::query::result_set::{Key32, ResultSet, RowEntry, SortedRow, WithinRadius};
+use crate::query::{order, Neighbor, NeighborHeap, Neighborhood};
 use crate::scalar::{Scalar, ScalarType};
 use crate::table::{rows_in_chunks, NeighborTable, RowsChunk, CHUNK};
 
@@ -212,16 +213,28 @@ fn box_dist<T: Scalar, const D: usize>(
 /// full: caller indices are below it).
 #[inline(always)]
 fn admits<T: Scalar>(lb: T, min_id: u32, b: T, w: u32) -> bool {
-    lb < b || (lb == b && min_id < w)
+    order::precedes((lb, min_id), (b, w))
 }
 
-/// The rows of one group's members, as they are being collected.
-trait Rows<T: Scalar> {
+/// One result set (`src/query/result_set.rs`) per member of a group, and how their rows are
+/// written.
+trait RowSets<T: Scalar> {
+    /// The result set of one member.
+    type Set<'a>: ResultSet<T>
+    where
+        Self: 'a;
     /// Empties the first `m` rows.
     fn clear(&mut self, m: usize);
-    /// Offers a candidate to row `i` (which it must precede, see [`admits`]); returns the
-    /// row's new worst admissible key.
-    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32);
+    /// The result set of member `i`.
+    fn set(&mut self, i: usize) -> Self::Set<'_>;
+    /// Adds a candidate to member `i`'s set (it must precede the set's worst key, see
+    /// [`admits`]); returns the set's new worst key.
+    #[inline(always)]
+    fn insert(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
+        let mut set = self.set(i);
+        set.insert(index, sq_dist);
+        set.worst_key()
+    }
     /// Whether keys change as candidates arrive (k-nearest) or stay the radius (radius).
     const TIGHTENS: bool;
     /// Appends the first `m` rows, in `(sq_dist, index)` order where asked, to `out`.
@@ -233,57 +246,65 @@ trait Rows<T: Scalar> {
     }
 }
 
-/// Small `k`: each row kept sorted by insertion in a fixed slice of a flat buffer, so a
-/// candidate costs a short shift and the row needs no final sort.
-struct SortedRows<T> {
+/// Small `k`: each row a [`SortedRow`] in a fixed slice of a flat buffer, so a candidate costs
+/// a short shift and the row needs no final sort. Entries `E` are [`Neighbor`]s, or for `f32`
+/// the packed keys [`Key32`], so the insertion compares one integer instead of two floats and
+/// an index.
+struct SortedRows<T, E> {
     k: usize,
     sq_radius: T,
     len: [usize; GROUP],
-    buf: Vec<Neighbor<T>>,
+    buf: Vec<E>,
 }
 
 /// Rows up to this `k` are kept sorted by insertion; larger ones in a heap.
 const SORTED_MAX_K: usize = 64;
 
-impl<T: Scalar> Rows<T> for SortedRows<T> {
+impl<T: Scalar, E: RowEntry<T>> RowSets<T> for SortedRows<T, E> {
+    type Set<'a>
+        = SortedRow<'a, T, E>
+    where
+        Self: 'a;
     const TIGHTENS: bool = true;
     #[inline]
     fn clear(&mut self, m: usize) {
         self.len[..m].fill(0);
     }
     #[inline(always)]
-    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
+    fn set(&mut self, i: usize) -> SortedRow<'_, T, E> {
         let k = self.k;
-        let row = &mut self.buf[i * k..i * k + k];
-        let cand = Neighbor { index, sq_dist };
-        let len = &mut self.len[i];
-        let mut j = if *len < k {
-            *len += 1;
-            *len - 1
-        } else {
-            k - 1
-        };
-        while j > 0 && cand.precedes(&row[j - 1]) {
-            row[j] = row[j - 1];
-            j -= 1;
-        }
-        row[j] = cand;
-        if *len < k {
-            (self.sq_radius, u32::MAX)
-        } else {
-            (row[k - 1].sq_dist, row[k - 1].index)
+        SortedRow {
+            row: &mut self.buf[i * k..i * k + k],
+            len: &mut self.len[i],
+            sq_radius: self.sq_radius,
         }
     }
     fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
         for i in 0..m {
-            write_row(&self.buf[i * self.k..i * self.k + self.len[i]], out);
+            let row = &self.buf[i * self.k..i * self.k + self.len[i]];
+            write_row(row.len(), row.iter().map(|&e| e.pair()), out);
         }
     }
 }
 
-/// Appends one row to the chunk's buffers.
+/// Appends one row of `len` pairs `(sq_dist, index)` to the chunk's buffers.
 #[inline]
-fn write_row<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<T>) {
+fn write_row<T: Scalar>(len: usize, row: impl Iterator<Item = (T, u32)>, out: &mut RowsChunk<T>) {
+    if !out.reserve_row(len) {
+        return;
+    }
+    out.0.push(len);
+    let at = out.1.len();
+    out.1.resize(at + len, 0);
+    out.2.resize(at + len, T::ZERO);
+    for ((id, d), pair) in out.1[at..].iter_mut().zip(&mut out.2[at..]).zip(row) {
+        (*d, *id) = pair;
+    }
+}
+
+/// Appends one row of neighbours to the chunk's buffers ([`write_row`] for a slice).
+#[inline]
+fn write_neighbors<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<T>) {
     if !out.reserve_row(row.len()) {
         return;
     }
@@ -297,105 +318,25 @@ fn write_row<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<T>) {
     }
 }
 
-/// Small `k` in f32: as [`SortedRows`], with each neighbour held as the one integer key
-/// `(bits(sq_dist) << 32) | index`, which orders as `(sq_dist, index)` (see [`sort_row`]), so
-/// the insertion compares one integer instead of two floats and an index.
-struct SortedKeys<T> {
-    k: usize,
-    sq_radius: T,
-    len: [usize; GROUP],
-    buf: Vec<u64>,
-}
-
-impl<T: Scalar> SortedKeys<T> {
-    #[inline(always)]
-    fn key(index: u32, sq_dist: T) -> u64 {
-        // Exact: `T` is f32 here, and an f32 survives the round trip through f64.
-        (u64::from((sq_dist.to_f64() as f32).to_bits()) << 32) | u64::from(index)
-    }
-    #[inline(always)]
-    fn unkey(key: u64) -> (T, u32) {
-        (
-            T::from_f64(f64::from(f32::from_bits((key >> 32) as u32))),
-            key as u32,
-        )
-    }
-}
-
-impl<T: Scalar> Rows<T> for SortedKeys<T> {
-    const TIGHTENS: bool = true;
-    #[inline]
-    fn clear(&mut self, m: usize) {
-        self.len[..m].fill(0);
-    }
-    #[inline(always)]
-    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
-        let k = self.k;
-        let row = &mut self.buf[i * k..i * k + k];
-        let cand = Self::key(index, sq_dist);
-        let len = &mut self.len[i];
-        let mut j = if *len < k {
-            *len += 1;
-            *len - 1
-        } else {
-            k - 1
-        };
-        while j > 0 && cand < row[j - 1] {
-            row[j] = row[j - 1];
-            j -= 1;
-        }
-        row[j] = cand;
-        if *len < k {
-            (self.sq_radius, u32::MAX)
-        } else {
-            Self::unkey(row[k - 1])
-        }
-    }
-    fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
-        for i in 0..m {
-            let row = &self.buf[i * self.k..i * self.k + self.len[i]];
-            if !out.reserve_row(row.len()) {
-                return;
-            }
-            out.0.push(row.len());
-            let at = out.1.len();
-            out.1.resize(at + row.len(), 0);
-            out.2.resize(at + row.len(), T::ZERO);
-            for ((id, d), &key) in out.1[at..].iter_mut().zip(&mut out.2[at..]).zip(row) {
-                (*d, *id) = Self::unkey(key);
-            }
-        }
-    }
-}
-
-/// Sorts a row by `(sq_dist, index)` through integer keys: squared distances are never
-/// negative (nor −0), and the bits of non-negative IEEE floats order as the values, so
-/// `(bits(f64::from(sq_dist)) << 32) | index` orders as `(sq_dist, index)`; every key is
-/// distinct, so an unstable sort gives the one order.
+/// Sorts a row by `(sq_dist, index)` through the packed keys of `src/query/order.rs`; every key
+/// is distinct, so an unstable sort gives the one order.
 fn sort_row<T: Scalar>(row: &mut [Neighbor<T>], keys: &mut Keys) {
     if T::TYPE == ScalarType::F32 {
         // f32 bits fit in 32: one u64 key (the f64 round trip of an f32 is exact).
         let keys = &mut keys.narrow;
         keys.clear();
-        keys.extend(row.iter().map(|nb| {
-            (u64::from((nb.sq_dist.to_f64() as f32).to_bits()) << 32) | u64::from(nb.index)
-        }));
+        keys.extend(row.iter().map(|nb| order::key32(nb.sq_dist, nb.index)));
         keys.sort_unstable();
         for (nb, &key) in row.iter_mut().zip(keys.iter()) {
-            nb.index = key as u32;
-            nb.sq_dist = T::from_f64(f64::from(f32::from_bits((key >> 32) as u32)));
+            (nb.sq_dist, nb.index) = order::unkey32(key);
         }
     } else {
         let keys = &mut keys.wide;
         keys.clear();
-        keys.extend(
-            row.iter()
-                .map(|nb| (u128::from(nb.sq_dist.to_f64().to_bits()) << 32) | u128::from(nb.index)),
-        );
+        keys.extend(row.iter().map(|nb| order::key64(nb.sq_dist, nb.index)));
         keys.sort_unstable();
         for (nb, &key) in row.iter_mut().zip(keys.iter()) {
-            nb.index = key as u32;
-            nb.sq_dist = T::from_f64(f64::from_bits((key >> 32) as u64));
+            (nb.sq_dist, nb.index) = order::unkey64(key);
         }
     }
 }
@@ -415,27 +356,29 @@ struct HeapRows<T> {
     keys: Keys,
 }
 
-impl<T: Scalar> Rows<T> for HeapRows<T> {
+impl<T: Scalar> RowSets<T> for HeapRows<T> {
+    type Set<'a>
+        = NeighborHeap<'a, T>
+    where
+        Self: 'a;
     const TIGHTENS: bool = true;
     #[inline]
     fn clear(&mut self, m: usize) {
         self.rows[..m].iter_mut().for_each(Vec::clear);
     }
     #[inline]
-    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
-        let mut h = NeighborHeap::resume(&mut self.rows[i], self.k, self.sq_radius);
-        h.push(index, sq_dist);
-        h.worst_key()
+    fn set(&mut self, i: usize) -> NeighborHeap<'_, T> {
+        NeighborHeap::resume(&mut self.rows[i], self.k, self.sq_radius)
     }
     fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
         for r in &mut self.rows[..m] {
             sort_row(r, &mut self.keys);
-            write_row(r, out);
+            write_neighbors(r, out);
         }
     }
 }
 
-/// Radius: every candidate within the radius, sorted at the end if asked.
+/// Radius: every candidate within the radius ([`WithinRadius`]), sorted at the end if asked.
 struct RadiusRows<T> {
     sq_radius: T,
     sorted: bool,
@@ -443,23 +386,29 @@ struct RadiusRows<T> {
     keys: Keys,
 }
 
-impl<T: Scalar> Rows<T> for RadiusRows<T> {
+impl<T: Scalar> RowSets<T> for RadiusRows<T> {
+    type Set<'a>
+        = WithinRadius<'a, T>
+    where
+        Self: 'a;
     const TIGHTENS: bool = false;
     #[inline]
     fn clear(&mut self, m: usize) {
         self.rows[..m].iter_mut().for_each(Vec::clear);
     }
     #[inline(always)]
-    fn offer(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
-        self.rows[i].push(Neighbor { index, sq_dist });
-        (self.sq_radius, u32::MAX)
+    fn set(&mut self, i: usize) -> WithinRadius<'_, T> {
+        WithinRadius {
+            out: &mut self.rows[i],
+            sq_radius: self.sq_radius,
+        }
     }
     fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
         for r in &mut self.rows[..m] {
             if self.sorted {
                 sort_row(r, &mut self.keys);
             }
-            write_row(r, out);
+            write_neighbors(r, out);
         }
     }
     fn write_copies(&mut self, self_ids: &[u32], out: &mut RowsChunk<T>) {
@@ -538,11 +487,11 @@ pub(crate) fn table<T: Scalar, const D: usize>(
                     }
                 });
             } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
-                let mut rows = SortedKeys {
+                let mut rows = SortedRows {
                     k,
                     sq_radius,
                     len: [0; GROUP],
-                    buf: vec![0; GROUP * k],
+                    buf: vec![Key32::default(); GROUP * k],
                 };
                 run(c, &mut |s, g| {
                     // a chunk whose rows did not fit takes no more (see `RowsChunk`)
@@ -594,7 +543,7 @@ struct Search<'a, T, const D: usize> {
 impl<T: Scalar, const D: usize> Search<'_, T, D> {
     /// Answers the group of tree positions `g` and appends its rows, in position order, to
     /// `out`.
-    fn group<R: Rows<T>>(
+    fn group<R: RowSets<T>>(
         &self,
         g: Range<usize>,
         rows: &mut R,
@@ -676,7 +625,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
                                 hits &= hits - 1;
                                 let id = tree.ids[start + p];
                                 if admits(d[p], id, bound[i], worst[i]) && id != self_id[i] {
-                                    (bound[i], worst[i]) = rows.offer(i, id, d[p]);
+                                    (bound[i], worst[i]) = rows.insert(i, id, d[p]);
                                 }
                             }
                             start += BLOCK;
@@ -685,7 +634,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
                     if R::TIGHTENS {
                         (gb, gw) = (bound[0], worst[0]);
                         for i in 1..m {
-                            if gb < bound[i] || (gb == bound[i] && gw < worst[i]) {
+                            if order::precedes((gb, gw), (bound[i], worst[i])) {
                                 (gb, gw) = (bound[i], worst[i]);
                             }
                         }

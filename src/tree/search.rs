@@ -7,46 +7,10 @@
 //! distance with a smaller index is still found: ties are resolved by index.
 
 use super::node::Node;
-use crate::query::NeighborHeap;
+use crate::query::result_set::ResultSet;
+// the radius result set, where the tree's search driver (`src/tree/mod.rs`) takes it from
+pub(crate) use crate::query::result_set::WithinRadius;
 use crate::scalar::Scalar;
-
-/// Where candidates go: the k-best heap, or all within a radius.
-pub(crate) trait Collector<T> {
-    /// Largest squared distance still of interest.
-    fn bound(&self) -> T;
-    /// Offers a candidate.
-    fn offer(&mut self, index: u32, sq_dist: T);
-}
-
-impl<T: Scalar> Collector<T> for NeighborHeap<'_, T> {
-    #[inline]
-    fn bound(&self) -> T {
-        NeighborHeap::bound(self)
-    }
-    #[inline]
-    fn offer(&mut self, index: u32, sq_dist: T) {
-        self.push(index, sq_dist)
-    }
-}
-
-/// Every point with `sq_dist ≤ sq_radius`, in visiting order.
-pub(crate) struct WithinRadius<'a, T> {
-    pub out: &'a mut Vec<crate::query::Neighbor<T>>,
-    pub sq_radius: T,
-}
-
-impl<T: Scalar> Collector<T> for WithinRadius<'_, T> {
-    #[inline]
-    fn bound(&self) -> T {
-        self.sq_radius
-    }
-    #[inline]
-    fn offer(&mut self, index: u32, sq_dist: T) {
-        if sq_dist <= self.sq_radius {
-            self.out.push(crate::query::Neighbor { index, sq_dist });
-        }
-    }
-}
 
 /// The tree's arrays a search reads.
 pub(crate) struct TreeView<'a, T> {
@@ -109,8 +73,9 @@ fn sq_dist_at<T: Scalar, const D: usize>(q: &[T], coords: &[T], i: usize, dim: u
     s
 }
 
-/// Runs the search, offering every point of every visited leaf except `exclude`.
-pub(crate) fn search<T: Scalar, C: Collector<T>>(
+/// Runs the search, offering every point of every visited leaf except `exclude` to the result
+/// set `out` (`src/query/result_set.rs`), which decides what it keeps.
+pub(crate) fn search<T: Scalar, C: ResultSet<T>>(
     tree: &TreeView<'_, T>,
     q: &[T],
     exclude: Option<u32>,
@@ -124,7 +89,7 @@ pub(crate) fn search<T: Scalar, C: Collector<T>>(
     }
 }
 
-fn search_d<T: Scalar, C: Collector<T>, const D: usize>(
+fn search_d<T: Scalar, C: ResultSet<T>, const D: usize>(
     tree: &TreeView<'_, T>,
     q: &[T],
     exclude: Option<u32>,

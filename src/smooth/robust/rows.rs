@@ -201,7 +201,7 @@ impl Rows {
 /// (points move a fraction of a spacing per iteration), so this is about one pass.
 fn sort_row(index: &mut [u32], sq_dist: &mut [f64], order: &[u32]) {
     let before = |a: (f64, u32), b: (f64, u32)| {
-        a.0 < b.0 || (a.0 == b.0 && order[a.1 as usize] < order[b.1 as usize])
+        crate::query::order::precedes((a.0, order[a.1 as usize]), (b.0, order[b.1 as usize]))
     };
     for i in 1..index.len() {
         let item = (sq_dist[i], index[i]);

@@ -1,0 +1,251 @@
+//! The result-set policy every search fills (as nanoflann's `KNNResultSet` and
+//! `RadiusResultSet` serve one search): a set is offered candidates `(index, sq_dist)` and
+//! says, through its worst admissible key, which candidates can still enter. The searches —
+//! the single-query descent (`src/tree/search.rs`), the grouped all-point search
+//! (`src/tree/group_search.rs`) and the baselines — only offer; what is kept is decided here:
+//!
+//! - [`NeighborHeap`] (`src/query/heap.rs`): the k nearest within a radius, any `k`;
+//! - [`SortedRow`]: the same for small `k`, kept sorted by insertion;
+//! - [`WithinRadius`]: every point within a radius.
+//!
+//! All of them order by `(sq_dist, index)` (`src/query/order.rs`).
+
+use super::{order, Neighbor, NeighborHeap};
+use crate::scalar::Scalar;
+
+/// Where a search puts its candidates.
+pub(crate) trait ResultSet<T: Scalar> {
+    /// The worst key `(sq_dist, index)` a candidate must precede to be accepted:
+    /// `(sq_radius, u32::MAX)` while the set is not full (caller indices are below `u32::MAX`),
+    /// then its worst member.
+    fn worst_key(&self) -> (T, u32);
+
+    /// The largest squared distance still of interest (a candidate at exactly this distance
+    /// may still enter by its index).
+    #[inline(always)]
+    fn bound(&self) -> T {
+        self.worst_key().0
+    }
+
+    /// Adds a candidate that precedes [`Self::worst_key`] (the caller has checked it).
+    fn insert(&mut self, index: u32, sq_dist: T);
+
+    /// Offers a candidate: it enters if it precedes [`Self::worst_key`] — while the set is not
+    /// full, if it lies within the radius (inclusive).
+    #[inline(always)]
+    fn offer(&mut self, index: u32, sq_dist: T) {
+        if order::precedes((sq_dist, index), self.worst_key()) {
+            self.insert(index, sq_dist);
+        }
+    }
+}
+
+impl<T: Scalar> ResultSet<T> for NeighborHeap<'_, T> {
+    #[inline(always)]
+    fn worst_key(&self) -> (T, u32) {
+        NeighborHeap::worst_key(self)
+    }
+    #[inline(always)]
+    fn bound(&self) -> T {
+        NeighborHeap::bound(self)
+    }
+    #[inline(always)]
+    fn insert(&mut self, index: u32, sq_dist: T) {
+        NeighborHeap::insert(self, index, sq_dist)
+    }
+    #[inline(always)]
+    fn offer(&mut self, index: u32, sq_dist: T) {
+        self.push(index, sq_dist)
+    }
+}
+
+/// Every point with `sq_dist ≤ sq_radius`, in the order offered.
+pub(crate) struct WithinRadius<'a, T> {
+    /// The result (appended to).
+    pub out: &'a mut Vec<Neighbor<T>>,
+    /// The squared radius.
+    pub sq_radius: T,
+}
+
+impl<T: Scalar> ResultSet<T> for WithinRadius<'_, T> {
+    #[inline(always)]
+    fn worst_key(&self) -> (T, u32) {
+        (self.sq_radius, u32::MAX)
+    }
+    #[inline(always)]
+    fn bound(&self) -> T {
+        self.sq_radius
+    }
+    #[inline(always)]
+    fn insert(&mut self, index: u32, sq_dist: T) {
+        self.out.push(Neighbor { index, sq_dist });
+    }
+    #[inline(always)]
+    fn offer(&mut self, index: u32, sq_dist: T) {
+        if sq_dist <= self.sq_radius {
+            self.insert(index, sq_dist);
+        }
+    }
+}
+
+/// How a [`SortedRow`] holds a neighbour: as a [`Neighbor`], or packed into one integer key
+/// (`src/query/order.rs`) so that the insertion compares one integer.
+pub(crate) trait RowEntry<T>: Copy {
+    /// The entry of a candidate.
+    fn of(index: u32, sq_dist: T) -> Self;
+    /// Its `(sq_dist, index)`.
+    fn pair(self) -> (T, u32);
+    /// Whether it comes before `other` in `(sq_dist, index)` order.
+    fn precedes(self, other: Self) -> bool;
+}
+
+impl<T: Scalar> RowEntry<T> for Neighbor<T> {
+    #[inline(always)]
+    fn of(index: u32, sq_dist: T) -> Self {
+        Neighbor { index, sq_dist }
+    }
+    #[inline(always)]
+    fn pair(self) -> (T, u32) {
+        self.key()
+    }
+    #[inline(always)]
+    fn precedes(self, other: Self) -> bool {
+        Neighbor::precedes(&self, &other)
+    }
+}
+
+/// An `f32` neighbour as its packed `u64` key ([`order::key32`]); only for `T = f32`.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Key32(u64);
+
+impl<T: Scalar> RowEntry<T> for Key32 {
+    #[inline(always)]
+    fn of(index: u32, sq_dist: T) -> Self {
+        Key32(order::key32(sq_dist, index))
+    }
+    #[inline(always)]
+    fn pair(self) -> (T, u32) {
+        order::unkey32(self.0)
+    }
+    #[inline(always)]
+    fn precedes(self, other: Self) -> bool {
+        self.0 < other.0
+    }
+}
+
+/// The k nearest within a radius kept sorted by insertion in a borrowed slice of length `k`
+/// (its first `len` entries hold the set): a candidate costs a short shift and the result
+/// needs no final sort. For small `k`.
+pub(crate) struct SortedRow<'a, T, E> {
+    /// Storage of `k` entries.
+    pub row: &'a mut [E],
+    /// How many are held.
+    pub len: &'a mut usize,
+    /// The squared radius.
+    pub sq_radius: T,
+}
+
+impl<T: Scalar, E: RowEntry<T>> ResultSet<T> for SortedRow<'_, T, E> {
+    #[inline(always)]
+    fn worst_key(&self) -> (T, u32) {
+        let k = self.row.len();
+        if *self.len < k {
+            (self.sq_radius, u32::MAX)
+        } else {
+            self.row[k - 1].pair()
+        }
+    }
+
+    #[inline(always)]
+    fn insert(&mut self, index: u32, sq_dist: T) {
+        let k = self.row.len();
+        let cand = E::of(index, sq_dist);
+        let mut j = if *self.len < k {
+            *self.len += 1;
+            *self.len - 1
+        } else {
+            k - 1
+        };
+        while j > 0 && cand.precedes(self.row[j - 1]) {
+            self.row[j] = self.row[j - 1];
+            j -= 1;
+        }
+        self.row[j] = cand;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Offers the same candidates to every k-nearest set and checks they keep the same.
+    #[test]
+    fn the_k_nearest_sets_agree() {
+        let cands: Vec<(u32, f32)> = (0..200u32)
+            .map(|i| {
+                (
+                    i.wrapping_mul(2_654_435_761) % 1000,
+                    ((i * 37) % 23) as f32 * 0.5,
+                )
+            })
+            .collect();
+        for k in [1usize, 3, 8, 50, 300] {
+            for r2 in [f32::INFINITY, 4.0, 0.0] {
+                let mut heap_out = Vec::new();
+                let mut heap = NeighborHeap::new(&mut heap_out, k, r2);
+                let mut nb = vec![Neighbor::<f32>::default(); k];
+                let mut keys = vec![Key32::default(); k];
+                let (mut nb_len, mut key_len) = (0, 0);
+                let mut sorted = SortedRow {
+                    row: &mut nb[..],
+                    len: &mut nb_len,
+                    sq_radius: r2,
+                };
+                let mut packed = SortedRow {
+                    row: &mut keys[..],
+                    len: &mut key_len,
+                    sq_radius: r2,
+                };
+                for &(i, d) in &cands {
+                    heap.offer(i, d);
+                    sorted.offer(i, d);
+                    packed.offer(i, d);
+                    assert_eq!(heap.worst_key(), sorted.worst_key());
+                    assert_eq!(heap.worst_key(), packed.worst_key());
+                }
+                heap.finish();
+                let want: Vec<(f32, u32)> = heap_out.iter().map(|n| n.key()).collect();
+                let got: Vec<(f32, u32)> = nb[..nb_len].iter().map(|n| n.key()).collect();
+                let got_packed: Vec<(f32, u32)> =
+                    keys[..key_len].iter().map(|&e| e.pair()).collect();
+                assert_eq!(got, want, "k {k} r2 {r2}");
+                assert_eq!(got_packed, want, "k {k} r2 {r2}");
+                // a brute-force reference: sort all within the radius, keep k
+                let mut all: Vec<(f32, u32)> = cands
+                    .iter()
+                    .filter(|c| c.1 <= r2)
+                    .map(|&(i, d)| (d, i))
+                    .collect();
+                all.sort_by(|&a, &b| order::cmp(a, b));
+                all.dedup();
+                all.truncate(k);
+                assert_eq!(want, all);
+            }
+        }
+    }
+
+    #[test]
+    fn within_radius_keeps_everything_inside() {
+        let mut out = Vec::new();
+        let mut set = WithinRadius {
+            out: &mut out,
+            sq_radius: 1.0f64,
+        };
+        for (i, d) in [(0u32, 1.0), (1, 1.5), (2, 0.0), (3, 1.0)] {
+            set.offer(i, d);
+        }
+        assert_eq!(set.worst_key(), (1.0, u32::MAX));
+        let got: Vec<u32> = out.iter().map(|n| n.index).collect();
+        assert_eq!(got, vec![0, 2, 3]);
+    }
+}
