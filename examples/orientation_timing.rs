@@ -1,5 +1,5 @@
-//! The propagated orientation against the normals it orients, side by side in one run (issue 13
-//! item 10: propagation may take no more time than the normals themselves).
+//! The propagated orientation against the normals it orients, side by side in one run (the goal:
+//! propagation may take no more time than the normals themselves).
 //!
 //! `cargo run --release --example orientation_timing -- [POINTS | CLOUD] [options]`
 //!

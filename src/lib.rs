@@ -9,6 +9,7 @@
 //! (`‖x − q‖ ≤ ε`); distances come back squared (`sq_dist`); results are ordered by
 //! `(sq_dist, index)`, identical for any number of threads.
 #![warn(missing_docs)]
+#![warn(clippy::undocumented_unsafe_blocks)]
 
 pub mod cloud;
 pub mod error;

@@ -16,7 +16,10 @@
 //!   error (one rule for which status, in [`fields`]), never undefined behaviour;
 //! - the C options structs carry nothing the core's options do not: each reader converts
 //!   field by field into the core's options (threads included) and calls the core;
-//! - `unsafe` appears only in this module, each block with a `// SAFETY:` comment.
+//! - `unsafe` is this module's tool for reading and writing C memory, each block with a
+//!   `// SAFETY:` comment; elsewhere the crate has it only in a measured hot loop
+//!   (`tree/group_search.rs`), the byte view of a point buffer (`points.rs`) and the memory
+//!   query of `table.rs`. `clippy::undocumented_unsafe_blocks` holds crate-wide (`lib.rs`).
 #![allow(non_camel_case_types)]
 #![deny(unsafe_op_in_unsafe_fn)]
 #![warn(clippy::undocumented_unsafe_blocks)]

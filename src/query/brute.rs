@@ -2,9 +2,10 @@
 //! the oracle of the tests.
 
 use super::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
-use crate::cloud::{resolve_query, Cloud, NonFinitePolicy};
+use crate::cloud::{Cloud, NonFinitePolicy};
 use crate::error::Result;
 use crate::points::PointsView;
+use crate::query::resolve_query;
 use crate::scalar::Scalar;
 
 /// Answers every query by scanning all points.

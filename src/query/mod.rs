@@ -192,3 +192,47 @@ pub trait NeighborSearch<T: Scalar>: Sync {
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()>;
 }
+/// Resolves a query to its coordinates and the caller index to leave out: the shared first
+/// step of every searcher. `slot_of` maps caller indices to slots of `cloud`.
+pub(crate) fn resolve_query<'q, T: Scalar>(
+    query: Query<'q, T>,
+    dim: usize,
+    source_len: usize,
+    slot_of: &[u32],
+    point_of_slot: impl Fn(usize) -> &'q [T],
+) -> Result<(&'q [T], Option<u32>)> {
+    match query {
+        Query::Point { coords, exclude } => {
+            if coords.len() != dim {
+                return Err(NbhdError::DimensionMismatch {
+                    expected: dim,
+                    got: coords.len(),
+                });
+            }
+            if let Some(j) = coords.iter().position(|c| !c.is_finite()) {
+                return Err(NbhdError::NonFiniteQuery {
+                    query: None,
+                    coordinate: j,
+                });
+            }
+            Ok((coords, exclude))
+        }
+        Query::Stored {
+            index,
+            exclude_self,
+        } => {
+            let i = index as usize;
+            if i >= source_len {
+                return Err(NbhdError::IndexOutOfRange {
+                    index: i,
+                    count: source_len,
+                });
+            }
+            let slot = slot_of[i];
+            if slot == u32::MAX {
+                return Err(NbhdError::SkippedPoint { index: i });
+            }
+            Ok((point_of_slot(slot as usize), exclude_self.then_some(index)))
+        }
+    }
+}

@@ -18,10 +18,11 @@
 
 use super::brute::sq_dist;
 use super::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
-use crate::cloud::{resolve_query, Cloud, NonFinitePolicy};
+use crate::cloud::{Cloud, NonFinitePolicy};
 use crate::error::Result;
 use crate::linalg::sym_eigen;
 use crate::points::PointsView;
+use crate::query::resolve_query;
 use crate::scalar::{Scalar, ScalarType};
 
 /// Coordinates at least this large (in absolute value) switch pruning off: projections and

@@ -3,7 +3,7 @@
 //!
 //! Points of one leaf have nearly the same neighbourhood (the "leaf-to-leaf" sharing of
 //! dual-tree search, Gray & Moore, *'N-Body' Problems in Statistical Learning*, NIPS 2000, and
-//! of bucketed all-kNN, Vaidya 1989; repository note `performance.md`). So instead of one
+//! of bucketed all-kNN, Vaidya 1989). So instead of one
 //! descent per query (thesis Algorithm 9), the tree is descended once per group: a cell is
 //! visited if its tight bounding box may hold a point of some member's answer, i.e. if its
 //! squared distance to the group's bounding box does not exceed the largest current bound of

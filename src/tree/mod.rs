@@ -24,8 +24,8 @@ mod split;
 
 use std::sync::OnceLock;
 
-use crate::cloud::resolve_query;
 use crate::error::Result;
+use crate::query::resolve_query;
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
 use node::Node;

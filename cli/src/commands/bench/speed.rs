@@ -1,5 +1,5 @@
-//! `nbhd bench speed`: nbhd's all-point tables side by side with the Rust peers in one run
-//! (issue 3): kiddo's immutable tree (f32 and f64) and brute force, on generated sets and on
+//! `nbhd bench speed`: nbhd's all-point tables side by side with the Rust peers in one run:
+//! kiddo's immutable tree (f32 and f64) and brute force, on generated sets and on
 //! point-cloud files, for the build, kNN (k = 10, 30), radius (about 20 neighbours) and ε-k
 //! (k = 16 within that radius), on each requested number of threads.
 //!
@@ -35,7 +35,7 @@ pub const QUICK_BRUTE_MAX_POINTS: usize = 20_000;
 /// Sets of at most this many points are "small" (the only ones `--quick` runs).
 pub const QUICK_MAX_POINTS: usize = 150_000;
 
-/// Side-by-side speed of nbhd, kiddo's immutable tree and brute force (issue 3)
+/// Side-by-side speed of nbhd, kiddo's immutable tree and brute force
 ///
 /// For each set, operation, thread count and scalar type: nbhd's median time, kiddo's
 /// (ImmutableKdTree, queries in chunks on a pool of that many threads, the table written like
