@@ -16,9 +16,6 @@ pub(crate) struct OuterSum {
     zz: f64,
 }
 
-// `add` and `matrix` are for `covariance_about` in `src/geometry/normals.rs` (owned by another
-// change of the same round), whose body becomes `add(-bary)`, `add(d - bary)`, `matrix()`.
-#[allow(dead_code)]
 impl OuterSum {
     /// Adds `d dᵀ`.
     #[inline(always)]

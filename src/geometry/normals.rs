@@ -2,6 +2,7 @@
 //! matrix of `N_i ∪ {p_i}` about its barycentre; the normal is the unit eigenvector of its
 //! smallest eigenvalue, the two other eigenvectors span the tangent plane.
 
+use super::covariance::OuterSum;
 use crate::error::{NbhdError, Result};
 use crate::table::NeighborTable;
 use glam::{DMat3, DVec3};
@@ -129,26 +130,12 @@ fn covariance(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> DMa
 /// The covariance of eq. 2.8 about the barycentre offset `bary`.
 #[inline]
 fn covariance_about(offsets: impl Iterator<Item = DVec3>, bary: DVec3) -> DMat3 {
-    // the upper triangle only; every entry is the same sum of the same products as in the
-    // full matrix
-    let [mut xx, mut xy, mut xz, mut yy, mut yz, mut zz] = [0.0f64; 6];
-    let mut add = |d: DVec3| {
-        xx += d.x * d.x;
-        xy += d.x * d.y;
-        xz += d.x * d.z;
-        yy += d.y * d.y;
-        yz += d.y * d.z;
-        zz += d.z * d.z;
-    };
-    add(-bary);
+    let mut sum = OuterSum::default();
+    sum.add(-bary);
     for d in offsets {
-        add(d - bary);
+        sum.add(d - bary);
     }
-    DMat3::from_cols(
-        DVec3::new(xx, xy, xz),
-        DVec3::new(xy, yy, yz),
-        DVec3::new(xz, yz, zz),
-    )
+    sum.matrix()
 }
 
 /// Eigenvalues clamped at 0 (round-off can leave tiny negatives) and the degeneracy flags.

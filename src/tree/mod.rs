@@ -26,11 +26,12 @@ use std::sync::OnceLock;
 
 use crate::error::Result;
 use crate::query::resolve_query;
+use crate::query::result_set::WithinRadius;
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
 use node::Node;
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
-use search::{TreeView, WithinRadius};
+use search::TreeView;
 
 /// Shape and memory of a built tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

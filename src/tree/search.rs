@@ -8,8 +8,6 @@
 
 use super::node::Node;
 use crate::query::result_set::ResultSet;
-// the radius result set, where the tree's search driver (`src/tree/mod.rs`) takes it from
-pub(crate) use crate::query::result_set::WithinRadius;
 use crate::scalar::Scalar;
 
 /// The tree's arrays a search reads.
