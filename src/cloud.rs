@@ -71,11 +71,6 @@ impl<T: Scalar> Cloud<T> {
         self.ids.len()
     }
 
-    /// `true` if no point is held (never, after a successful build).
-    pub fn is_empty(&self) -> bool {
-        self.ids.is_empty()
-    }
-
     /// Coordinates of the point in slot `slot`.
     #[inline]
     pub fn point(&self, slot: usize) -> &[T] {

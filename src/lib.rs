@@ -11,18 +11,18 @@
 #![warn(missing_docs)]
 #![warn(clippy::undocumented_unsafe_blocks)]
 
-pub mod cloud;
+pub(crate) mod cloud;
 pub mod error;
 pub mod ffi;
 pub mod geometry;
 #[cfg(feature = "io")]
 pub mod io;
-pub mod linalg;
-pub mod parallel;
+pub(crate) mod linalg;
+pub(crate) mod parallel;
 pub mod points;
 pub mod query;
 pub mod scalar;
-pub mod select;
+pub(crate) mod select;
 pub mod shapes;
 pub mod smooth;
 pub mod table;
@@ -30,6 +30,7 @@ pub mod tree;
 
 pub use cloud::NonFinitePolicy;
 pub use error::{NbhdError, Result};
+pub use parallel::MAX_THREADS;
 pub use points::{PointsView, MAX_POINTS};
 pub use query::brute::BruteForce;
 pub use query::pca_sweep::PcaSweep;

@@ -2,6 +2,7 @@
 //! and rank-deficient matrices (collinear or coplanar neighbourhoods), which is what the
 //! covariance matrices of eq. (2.8) and of the PCA sweep (Section 5.1) are.
 
+#[cfg(test)]
 use glam::{DMat3, DVec3};
 
 /// Eigenvalues (ascending) and orthonormal eigenvectors of a symmetric `d × d` matrix.
@@ -77,7 +78,9 @@ pub fn sym_eigen(a: &[f64], d: usize) -> SymEigen {
     SymEigen { values, vectors }
 }
 
-/// [`sym_eigen`] for a 3 × 3 matrix: eigenvalues ascending and the matching unit eigenvectors.
+/// [`sym_eigen`] for a 3 × 3 matrix: eigenvalues ascending and the matching unit eigenvectors;
+/// the reference the 3 × 3 solvers of `geometry/eigen.rs` are tested against.
+#[cfg(test)]
 pub fn sym_eigen3(a: DMat3) -> (DVec3, [DVec3; 3]) {
     let rows = a.transpose().to_cols_array();
     let e = sym_eigen(&rows, 3);

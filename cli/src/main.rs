@@ -104,10 +104,10 @@ fn run(cli: Cli) -> Result<()> {
         if t == 0 {
             return Err("--threads must be at least 1".into());
         }
-        if t > nbhd::parallel::MAX_THREADS {
+        if t > nbhd::MAX_THREADS {
             return Err(format!(
                 "--threads {t} is above the maximum of {} worker threads",
-                nbhd::parallel::MAX_THREADS
+                nbhd::MAX_THREADS
             )
             .into());
         }

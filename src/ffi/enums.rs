@@ -5,7 +5,7 @@
 //!
 //! C may store any integer in an enum-typed field, and a Rust enum holding a value outside
 //! its variants is undefined behaviour; so these enums are never read from C memory as Rust
-//! values. [`super::fields`] reads an enum field as `int` and checks it against [`CEnum`].
+//! values. `fields.rs` reads an enum field as `int` and checks it against `CEnum`.
 
 use std::ffi::c_int;
 

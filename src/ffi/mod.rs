@@ -11,9 +11,9 @@
 //! - every export runs inside a panic guard ([`status`]): a Rust panic becomes
 //!   `NBHD_STATUS_INTERNAL` with its message, and no unwinding ever reaches C;
 //! - every pointer is checked for NULL and for the alignment of the type it is read or
-//!   written as, before anything is read; structs from C are read field by field ([`fields`]),
+//!   written as, before anything is read; structs from C are read field by field (`fields.rs`),
 //!   C enum values as integers checked against [`enums`], so an out-of-range value is an
-//!   error (one rule for which status, in [`fields`]), never undefined behaviour;
+//!   error (one rule for which status, in `fields.rs`), never undefined behaviour;
 //! - the C options structs carry nothing the core's options do not: each reader converts
 //!   field by field into the core's options (threads included) and calls the core;
 //! - `unsafe` is this module's tool for reading and writing C memory, each block with a

@@ -1,7 +1,7 @@
 //! The plain C structs of the ABI that are not about smoothing: the points descriptor, the
 //! build and table options, tree statistics and the neighbourhood spec, with their
 //! conversions to and from the core. Their enums live in [`super::enums`]; structs coming
-//! from C are read field by field with [`super::fields`].
+//! from C are read field by field with `fields.rs`.
 
 use std::ffi::c_void;
 

@@ -1,6 +1,6 @@
 //! Allocation-free eigen-solvers for symmetric 3 × 3 matrices, since the covariance of every
 //! point (eq. 2.8) is decomposed in every smoothing step: a cyclic Jacobi with the same method
-//! and ordering as [`crate::linalg::sym_eigen3`] on fixed-size arrays, and a closed form for the
+//! and ordering as `linalg::sym_eigen3` (the test reference) on fixed-size arrays, and a closed form for the
 //! smallest eigenvector (the normal of eq. 2.10) that declines whenever it would be less exact.
 
 use glam::{DMat3, DVec3};

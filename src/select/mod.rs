@@ -49,7 +49,8 @@ pub enum SelectAlgorithm {
 }
 
 impl SelectAlgorithm {
-    /// Every algorithm, for tests and benchmarks that compare them.
+    /// Every algorithm, for the tests that compare them.
+    #[cfg(test)]
     pub const ALL: [SelectAlgorithm; 4] = [
         SelectAlgorithm::Sort,
         SelectAlgorithm::Quickselect,

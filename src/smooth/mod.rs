@@ -195,7 +195,7 @@ pub struct SmoothOptions {
     /// [`crate::geometry::normals::FLAG_SKIPPED`].
     pub non_finite: NonFinitePolicy,
     /// Worker threads: 0 uses the current rayon pool (rayon's global pool has a thread per
-    /// core), n ≥ 1 a pool of n threads ([`crate::parallel::with_threads`]); at most
+    /// core), n ≥ 1 a pool of n threads (see `parallel.rs`); at most
     /// [`crate::parallel::MAX_THREADS`]. The result is bit-identical for every value.
     pub threads: usize,
 }

@@ -124,10 +124,10 @@ pub struct RobustOptions {
     /// normals in place of the covariance normals).
     pub outputs: bool,
     /// Points with a NaN or infinite coordinate: rejected, or skipped (left unmoved, NaN
-    /// outputs and normals), as [`SmoothOptions::non_finite`].
+    /// outputs and normals), as [`super::SmoothOptions::non_finite`].
     pub non_finite: crate::NonFinitePolicy,
     /// Worker threads: 0 uses the current rayon pool, n ≥ 1 a pool of n threads; at most
-    /// [`crate::parallel::MAX_THREADS`], as [`SmoothOptions::threads`]. The result is
+    /// [`crate::MAX_THREADS`], as [`super::SmoothOptions::threads`]. The result is
     /// bit-identical for every value. Default 0.
     pub threads: usize,
 }

@@ -208,14 +208,10 @@ fn plan(a: &SpeedArgs) -> Result<Plan> {
     if a.thread_counts.contains(&0) {
         return Err("--thread-counts must be at least 1 each".into());
     }
-    if let Some(t) = a
-        .thread_counts
-        .iter()
-        .find(|&&t| t > nbhd::parallel::MAX_THREADS)
-    {
+    if let Some(t) = a.thread_counts.iter().find(|&&t| t > nbhd::MAX_THREADS) {
         return Err(format!(
             "--thread-counts {t} is above the maximum of {} worker threads",
-            nbhd::parallel::MAX_THREADS
+            nbhd::MAX_THREADS
         )
         .into());
     }
