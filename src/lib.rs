@@ -23,6 +23,7 @@ pub mod points;
 pub mod query;
 pub mod scalar;
 pub(crate) mod select;
+#[cfg(any(test, feature = "shapes"))]
 pub mod shapes;
 pub mod smooth;
 pub mod table;
