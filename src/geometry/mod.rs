@@ -8,7 +8,7 @@ mod eigen;
 pub mod neighbors;
 pub mod normals;
 pub mod orientation;
-pub mod robust_plane;
+pub(crate) mod robust_plane;
 
 pub use curvature::{
     directional_curvature, principal_curvatures, DensityForm, PrincipalCurvatures, PrincipalFormula,

@@ -85,16 +85,6 @@ impl<'a, T: Scalar> NeighborHeap<'a, T> {
         }
     }
 
-    /// Number of items held.
-    pub fn len(&self) -> usize {
-        self.items.len()
-    }
-
-    /// `true` if nothing was accepted.
-    pub fn is_empty(&self) -> bool {
-        self.items.is_empty()
-    }
-
     /// Sorts the items by `(sq_dist, index)` in place; the vector then holds the result.
     pub fn finish(self) {
         self.items.sort_unstable_by(|a, b| a.cmp_by_distance(b));

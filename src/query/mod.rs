@@ -19,7 +19,7 @@ pub(crate) mod result_set;
 use crate::error::{NbhdError, Result};
 use crate::scalar::Scalar;
 
-pub use heap::NeighborHeap;
+pub(crate) use heap::NeighborHeap;
 
 /// One neighbour: the caller's index of the point and its squared distance to the query.
 #[repr(C)]
