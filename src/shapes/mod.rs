@@ -1,5 +1,5 @@
 //! Test shapes with analytic ground truth, seeded sampling and seeded noise, and the quality
-//! metrics of the smoothing notes.
+//! metrics of `docs/smoothing-results.md`.
 //!
 //! Every shape knows, for any point of space, its distance to the true surface and the true
 //! normal there ([`Shape::closest`]), and the distance to its sharp features
@@ -102,7 +102,7 @@ pub fn tangent_frame(n: DVec3) -> (DVec3, DVec3) {
     (t1, n.cross(t1))
 }
 
-/// Noise as the smoothing notes define it: each point moves by
+/// Noise as `docs/smoothing-results.md` defines it: each point moves by
 /// `amplitude·h·(g0·n + g1·t1 + g2·t2)` — along the true normal `n` and both tangent
 /// directions alike — with `g` drawn from `kind`. `h` is the length unit (normally the mean
 /// spacing of the clean sample, [`crate::geometry::neighbors::mean_spacing`]).

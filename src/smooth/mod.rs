@@ -156,8 +156,9 @@ pub enum Stage {
 }
 
 /// Settings of [`smooth`]. `Default` gives the faithful anisotropic method with the settings
-/// of the smoothing notes: 15 nearest other points within 6h, computed once, 3 steps of
-/// τ = 0.5, `g_sharp` at λ = 0.2/h on all points.
+/// measured best for the thesis' method on the shapes of `docs/smoothing-results.md`: 15
+/// nearest other points within 6h, computed once, 3 steps of τ = 0.5, `g_sharp` at λ = 0.2/h
+/// on all points.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SmoothOptions {
     /// Maximum valence `k` (≥ 1).
@@ -223,7 +224,7 @@ impl Default for SmoothOptions {
 }
 
 impl SmoothOptions {
-    /// Isotropic fairing with the notes' settings (2 steps of τ = 0.5).
+    /// Isotropic fairing with the settings of `docs/smoothing-results.md` (2 steps of τ = 0.5).
     pub fn isotropic() -> Self {
         Self {
             weighting: Weighting::Isotropic,

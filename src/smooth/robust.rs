@@ -57,9 +57,10 @@
 //!    next to an edge); `a_ij` is the larger of the two.
 //! 5. **Stopping rule**: stop as soon as an iteration lowered the noise estimate σ̂ by less than
 //!    the fraction `tolerance`, at most after `max_iterations`. The amount of smoothing thus
-//!    grows with the noise instead of being a fixed step count (the notes' first lesson), and a
-//!    clean cloud stops after one iteration: its σ̂ is curvature, which smoothing does not
-//!    lower, so it is not eroded step by step.
+//!    grows with the noise instead of being a fixed step count (one count under-smooths strong
+//!    noise and erodes weak noise; docs/smoothing-results.md), and a clean cloud stops after
+//!    one iteration: its σ̂ is curvature, which smoothing does not lower, so it is not eroded
+//!    step by step.
 //!
 //! Every per-point computation reads the previous iteration only and sums its neighbours in row
 //! order; medians are taken over vectors collected in point order. The result is bit-identical
