@@ -69,21 +69,7 @@ impl SelectAlgorithm {
 ///
 /// The result depends only on the input and `algo` (no run-time randomness).
 ///
-/// ```
-/// use nbhd::select::{select_nth, SelectAlgorithm};
-///
-/// // Indices of points, ordered by their x coordinate (ties by index: a strict total order).
-/// let xs = [0.5, -1.0, 2.0, 0.5, 3.0];
-/// let mut idx: Vec<u32> = (0..5).collect();
-/// let mut less = |a: &u32, b: &u32| {
-///     let (p, q) = (xs[*a as usize], xs[*b as usize]);
-///     p < q || (p == q && a < b)
-/// };
-/// select_nth(&mut idx, 2, &mut less, SelectAlgorithm::FloydRivest);
-/// assert_eq!(idx[2], 3); // the median: x = 0.5, second of the two by index
-/// assert!(idx[..2].iter().all(|&i| less(&i, &3)));
-/// assert!(idx[3..].iter().all(|&i| less(&3, &i)));
-/// ```
+/// Example: `tests.rs`, `selects_the_median_index_by_coordinate`.
 ///
 /// # Panics
 ///

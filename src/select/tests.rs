@@ -307,3 +307,20 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn selects_the_median_index_by_coordinate() {
+    // indices of points, ordered by their x coordinate (ties by index: a strict total order)
+    let xs = [0.5, -1.0, 2.0, 0.5, 3.0];
+    for algo in SelectAlgorithm::ALL {
+        let mut idx: Vec<u32> = (0..5).collect();
+        let mut less = |a: &u32, b: &u32| {
+            let (p, q) = (xs[*a as usize], xs[*b as usize]);
+            p < q || (p == q && a < b)
+        };
+        select_nth(&mut idx, 2, &mut less, algo);
+        assert_eq!(idx[2], 3, "{algo:?}"); // the median: x = 0.5, second of the two by index
+        assert!(idx[..2].iter().all(|&i| less(&i, &3)), "{algo:?}");
+        assert!(idx[3..].iter().all(|&i| less(&3, &i)), "{algo:?}");
+    }
+}
