@@ -72,6 +72,7 @@
 //! the step took the 80k torus of `cpp_examples/bench_smoothing` from 5.3 s to about 0.8 s on one
 //! thread; the figures of `tests/smoothing_quality.rs` held or improved.
 
+mod candidates;
 mod planes;
 mod rows;
 mod step;

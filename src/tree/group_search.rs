@@ -437,98 +437,151 @@ pub(crate) fn table<T: Scalar, const D: usize>(
     nbhd: Neighborhood<T>,
     exclude_self: bool,
 ) -> Result<NeighborTable<T>> {
-    let (k, sq_radius) = nbhd.limits();
-    let boxes = Boxes::<T, D>::new(tree);
-    let groups = groups(tree.nodes);
-    // Chunks of whole groups, about CHUNK points each: fixed by the tree, not the threads.
-    let mut chunk_groups = vec![0usize];
-    let mut work_bounds = vec![0usize];
-    let mut acc = 0;
-    for (g, r) in groups.iter().enumerate() {
-        acc += r.len();
-        if acc >= CHUNK || g + 1 == groups.len() {
-            chunk_groups.push(g + 1);
-            work_bounds.push(r.end);
-            acc = 0;
+    let plan = Plan::<T, D>::new(tree, nbhd, exclude_self);
+    plan.rows(0..plan.chunks(), source_len, |pos| tree.ids[pos] as usize)
+}
+
+/// The grouped search of one tree and one neighbourhood, prepared once (cell boxes, groups,
+/// coordinates by dimension) and run over any run of its chunks: the whole table, or a block of
+/// tree positions at a time when the table of every point would not fit in memory.
+pub(crate) struct Plan<'a, T, const D: usize> {
+    tree: &'a TreeView<'a, T>,
+    boxes: Boxes<T, D>,
+    soa: Soa<T, D>,
+    groups: Vec<Range<usize>>,
+    /// Chunk `c` holds the groups `chunk_groups[c]..chunk_groups[c + 1]`.
+    chunk_groups: Vec<usize>,
+    /// Chunk `c` holds the tree positions `work_bounds[c]..work_bounds[c + 1]`.
+    work_bounds: Vec<usize>,
+    nbhd: Neighborhood<T>,
+    exclude_self: bool,
+}
+
+impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
+    pub(crate) fn new(
+        tree: &'a TreeView<'a, T>,
+        nbhd: Neighborhood<T>,
+        exclude_self: bool,
+    ) -> Self {
+        let boxes = Boxes::<T, D>::new(tree);
+        let groups = groups(tree.nodes);
+        // Chunks of whole groups, about CHUNK points each: fixed by the tree, not the threads.
+        let mut chunk_groups = vec![0usize];
+        let mut work_bounds = vec![0usize];
+        let mut acc = 0;
+        for (g, r) in groups.iter().enumerate() {
+            acc += r.len();
+            if acc >= CHUNK || g + 1 == groups.len() {
+                chunk_groups.push(g + 1);
+                work_bounds.push(r.end);
+                acc = 0;
+            }
+        }
+        Self {
+            tree,
+            boxes,
+            soa: Soa::<T, D>::new(tree.coords),
+            groups,
+            chunk_groups,
+            work_bounds,
+            nbhd,
+            exclude_self,
         }
     }
-    let soa = Soa::<T, D>::new(tree.coords);
-    let search = Search {
-        tree,
-        boxes: &boxes,
-        soa: &soa,
-        sq_radius,
-        exclude_self,
-    };
-    let chunk_groups = &chunk_groups;
-    let groups = &groups;
-    let run = |c: usize, rows: &mut dyn FnMut(&Search<'_, T, D>, Range<usize>)| {
-        for g in &groups[chunk_groups[c]..chunk_groups[c + 1]] {
-            rows(&search, g.clone());
-        }
-    };
-    rows_in_chunks(
-        source_len,
-        &work_bounds,
-        |pos| tree.ids[pos] as usize,
-        |c, out| {
-            let mut stack = Vec::new();
-            if k == usize::MAX {
-                let mut rows = RadiusRows {
-                    sq_radius,
-                    sorted: nbhd.is_sorted(),
-                    rows: (0..GROUP).map(|_| Vec::new()).collect(),
-                    keys: Keys::default(),
-                };
-                run(c, &mut |s, g| {
-                    // a chunk whose rows did not fit takes no more (see `RowsChunk`)
-                    if out.3.is_none() {
-                        s.group(g, &mut rows, &mut stack, out)
-                    }
-                });
-            } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
-                let mut rows = SortedRows {
-                    k,
-                    sq_radius,
-                    len: [0; GROUP],
-                    buf: vec![Key32::default(); GROUP * k],
-                };
-                run(c, &mut |s, g| {
-                    // a chunk whose rows did not fit takes no more (see `RowsChunk`)
-                    if out.3.is_none() {
-                        s.group(g, &mut rows, &mut stack, out)
-                    }
-                });
-            } else if k <= SORTED_MAX_K {
-                let mut rows = SortedRows {
-                    k,
-                    sq_radius,
-                    len: [0; GROUP],
-                    buf: vec![Neighbor::default(); GROUP * k],
-                };
-                run(c, &mut |s, g| {
-                    // a chunk whose rows did not fit takes no more (see `RowsChunk`)
-                    if out.3.is_none() {
-                        s.group(g, &mut rows, &mut stack, out)
-                    }
-                });
-            } else {
-                let mut rows = HeapRows {
-                    k,
-                    sq_radius,
-                    rows: (0..GROUP).map(|_| Vec::new()).collect(),
-                    keys: Keys::default(),
-                };
-                run(c, &mut |s, g| {
-                    // a chunk whose rows did not fit takes no more (see `RowsChunk`)
-                    if out.3.is_none() {
-                        s.group(g, &mut rows, &mut stack, out)
-                    }
-                });
+
+    /// How many chunks the tree's positions are cut into.
+    pub(crate) fn chunks(&self) -> usize {
+        self.work_bounds.len() - 1
+    }
+
+    /// The tree positions of the chunks `chunks`.
+    pub(crate) fn positions(&self, chunks: Range<usize>) -> Range<usize> {
+        self.work_bounds[chunks.start]..self.work_bounds[chunks.end]
+    }
+
+    /// The rows of the points at the tree positions of `chunks`, computed in parallel, as a
+    /// table of `rows` rows in which the row of position `pos` is `row_of(pos)`.
+    pub(crate) fn rows(
+        &self,
+        chunks: Range<usize>,
+        rows: usize,
+        row_of: impl Fn(usize) -> usize + Sync,
+    ) -> Result<NeighborTable<T>> {
+        let (k, sq_radius) = self.nbhd.limits();
+        let search = Search {
+            tree: self.tree,
+            boxes: &self.boxes,
+            soa: &self.soa,
+            sq_radius,
+            exclude_self: self.exclude_self,
+        };
+        let first = chunks.start;
+        let run = |c: usize, rows: &mut dyn FnMut(&Search<'_, T, D>, Range<usize>)| {
+            let c = first + c;
+            for g in &self.groups[self.chunk_groups[c]..self.chunk_groups[c + 1]] {
+                rows(&search, g.clone());
             }
-            Ok(())
-        },
-    )
+        };
+        rows_in_chunks(
+            rows,
+            &self.work_bounds[chunks.start..=chunks.end],
+            row_of,
+            |c, out| {
+                let mut stack = Vec::new();
+                if k == usize::MAX {
+                    let mut rows = RadiusRows {
+                        sq_radius,
+                        sorted: self.nbhd.is_sorted(),
+                        rows: (0..GROUP).map(|_| Vec::new()).collect(),
+                        keys: Keys::default(),
+                    };
+                    run(c, &mut |s, g| {
+                        // a chunk whose rows did not fit takes no more (see `RowsChunk`)
+                        if out.3.is_none() {
+                            s.group(g, &mut rows, &mut stack, out)
+                        }
+                    });
+                } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
+                    let mut rows = SortedRows {
+                        k,
+                        sq_radius,
+                        len: [0; GROUP],
+                        buf: vec![Key32::default(); GROUP * k],
+                    };
+                    run(c, &mut |s, g| {
+                        if out.3.is_none() {
+                            s.group(g, &mut rows, &mut stack, out)
+                        }
+                    });
+                } else if k <= SORTED_MAX_K {
+                    let mut rows = SortedRows {
+                        k,
+                        sq_radius,
+                        len: [0; GROUP],
+                        buf: vec![Neighbor::default(); GROUP * k],
+                    };
+                    run(c, &mut |s, g| {
+                        if out.3.is_none() {
+                            s.group(g, &mut rows, &mut stack, out)
+                        }
+                    });
+                } else {
+                    let mut rows = HeapRows {
+                        k,
+                        sq_radius,
+                        rows: (0..GROUP).map(|_| Vec::new()).collect(),
+                        keys: Keys::default(),
+                    };
+                    run(c, &mut |s, g| {
+                        if out.3.is_none() {
+                            s.group(g, &mut rows, &mut stack, out)
+                        }
+                    });
+                }
+                Ok(())
+            },
+        )
+    }
 }
 
 /// What every group's search reads.

@@ -12,16 +12,9 @@
 //! memory; every row keeps the `(sq_dist, index)` order of the caller's indices.
 
 use crate::error::Result;
-use crate::query::Neighborhood;
-use crate::table::{NeighborTable, TableOptions};
-use crate::{BuildOptions, KdTree, PointsView};
+use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
-
-/// Stored points searched at once by [`Rows::search`]: large enough to keep both threads busy
-/// and the tree's leaf-order batching effective, small enough that the block's table (about
-/// 600 bytes per point at k = 48) stays a few tens of MB.
-const SEARCH_BLOCK: usize = 1 << 16;
 
 /// The neighbour rows of every stored point: row `s` lists the stored positions of the
 /// candidates of the point stored at `s`, nearest first; only the first `len[s]` (those within
@@ -64,59 +57,24 @@ impl Rows {
         }
     }
 
-    /// The `k` nearest other points of every point by the k-d tree, the points stored in the
-    /// tree's order (returned), and each point's squared distance to its nearest (by caller
-    /// index): the rows of `KdTree::neighborhoods` with `exclude_self`, searched in blocks of
-    /// stored points, so that no table of all rows and distances is ever held (at a million
-    /// points and k = 48, 576 MB). Not yet cut at ε (see [`Rows::update`]).
+    /// The `k` nearest other points of every point by the k-d tree (`candidates.rs`: an `f32`
+    /// search proven exact in `f64`), the points stored in the tree's order (returned), and each
+    /// point's squared distance to its nearest (by caller index), searched in blocks of stored
+    /// points, so that no table of all rows and distances is ever held (at a million points and
+    /// k = 48, 576 MB). Not yet cut at ε (see [`Rows::update`]).
     pub(super) fn search(points: &[DVec3], k: usize) -> Result<(Self, Vec<u32>, Vec<Option<f64>>)> {
-        let n = points.len();
-        let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
-        let tree =
-            KdTree::<f64>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())?;
-        drop(flat);
-        let order = tree.tree_order().to_vec();
-        let position = super::super::positions_of(&order);
-        let width = k.min(n.saturating_sub(1));
-        let mut index = vec![0u32; n * width];
-        let mut nearest = vec![None; n];
-        let mut queries: Vec<f64> = Vec::new();
-        // the k + 1 nearest of each stored point, itself dropped: without it, the first k of
-        // the (sq_dist, index) order are the k nearest other points; a point with more than k
-        // copies of lower index is not among its own k + 1, and its first k are those copies
-        let with_self = Neighborhood::Knn { k: width + 1 };
-        for (block, rows) in order
-            .chunks(SEARCH_BLOCK)
-            .zip(index.chunks_mut(SEARCH_BLOCK * width.max(1)))
-        {
-            queries.clear();
-            queries.extend(block.iter().flat_map(|&o| points[o as usize].to_array()));
-            let table = tree.neighborhoods_of(
-                &PointsView::from_flat(&queries, 3)?,
-                with_self,
-                &TableOptions::default(),
-            )?;
-            for (q, &o) in block.iter().enumerate() {
-                let (ids, d2) = (table.indices_of(q), table.sq_dists_of(q));
-                let others = ids.iter().zip(d2).filter(|(&j, _)| j != o).take(width);
-                let row = &mut rows[q * width..(q + 1) * width];
-                for (slot, (&j, &d)) in row.iter_mut().zip(others.clone()) {
-                    *slot = position[j as usize];
-                    nearest[o as usize].get_or_insert(d);
-                }
-            }
-        }
-        let candidates = vec![width as u32; n];
+        let found = super::candidates::nearest_others(points, k)?;
+        let candidates = vec![found.width as u32; points.len()];
         let len = candidates.clone();
         Ok((
             Self {
-                width,
-                index,
+                width: found.width,
+                index: found.index,
                 candidates,
                 len,
             },
-            order,
-            nearest,
+            found.order,
+            found.nearest,
         ))
     }
 
