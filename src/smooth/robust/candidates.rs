@@ -210,7 +210,7 @@ fn f32_error(g: f64, extent: f64) -> Option<f64> {
     // g is within 6 % of the exact d where the bound is used (√g ≥ 64 e): bound |t| by 1.1 g
     let r = (1.1 * g).sqrt();
     let e = 2.0 * u * extent + u * r;
-    if !(g.sqrt() >= 64.0 * e) {
+    if g.is_nan() || g.sqrt() < 64.0 * e {
         return None;
     }
     Some(2.0 * (e * (2.0 * 3f64.sqrt() * r + 3.0 * e) + 3.0 * u * 1.1 * g))
