@@ -75,21 +75,32 @@ static void bench(const Input& in, int reps) {
             double ms[3];
             // Interleaved repetitions: each repetition runs every backend once.
             std::vector<double> t[3];
+            // PCL 1.13's search::Octree takes nearestKSearch(index)'s position in setIndices as
+            // a cloud index (RegionGrowing then queries NaN holes and asserts): skipped there.
+            const bool skip_octree = std::strcmp(a.name, "region growing k=30") == 0 &&
+                                     in.finite->size() != in.cloud->size();
             for (int r = 0; r < reps; ++r)
                 for (int b = 0; b < 3; ++b)
-                    t[b].push_back(median_ms(1, [&] { a.run(backends[b].second, threads); }));
+                    t[b].push_back(b == 1 && skip_octree
+                                       ? NAN
+                                       : median_ms(1, [&] { a.run(backends[b].second, threads); }));
             for (int b = 0; b < 3; ++b) {
                 std::sort(t[b].begin(), t[b].end());
                 ms[b] = t[b][t[b].size() / 2];
             }
-            std::printf("| %s | %d | %.0f | %.0f (%.2f) | %.0f (**%.2f**) |\n", a.name, threads,
-                        ms[0], ms[1], ms[1] / ms[0], ms[2], ms[2] / ms[0]);
+            if (skip_octree)
+                std::printf("| %s | %d | %.0f | n/a | %.0f (**%.2f**) |\n", a.name, threads, ms[0],
+                            ms[2], ms[2] / ms[0]);
+            else
+                std::printf("| %s | %d | %.0f | %.0f (%.2f) | %.0f (**%.2f**) |\n", a.name, threads,
+                            ms[0], ms[1], ms[1] / ms[0], ms[2], ms[2] / ms[0]);
             std::fflush(stdout);
         }
     }
 
     // Single index queries against one all-point table, k = 16 with the point itself.
     nbhd::PclSearch<pcl::PointXYZ> s;
+    s.setTableRuns(false);  // the single queries themselves
     s.setInputCloud(in.cloud);
     pcl::Indices idx;
     std::vector<float> d;

@@ -129,6 +129,26 @@ static void interface_checks(const typename pcl::PointCloud<PointT>::Ptr& cloud,
         b = nb.radiusSearch(*cloud, idx, r, ni, nd, 8);
         compare("radius max_nn 8", pi, pd, ni, nd, a, b, true, t);
     }
+    // Runs of same-k / same-radius index queries over every point, as PCL's algorithms ask
+    // them: past the run length nbhd serves them from one all-point table.
+    for (int pass = 0; pass < 3; ++pass) {
+        for (std::size_t i = 0; i < n; ++i) {
+            const PointT& p = (*cloud)[i];
+            if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) continue;
+            const auto idx = static_cast<pcl::index_t>(i);
+            int a, b;
+            if (pass == 0) {
+                a = kd.nearestKSearch(*cloud, idx, 16, pi, pd);
+                b = nb.nearestKSearch(*cloud, idx, 16, ni, nd);
+            } else {
+                const unsigned max_nn = pass == 1 ? 0 : 12;
+                a = kd.radiusSearch(*cloud, idx, r, pi, pd, max_nn);
+                b = nb.radiusSearch(*cloud, idx, r, ni, nd, max_nn);
+            }
+            compare(pass == 0 ? "knn run" : pass == 1 ? "radius run" : "max_nn run", pi, pd, ni,
+                    nd, a, b, pass != 1, t);
+        }
+    }
     // Input positions (nearestKSearch(index)): positions in the subset when one was given.
     const std::size_t positions = subset ? subset->size() : n;
     for (std::size_t j = 0; j < positions; j += step) {
