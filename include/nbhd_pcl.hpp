@@ -40,14 +40,18 @@
 //     queries with the same k (or radius, max_nn) — what PCL's algorithms do, one per point —
 //     is served, once the run is long (max(1024, points / 32) queries), from one table of
 //     every point's answer computed at once on all cores (nbhd_tree_neighborhoods): the same
-//     rows, measured 0.6× the time of the single queries on one thread (cpp_examples/README.md).
-//     Tables are kept until the next setInputCloud (at most 4, each at most 2^25 neighbours;
-//     larger ones are not made). setTableRuns(false) turns this off.
+//     rows, in less time than the single queries for k nearest and for radius answers of up to
+//     64 points on average (measured, cpp_examples/README.md; larger radius answers stay single
+//     queries). Tables are kept until the next setInputCloud (at most 4, each at most 2^25
+//     neighbours; larger ones are not made). setTableRuns(false) turns this off.
 //   - Threads: const queries share no buffer (only a relaxed atomic size hint for radius
 //     answers), so any number of threads may query at once (NormalEstimationOMP,
 //     FPFHEstimationOMP). setInputCloud must not run concurrently with queries, as for every
 //     PCL search.
 //
+// Indices given to setInputCloud must be distinct and within the cloud (KdTreeFLANN would
+// search a listed point twice); otherwise setInputCloud throws with nbhd's message naming the
+// index.
 // Errors of nbhd that PCL's interface cannot carry (out of memory while building, ...) throw
 // std::runtime_error with nbhd's message; PCL's KdTree prints an error and searches nothing
 // for an empty cloud, which this class does too (every query then gives 0 results).
@@ -368,6 +372,7 @@ private:
 
     // ---- runs of index queries served from one all-point table ------------------------------
 
+    static constexpr std::size_t kMaxRadiusRow = 64;  // radius tables only up to this mean row
     using Key = std::uint64_t;  // kind (2 bits), k (30 bits), float bits of r*r (32 bits)
     static Key make_key(nbhd_neighborhood_kind kind, std::size_t k, float limit) {
         std::uint32_t bits;
@@ -418,8 +423,29 @@ private:
         if (cur && cur->key == key) return cur;
         if (tables_.size() >= 4) return nullptr;
         const nbhd_neighborhood_kind kind = static_cast<nbhd_neighborhood_kind>(key >> 62);
-        const std::size_t per_point =
-            kind == NBHD_NEIGHBORHOOD_KIND_RADIUS ? size_hint_.load(std::memory_order_relaxed) : k;
+        std::size_t per_point = k;
+        if (kind == NBHD_NEIGHBORHOOD_KIND_RADIUS) {
+            // The mean answer size, from 64 points spread over the tree's index range.
+            nbhd_stats st{};
+            nbhd_tree_stats(tree_.get(), &st);
+            std::vector<std::uint32_t> i(1024);
+            std::vector<float> d(1024);
+            std::size_t total = 0, asked = 0;
+            for (std::size_t j = 0; j < 64; ++j) {
+                std::size_t n = 0;
+                const std::size_t at = j * st.source_points / 64;
+                if (nbhd_tree_radius_index(tree_.get(), at, false, r, i.data(), d.data(), i.size(),
+                                           &n) == NBHD_STATUS_SKIPPED_POINT)
+                    continue;
+                total += n;
+                ++asked;
+            }
+            per_point = asked ? total / asked : 0;
+            // Measured (cpp_examples/README.md): with rows of about 72 points (MLS r = 5h, one
+            // query per point) the single queries were faster than table + copy on one core;
+            // with about 50 (FPFH r = 4h) and below, the table was.
+            if (per_point > kMaxRadiusRow) return nullptr;
+        }
         if (per_point > (std::size_t(1) << 25) / (searched_ + 1)) return nullptr;
         nbhd_neighborhood_spec spec = {kind, k, r};
         nbhd_table_options o = nbhd_table_options_default();
