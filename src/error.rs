@@ -65,7 +65,7 @@ pub enum NbhdError {
         /// Number of points the caller passed in.
         count: usize,
     },
-    /// An index subset lists the same point twice ([`crate::tree::KdTree::build_subset`]).
+    /// An index subset lists the same point twice (a tree over listed indices, `build_subset`).
     DuplicateIndex {
         /// The caller's index listed twice.
         index: usize,
