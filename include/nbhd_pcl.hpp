@@ -60,7 +60,6 @@
 #include <nbhd.h>
 
 #include <pcl/point_cloud.h>
-#include <pcl/point_traits.h>
 #include <pcl/search/search.h>
 #include <pcl/type_traits.h>
 
