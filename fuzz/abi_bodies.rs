@@ -304,11 +304,30 @@ fn build(inp: &mut Input, points: &mut Points) -> *mut nbhd_tree {
     }
     let mut tree = null_mut();
     let opts_ptr = if with_options { opts.as_ptr() } else { null() };
+    let mut allowed = POINTS.to_vec();
+    allowed.extend([S::InvalidOption, S::ThreadPool]);
+    if inp.u8() % 4 == 0 {
+        // Over an index subset: small indices (mostly in range, duplicates possible) and
+        // now and then a large one.
+        let n = inp.below(48);
+        let ids: Vec<u32> = (0..n)
+            .map(|_| match inp.u8() % 16 {
+                0 => u32::MAX - u32::from(inp.u8()),
+                _ => u32::from(inp.u8() % 64),
+            })
+            .collect();
+        // SAFETY: as for nbhd_tree_build below; `ids` holds `ids.len()` readable values.
+        let status = unsafe {
+            nbhd_tree_build_indices(points.desc(), ids.as_ptr(), ids.len(), opts_ptr, &mut tree)
+        };
+        allowed.push(S::IndexOutOfRange);
+        check("nbhd_tree_build_indices", status, &allowed);
+        assert_eq!(status == S::Ok, !tree.is_null());
+        return tree;
+    }
     // SAFETY: the description is true (or overflows and must be refused unread); `opts_ptr`
     // is NULL or a live options struct; `tree` is writable.
     let status = unsafe { nbhd_tree_build(points.desc(), opts_ptr, &mut tree) };
-    let mut allowed = POINTS.to_vec();
-    allowed.extend([S::InvalidOption, S::ThreadPool]);
     check("nbhd_tree_build", status, &allowed);
     assert_eq!(status == S::Ok, !tree.is_null());
     tree

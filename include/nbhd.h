@@ -1071,7 +1071,39 @@ nbhd_status nbhd_tree_build(const nbhd_points *points,
                             nbhd_tree **out_tree);
 
 /**
- * Frees a tree made by nbhd_tree_build. NULL is ignored. The tree must not be in use by
+ * Builds a k-d tree over the points `indices[0 .. index_count]` of `*points` only, as PCL's
+ * `setInputCloud(cloud, indices)`, and stores a new handle in `*out_tree`. The point buffer
+ * is read in place (only the listed points are copied into the tree), and every result names
+ * the point's index in `*points`, as for nbhd_tree_build: the tree answers exactly as
+ * nbhd_tree_build over the listed points would, in the caller's indices. The order of
+ * `indices` does not matter.
+ *
+ * Queries by index (nbhd_tree_knn_index, ...) take an index of `*points`; one that is not
+ * listed fails with SKIPPED_POINT, as a skipped non-finite point does.
+ * nbhd_tree_neighborhoods gives a row for every point of `*points` (row i for index i,
+ * `nbhd_stats.source_points` = `points->count` rows): the listed points' neighbourhoods among
+ * the listed points, and empty rows for the others.
+ *
+ * Errors: those of nbhd_tree_build (NON_FINITE names the first listed non-finite point unless
+ * `options->non_finite` skips them; EMPTY_INPUT when `index_count` is 0 or every listed point
+ * is skipped), plus NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
+ * message names the first index >= `points->count`) and INVALID_ARGUMENT (an index listed
+ * twice, named in the message).
+ *
+ * Ownership: the caller owns `*out_tree` and frees it with nbhd_tree_free; `indices` and
+ * the point buffer may be freed once this returns.
+ *
+ * # Safety
+ * As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t.
+ */
+nbhd_status nbhd_tree_build_indices(const nbhd_points *points,
+                                    const uint32_t *indices,
+                                    size_t index_count,
+                                    const nbhd_build_options *options,
+                                    nbhd_tree **out_tree);
+
+/**
+ * Frees a tree made by nbhd_tree_build(_indices). NULL is ignored. The tree must not be in use by
  * another thread, and must not be used after this call.
  *
  * # Safety

@@ -54,7 +54,7 @@ if ! nm -D --defined-only "$so_file" | grep -q ' T nbhd_tree_build$'; then
     echo "cpp-test.sh: $so_file does not export nbhd_tree_build" >&2
     exit 1
 fi
-for h in nbhd.h nbhd.hpp; do
+for h in nbhd.h nbhd.hpp nbhd_pcl.hpp; do
     if ! cmp -s "include/$h" "$prefix/include/nbhd/$h"; then
         echo "cpp-test.sh: $prefix/include/nbhd/$h is missing or differs from include/$h" >&2
         exit 1

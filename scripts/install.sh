@@ -6,6 +6,8 @@
 #   PREFIX/include/nbhd/nbhd.h      the C API (found as <nbhd.h>: the CMake package and the
 #   PREFIX/include/nbhd/nbhd.hpp    pkg-config files put PREFIX/include/nbhd on the include path)
 #                                   and the C++ RAII layer over it (<nbhd.hpp>, header-only)
+#   PREFIX/include/nbhd/nbhd_pcl.hpp  nbhd::PclSearch, a pcl::search::Search backend
+#                                   (<nbhd_pcl.hpp>, header-only; the program links PCL)
 #   PREFIX/lib/libnbhd.so.X.Y.Z   the shared library, version X.Y.Z of Cargo.toml
 #   PREFIX/lib/libnbhd.so.0.Y     -> libnbhd.so.X.Y.Z: the SONAME, the name programs record
 #                                    (libnbhd.so.X from version 1.0 on; see below)
@@ -109,7 +111,7 @@ static_deps_pc="-lgcc_s -lutil -lrt -lpthread -lm -ldl -lc"
 
 echo "== installing into $prefix"
 install -d "$prefix/include/nbhd" "$prefix/lib/cmake/nbhd" "$prefix/lib/pkgconfig"
-install -m 644 include/nbhd.h include/nbhd.hpp "$prefix/include/nbhd/"
+install -m 644 include/nbhd.h include/nbhd.hpp include/nbhd_pcl.hpp "$prefix/include/nbhd/"
 install -m 755 "$release/libnbhd.so" "$prefix/lib/$real_name"
 ln -sfn "$real_name" "$prefix/lib/$soname"
 ln -sfn "$soname" "$prefix/lib/libnbhd.so"
@@ -129,7 +131,8 @@ cat >"$prefix/lib/cmake/nbhd/nbhdConfig.cmake" <<EOF
 #   target_link_libraries(app PRIVATE nbhd::nbhd)          # shared library
 #   target_link_libraries(app PRIVATE nbhd::nbhd_static)   # static library
 #
-# Sets nbhd_FOUND, nbhd_VERSION, nbhd_INCLUDE_DIR (holding nbhd.h and nbhd.hpp), nbhd_LIBRARY,
+# Sets nbhd_FOUND, nbhd_VERSION, nbhd_INCLUDE_DIR (holding nbhd.h, nbhd.hpp and nbhd_pcl.hpp,
+# the pcl::search backend: link PCL too), nbhd_LIBRARY,
 # nbhd_STATIC_LIBRARY.
 include(CMakeFindDependencyMacro)
 find_dependency(Threads)
@@ -139,6 +142,7 @@ set(nbhd_INCLUDE_DIR "\${_nbhd_prefix}/include/nbhd")
 set(nbhd_LIBRARY "\${_nbhd_prefix}/lib/libnbhd.so")
 set(nbhd_STATIC_LIBRARY "\${_nbhd_prefix}/lib/libnbhd.a")
 foreach(_nbhd_file IN ITEMS "\${nbhd_INCLUDE_DIR}/nbhd.h" "\${nbhd_INCLUDE_DIR}/nbhd.hpp"
+        "\${nbhd_INCLUDE_DIR}/nbhd_pcl.hpp"
         "\${_nbhd_prefix}/lib/$real_name"
         "\${_nbhd_prefix}/lib/$soname" "\${nbhd_LIBRARY}" "\${nbhd_STATIC_LIBRARY}")
   if(NOT EXISTS "\${_nbhd_file}")
@@ -228,7 +232,7 @@ EOF
 
 if [ "$keep_symbols" = 0 ]; then what="stripped, no debug information"; else what="with symbols and line tables"; fi
 echo "== installed nbhd $version ($profile profile, $what):"
-(cd "$prefix" && find include/nbhd/nbhd.h include/nbhd/nbhd.hpp "lib/$real_name" "lib/$soname" lib/libnbhd.so lib/libnbhd.a \
+(cd "$prefix" && find include/nbhd/nbhd.h include/nbhd/nbhd.hpp include/nbhd/nbhd_pcl.hpp "lib/$real_name" "lib/$soname" lib/libnbhd.so lib/libnbhd.a \
     lib/cmake/nbhd lib/pkgconfig/nbhd.pc lib/pkgconfig/nbhd-static.pc \( -type f -o -type l \) \
     -printf '%p\n' | sort | while read -r f; do
         if [ -L "$f" ]; then echo "   $f -> $(readlink "$f")"; else echo "   $f ($(stat -c %s "$f") bytes)"; fi

@@ -33,10 +33,20 @@ impl<T: Scalar> Cloud<T> {
     /// points. A value that is finite in the source but overflows `T` (an `f64` beyond the
     /// `f32` range) counts as non-finite.
     pub fn from_view(view: &PointsView<'_>, policy: NonFinitePolicy) -> Result<Self> {
-        let (n, dim) = (view.len(), view.dim());
+        Self::from_view_at(view, 0..view.len(), policy)
+    }
+
+    /// As [`Self::from_view`], over the points `indices` of `view` only (in range, in the order
+    /// given; the caller checks them). Errors name the caller's index.
+    pub fn from_view_at(
+        view: &PointsView<'_>,
+        indices: impl ExactSizeIterator<Item = usize>,
+        policy: NonFinitePolicy,
+    ) -> Result<Self> {
+        let (n, dim) = (indices.len(), view.dim());
         let mut coords = Vec::with_capacity(n * dim);
         let mut ids = Vec::with_capacity(n);
-        for i in 0..n {
+        for i in indices {
             let start = coords.len();
             for j in 0..dim {
                 coords.push(view.coord::<T>(i, j));
@@ -62,7 +72,7 @@ impl<T: Scalar> Cloud<T> {
             coords,
             ids,
             dim,
-            source_len: n,
+            source_len: view.len(),
         })
     }
 

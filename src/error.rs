@@ -65,6 +65,11 @@ pub enum NbhdError {
         /// Number of points the caller passed in.
         count: usize,
     },
+    /// An index subset lists the same point twice (a tree over listed indices, `build_subset`).
+    DuplicateIndex {
+        /// The caller's index listed twice.
+        index: usize,
+    },
     /// A stored-point query named a point that was skipped at build time (non-finite).
     SkippedPoint {
         /// The index given.
@@ -190,6 +195,10 @@ impl fmt::Display for NbhdError {
                     "point index {index} is out of range (the set has {count} points)"
                 )
             }
+            DuplicateIndex { index } => write!(
+                f,
+                "point index {index} is listed more than once in the index subset"
+            ),
             SkippedPoint { index } => write!(
                 f,
                 "point {index} was skipped at build time (non-finite) and cannot be queried"

@@ -379,6 +379,20 @@ fn c_smoothing_is_clean_under_valgrind() {
     }
 }
 
+#[test]
+fn c_subset_trees_answer_as_brute_force() {
+    run(Command::new(compiled("subset_test")), "tests/c/subset_test");
+}
+
+#[test]
+fn c_subset_trees_are_clean_under_valgrind() {
+    let exe = compiled("subset_test");
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(exe);
+        run(cmd, "valgrind tests/c/subset_test");
+    }
+}
+
 /// Names of the functions the header declares.
 fn header_functions() -> Vec<String> {
     let header = std::fs::read_to_string(Path::new(ROOT).join("include/nbhd.h")).unwrap();

@@ -178,6 +178,7 @@ impl FfiError {
                 NbhdError::DimensionMismatch { .. } => S::DimensionMismatch,
                 NbhdError::IndexOutOfRange { .. } => S::IndexOutOfRange,
                 NbhdError::SkippedPoint { .. } => S::SkippedPoint,
+                NbhdError::DuplicateIndex { .. } => S::InvalidArgument,
                 NbhdError::InvalidOption { .. } => S::InvalidOption,
                 NbhdError::Cancelled => S::Cancelled,
                 NbhdError::ThreadPool(_) => S::ThreadPool,

@@ -1,7 +1,7 @@
 //! The tree handle: build options, build, free, statistics.
 
-use super::args::{deref, init_out};
-use super::status::{guard, guard_value, nbhd_status};
+use super::args::{check_ptr, deref, init_out};
+use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::{nbhd_build_options, nbhd_points, nbhd_stats, read_build_options, PointsArg};
 use crate::scalar::ScalarType;
 use crate::tree::{BuildOptions, KdTree};
@@ -97,7 +97,71 @@ pub unsafe extern "C" fn nbhd_tree_build(
     })
 }
 
-/// Frees a tree made by nbhd_tree_build. NULL is ignored. The tree must not be in use by
+/// Builds a k-d tree over the points `indices[0 .. index_count]` of `*points` only, as PCL's
+/// `setInputCloud(cloud, indices)`, and stores a new handle in `*out_tree`. The point buffer
+/// is read in place (only the listed points are copied into the tree), and every result names
+/// the point's index in `*points`, as for nbhd_tree_build: the tree answers exactly as
+/// nbhd_tree_build over the listed points would, in the caller's indices. The order of
+/// `indices` does not matter.
+///
+/// Queries by index (nbhd_tree_knn_index, ...) take an index of `*points`; one that is not
+/// listed fails with SKIPPED_POINT, as a skipped non-finite point does.
+/// nbhd_tree_neighborhoods gives a row for every point of `*points` (row i for index i,
+/// `nbhd_stats.source_points` = `points->count` rows): the listed points' neighbourhoods among
+/// the listed points, and empty rows for the others.
+///
+/// Errors: those of nbhd_tree_build (NON_FINITE names the first listed non-finite point unless
+/// `options->non_finite` skips them; EMPTY_INPUT when `index_count` is 0 or every listed point
+/// is skipped), plus NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
+/// message names the first index >= `points->count`) and INVALID_ARGUMENT (an index listed
+/// twice, named in the message).
+///
+/// Ownership: the caller owns `*out_tree` and frees it with nbhd_tree_free; `indices` and
+/// the point buffer may be freed once this returns.
+///
+/// # Safety
+/// As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_tree_build_indices(
+    points: *const nbhd_points,
+    indices: *const u32,
+    index_count: usize,
+    options: *const nbhd_build_options,
+    out_tree: *mut *mut nbhd_tree,
+) -> nbhd_status {
+    guard("nbhd_tree_build_indices", || {
+        // SAFETY: `out_tree` is NULL or writable (caller).
+        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
+        // SAFETY: `points` and `options` are NULL or readable structs (caller).
+        let (arg, options) = unsafe {
+            (
+                PointsArg::read(points, "points")?,
+                read_build_options(options)?,
+            )
+        };
+        check_ptr(indices, "indices")?;
+        if index_count > isize::MAX as usize / std::mem::size_of::<u32>() {
+            return Err(FfiError::InvalidArgument(format!(
+                "index_count {index_count} overflows the address space"
+            )));
+        }
+        // SAFETY: `indices` is non-NULL and aligned (checked above) and points to `index_count`
+        // readable values (caller), whose byte size fits in isize (checked above); only read.
+        let indices = unsafe { std::slice::from_raw_parts(indices, index_count) };
+        // SAFETY: the caller's description of the point memory is true (contract above).
+        let view = unsafe { arg.view() }?;
+        let inner = match arg.scalar {
+            ScalarType::F32 => AnyTree::F32(KdTree::build_subset(&view, indices, &options)?),
+            ScalarType::F64 => AnyTree::F64(KdTree::build_subset(&view, indices, &options)?),
+        };
+        let handle = Box::into_raw(Box::new(nbhd_tree { inner }));
+        // SAFETY: `out` was checked by `init_out`; the handle is a fresh Box the caller now owns.
+        unsafe { out.write(handle) };
+        Ok(())
+    })
+}
+
+/// Frees a tree made by nbhd_tree_build(_indices). NULL is ignored. The tree must not be in use by
 /// another thread, and must not be used after this call.
 ///
 /// # Safety

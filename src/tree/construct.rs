@@ -1,7 +1,8 @@
-//! The build driver: from the caller's points to a [`KdTree`]. It reads the points (straight
-//! into compact records for dimensions 1 to 3, through a [`Cloud`] otherwise), runs the build
-//! the options ask for (`build.rs`, `presorted.rs`) on the thread count asked for, and keeps
-//! the coordinates and caller indices in tree order.
+//! The build driver: from the caller's points to a [`KdTree`]. It reads the points (all of
+//! them, or the listed subset of [`KdTree::build_subset`]; straight into compact records for
+//! dimensions 1 to 3, through a [`Cloud`] otherwise), runs the build the options ask for
+//! (`build.rs`, `presorted.rs`) on the thread count asked for, and keeps the coordinates and
+//! caller indices in tree order.
 
 use rayon::prelude::*;
 
@@ -14,7 +15,34 @@ use crate::error::{NbhdError, Result};
 use crate::parallel::with_threads;
 use crate::points::PointsView;
 use crate::scalar::{Scalar, ScalarType};
+use std::borrow::Cow;
 use std::sync::OnceLock;
+
+/// Which points of a view a build reads: all of them, or a validated subset of caller indices
+/// (in range, strictly increasing).
+#[derive(Clone, Copy)]
+enum Selection<'a> {
+    All(usize),
+    Subset(&'a [u32]),
+}
+
+impl Selection<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Selection::All(n) => *n,
+            Selection::Subset(s) => s.len(),
+        }
+    }
+
+    /// The caller's index of the `i`-th selected point.
+    #[inline]
+    fn at(&self, i: usize) -> usize {
+        match self {
+            Selection::All(_) => i,
+            Selection::Subset(s) => s[i] as usize,
+        }
+    }
+}
 
 impl<T: Scalar> KdTree<T> {
     /// Builds a tree over the points of `view` (converted to `T`).
@@ -25,13 +53,52 @@ impl<T: Scalar> KdTree<T> {
     /// [`NbhdError::ThreadPool`] if a requested pool cannot be created.
     pub fn build(view: &PointsView<'_>, options: &BuildOptions) -> Result<Self> {
         options.validate()?;
+        Self::build_selected(view, Selection::All(view.len()), options)
+    }
+
+    /// Builds a tree over the points `indices` of `view` only, as PCL's
+    /// `setInputCloud(cloud, indices)`: the buffer is read in place (nothing but the listed
+    /// points is copied), and every result names the caller's index in `view`, as
+    /// [`Self::build`] does. The tree is the one [`Self::build`] makes of the listed points
+    /// (identical for any order of `indices`).
+    ///
+    /// Queries by stored point ([`crate::query::Query::Stored`]) take the caller's index; an
+    /// index of `view` that is not listed answers [`NbhdError::SkippedPoint`], as a skipped
+    /// non-finite point does. All-point tables ([`Self::neighborhoods`]) have a row for every
+    /// point of `view` (row `i` for caller index `i`): the listed points' rows are their
+    /// neighbourhoods among the listed points, the other rows are empty.
+    ///
+    /// Errors: as [`Self::build`] (non-finite points among the listed ones are rejected or
+    /// skipped as `options.non_finite` says; [`NbhdError::EmptyInput`] if `indices` is empty or
+    /// every listed point is skipped), plus [`NbhdError::IndexOutOfRange`] naming the first
+    /// index `>= view.len()` and [`NbhdError::DuplicateIndex`] naming the smallest index
+    /// listed twice.
+    pub fn build_subset(
+        view: &PointsView<'_>,
+        indices: &[u32],
+        options: &BuildOptions,
+    ) -> Result<Self> {
+        options.validate()?;
+        let sorted = checked_subset(indices, view.len())?;
+        Self::build_selected(view, Selection::Subset(&sorted), options)
+    }
+
+    fn build_selected(
+        view: &PointsView<'_>,
+        selection: Selection<'_>,
+        options: &BuildOptions,
+    ) -> Result<Self> {
         let dim = view.dim();
         let (subtree, coords, ids) = match dim {
-            1 => build_inline::<T, 1>(view, options)?,
-            2 => build_inline::<T, 2>(view, options)?,
-            3 => build_inline::<T, 3>(view, options)?,
+            1 => build_inline::<T, 1>(view, selection, options)?,
+            2 => build_inline::<T, 2>(view, selection, options)?,
+            3 => build_inline::<T, 3>(view, selection, options)?,
             _ => {
-                let cloud = Cloud::<T>::from_view(view, options.non_finite)?;
+                let cloud = Cloud::<T>::from_view_at(
+                    view,
+                    (0..selection.len()).map(|i| selection.at(i)),
+                    options.non_finite,
+                )?;
                 let n = cloud.len();
                 let layout = BySlot {
                     coords: &cloud.coords,
@@ -65,24 +132,50 @@ impl<T: Scalar> KdTree<T> {
     }
 }
 
+/// `indices` checked against a view of `count` points and made strictly increasing (borrowed
+/// when they already are, the usual case).
+fn checked_subset(indices: &[u32], count: usize) -> Result<Cow<'_, [u32]>> {
+    if indices.is_empty() {
+        return Err(NbhdError::EmptyInput);
+    }
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= count) {
+        return Err(NbhdError::IndexOutOfRange {
+            index: bad as usize,
+            count,
+        });
+    }
+    if indices.windows(2).all(|w| w[0] < w[1]) {
+        return Ok(Cow::Borrowed(indices));
+    }
+    let mut sorted = indices.to_vec();
+    sorted.sort_unstable();
+    if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+        return Err(NbhdError::DuplicateIndex {
+            index: w[0] as usize,
+        });
+    }
+    Ok(Cow::Owned(sorted))
+}
+
 /// Builds with compact records of dimension `D`, read straight from the caller's buffer;
 /// returns the nodes, the coordinates and the caller indices in tree order. A record's slot is
 /// the caller's index itself: it orders ties exactly as the packed slots of a [`Cloud`] would
 /// (both increase with the caller's index), and needs no map back.
 fn build_inline<T: Scalar, const D: usize>(
     view: &PointsView<'_>,
+    sel: Selection<'_>,
     options: &BuildOptions,
 ) -> Result<(Subtree<T>, Vec<T>, Vec<u32>)> {
     // Reading the points and copying the result out are a fifth of a fast build: on more than
     // one thread they would cap its speed-up, so for large clouds they run in parallel too.
-    let parallel = options.threads != 1 && view.len() >= PARALLEL_COPY_MIN;
+    let parallel = options.threads != 1 && sel.len() >= PARALLEL_COPY_MIN;
     let work = || {
         let policy = options.non_finite;
         let mut records = match (view.scalar_type(), parallel) {
-            (ScalarType::F32, false) => read_records::<T, f32, D>(view, policy)?,
-            (ScalarType::F64, false) => read_records::<T, f64, D>(view, policy)?,
-            (ScalarType::F32, true) => read_records_parallel::<T, f32, D>(view, policy)?,
-            (ScalarType::F64, true) => read_records_parallel::<T, f64, D>(view, policy)?,
+            (ScalarType::F32, false) => read_records::<T, f32, D>(view, sel, policy)?,
+            (ScalarType::F64, false) => read_records::<T, f64, D>(view, sel, policy)?,
+            (ScalarType::F32, true) => read_records_parallel::<T, f32, D>(view, sel, policy)?,
+            (ScalarType::F64, true) => read_records_parallel::<T, f64, D>(view, sel, policy)?,
         };
         let subtree = run_build(Inline::<D>, options, &mut records)?;
         let mut coords = vec![T::ZERO; records.len() * D];
@@ -116,41 +209,46 @@ fn build_inline<T: Scalar, const D: usize>(
 /// Points from which a build on more than one thread reads and writes its copies in parallel.
 const PARALLEL_COPY_MIN: usize = 256 * 1024;
 
-/// [`read_records`] on the current rayon pool: every point converted in parallel, in order;
+/// [`read_records`] on the current rayon pool: every selected point converted in parallel, in order;
 /// if any is not finite, the serial reader decides (the error names the first such point, or
 /// the skipped points are left out).
 fn read_records_parallel<T: Scalar, S: Scalar, const D: usize>(
     view: &PointsView<'_>,
+    sel: Selection<'_>,
     policy: NonFinitePolicy,
 ) -> Result<Vec<Record<T, D>>> {
     let mut records = Vec::new();
-    (0..view.len())
+    (0..sel.len())
         .into_par_iter()
         .with_min_len(4096)
-        .map(|i| Record {
-            p: view.row::<S, D>(i).map(|c| T::from_f64(c.to_f64())),
-            slot: i as u32,
+        .map(|i| {
+            let i = sel.at(i);
+            Record {
+                p: view.row::<S, D>(i).map(|c| T::from_f64(c.to_f64())),
+                slot: i as u32,
+            }
         })
         .collect_into_vec(&mut records);
     if records
         .par_iter()
         .any(|r| r.p.iter().any(|c| !c.is_finite()))
     {
-        return read_records::<T, S, D>(view, policy);
+        return read_records::<T, S, D>(view, sel, policy);
     }
     Ok(records)
 }
 
-/// The finite points of `view` (stored as `S`) as records of `T` coordinates, applying
+/// The finite selected points of `view` (stored as `S`) as records of `T` coordinates, applying
 /// `policy` to the others (a value finite in `S` that overflows `T` counts as non-finite, as
 /// in [`Cloud::from_view`]).
 fn read_records<T: Scalar, S: Scalar, const D: usize>(
     view: &PointsView<'_>,
+    sel: Selection<'_>,
     policy: NonFinitePolicy,
 ) -> Result<Vec<Record<T, D>>> {
-    let n = view.len();
+    let n = sel.len();
     let mut records = Vec::with_capacity(n);
-    for i in 0..n {
+    for i in (0..n).map(|i| sel.at(i)) {
         let p = view.row::<S, D>(i).map(|c| T::from_f64(c.to_f64()));
         if p.iter().all(|c| c.is_finite()) {
             records.push(Record { p, slot: i as u32 });
