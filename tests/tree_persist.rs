@@ -460,3 +460,111 @@ fn resealed_mutations_are_refused_or_answer_exactly() {
     // within its cell): those must be answered exactly, so the check above is not vacuous.
     assert!(loaded > 0, "{refused} refused, none loaded");
 }
+
+#[allow(dead_code)]
+#[path = "../fuzz/tree_bodies.rs"]
+mod tree_bodies;
+
+/// The fuzz seeds of `load_tree` (a mode byte, then a saved tree): the trees below.
+/// `NBHD_BLESS_FUZZ_SEEDS=1` writes them.
+fn seed_trees() -> Vec<(&'static str, u8, Vec<u8>)> {
+    let skip = |pivot, leaf_size| BuildOptions {
+        pivot,
+        leaf_size,
+        non_finite: NonFinitePolicy::Skip,
+        ..BuildOptions::default()
+    };
+    let f32s = |kind, n, d, seed| to_f32(&points(kind, n, d, seed));
+    vec![
+        ("f32-3d-skipped", 0, small_tree().to_bytes()),
+        ("f32-3d-resealed", 1, small_tree().to_bytes()),
+        (
+            "f64-1d-cyclic-leaf1",
+            2,
+            build(&cloud(30, 1, 4), 1, skip(PivotPolicy::CyclicMedian, 1)).to_bytes(),
+        ),
+        (
+            "f64-7d-closest",
+            3,
+            build(&cloud(40, 7, 5), 7, skip(PivotPolicy::ClosestToMiddle, 4)).to_bytes(),
+        ),
+        (
+            "f32-2d-identical",
+            1,
+            build(
+                &f32s(Kind::AllIdentical, 20, 2, 1),
+                2,
+                skip(PivotPolicy::SpreadMedian, 3),
+            )
+            .to_bytes(),
+        ),
+        (
+            "f32-3d-one-point",
+            0,
+            build(&[1.0f32, 2.0, 3.0], 3, BuildOptions::default()).to_bytes(),
+        ),
+    ]
+}
+
+fn data_dir(sub: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(sub)
+        .join("load_tree")
+}
+
+fn files_in(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+#[test]
+fn fuzz_seeds_and_regressions_through_the_loader() {
+    let seeds = data_dir("fuzz-seeds");
+    if std::env::var_os("NBHD_BLESS_FUZZ_SEEDS").is_some() {
+        std::fs::create_dir_all(&seeds).unwrap();
+        for (name, mode, bytes) in seed_trees() {
+            let mut b = vec![mode];
+            b.extend_from_slice(&bytes);
+            std::fs::write(seeds.join(name), b).unwrap();
+        }
+    }
+    let files = files_in(&seeds);
+    assert_eq!(files.len(), seed_trees().len(), "seeds in {}", seeds.display());
+    for path in &files {
+        let bytes = std::fs::read(path).unwrap();
+        // Each seed is a valid tree of the type its mode byte names.
+        let tree = &bytes[1..];
+        let ok = if bytes[0] & 2 == 0 {
+            KdTree::<f32>::from_bytes(tree).is_ok()
+        } else {
+            KdTree::<f64>::from_bytes(tree).is_ok()
+        };
+        assert!(ok, "{}", path.display());
+        tree_bodies::load_tree(&bytes);
+    }
+    for path in files_in(&data_dir("fuzz-regressions")) {
+        tree_bodies::load_tree(&std::fs::read(&path).unwrap());
+    }
+    // Seeded mutations of the seeds, resealed or not, f32 or f64.
+    let mut rng = Rng::new(5);
+    for round in 0..4000 {
+        let mut b = std::fs::read(&files[round % files.len()]).unwrap();
+        b[0] = rng.below(4) as u8;
+        for _ in 0..1 + rng.below(4) {
+            let at = 1 + rng.below(b.len() - 1);
+            b[at] = match rng.below(3) {
+                0 => b[at] ^ (1 << rng.below(8)),
+                1 => rng.below(256) as u8,
+                _ => b[at].wrapping_sub(1),
+            };
+        }
+        if rng.below(10) == 0 {
+            b.truncate(1 + rng.below(b.len() - 1));
+        }
+        tree_bodies::load_tree(&b);
+    }
+}
