@@ -323,6 +323,8 @@ impl SavedTreeInfo {
         let size = |v: u64| {
             usize::try_from(v).map_err(|_| invalid(format!("{v} is too large for this machine")))
         };
+        // Every section's length then fits in memory sizes too.
+        size(total_len)?;
         Ok(Self {
             format_version: version,
             library_version: written_by,
