@@ -20,7 +20,9 @@
  *   NBHD_STATUS_INVALID_ARGUMENT. The message names the field and the value.
  *
  * Ownership
- *   - nbhd_tree_build makes an nbhd_tree* that you free with nbhd_tree_free.
+ *   - nbhd_tree_build, nbhd_tree_load and nbhd_tree_load_from_buffer make an nbhd_tree* that
+ *     you free with nbhd_tree_free. nbhd_tree_save_to_buffer writes into your buffer (a call
+ *     with capacity 0 tells the size); a saved tree is in the format of docs/tree-file-format.md.
  *   - nbhd_tree_neighborhoods(_of) make an nbhd_neighborhoods* that you free with
  *     nbhd_neighborhoods_free. A table does not refer to its tree; free them in any order.
  *   - Both free functions accept NULL.
@@ -321,6 +323,22 @@ typedef enum {
      * were needed. Nothing is written and the process is unharmed.
      */
     NBHD_STATUS_OUT_OF_MEMORY = 21,
+    /**
+     * A file could not be opened, read or written (the message names the file and gives
+     * the operating system's reason).
+     */
+    NBHD_STATUS_IO_ERROR = 22,
+    /**
+     * The bytes are not a saved tree this library reads: not a saved nbhd tree at all, or one
+     * of another format version or byte order (the message names what differs: the file's
+     * value and this library's).
+     */
+    NBHD_STATUS_FORMAT_MISMATCH = 23,
+    /**
+     * A saved tree is damaged: truncated, followed by other bytes, a checksum that does not
+     * match, or a field or node structure that is inconsistent (the message says which).
+     */
+    NBHD_STATUS_CORRUPT_DATA = 24,
 } nbhd_status;
 
 /**
@@ -473,7 +491,7 @@ typedef struct nbhd_neighborhoods nbhd_neighborhoods;
 /**
  * A built k-d tree (opaque). It holds its own copy of the points, in the scalar type of the
  * points it was built from, and is immutable: any number of threads may query one tree at
- * once. Made by nbhd_tree_build, freed by nbhd_tree_free.
+ * once. Made by nbhd_tree_build or nbhd_tree_load(_from_buffer), freed by nbhd_tree_free.
  */
 typedef struct nbhd_tree nbhd_tree;
 
@@ -1103,11 +1121,12 @@ nbhd_status nbhd_tree_build_indices(const nbhd_points *points,
                                     nbhd_tree **out_tree);
 
 /**
- * Frees a tree made by nbhd_tree_build(_indices). NULL is ignored. The tree must not be in use by
- * another thread, and must not be used after this call.
+ * Frees a tree made by nbhd_tree_build(_indices) or nbhd_tree_load(_from_buffer). NULL is
+ * ignored. The tree must not be in use by another thread, and must not be used after this call.
  *
  * # Safety
- * `tree` must be NULL or a handle from nbhd_tree_build not freed before.
+ * `tree` must be NULL or a handle from nbhd_tree_build or nbhd_tree_load(_from_buffer) not
+ * freed before.
  */
 void nbhd_tree_free(nbhd_tree *tree);
 
@@ -1123,6 +1142,81 @@ void nbhd_tree_free(nbhd_tree *tree);
  * writable.
  */
 nbhd_status nbhd_tree_stats(const nbhd_tree *tree, nbhd_stats *out_stats);
+
+/**
+ * Writes `tree` to the file `path` (created, or truncated if it exists) in the saved-tree
+ * format (docs/tree-file-format.md): a versioned header with checksums, then the tree as
+ * built. nbhd_tree_load reads it back into a tree that answers every query exactly as
+ * `tree` does.
+ *
+ * Errors: NULL_POINTER (`tree`, `path`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
+ * `path`; off Unix, a `path` that is not UTF-8), IO_ERROR (the file cannot be created or
+ * written; the message names it and gives the system's reason).
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `path` NULL or a NUL-terminated string.
+ */
+nbhd_status nbhd_tree_save(const nbhd_tree *tree, const char *path);
+
+/**
+ * Writes `tree` in the saved-tree format into the caller's `buffer` of `capacity` bytes, and
+ * the number of bytes the saved tree takes to `*size` — also when the buffer is too small, so
+ * a first call with `capacity` 0 (and `buffer` NULL) asks for the size. The bytes are those
+ * nbhd_tree_save writes to a file; nbhd_tree_load_from_buffer reads them.
+ *
+ * Errors: NULL_POINTER (`tree`, `size`, or `buffer` when `capacity` is large enough),
+ * MISALIGNED_POINTER, BUFFER_TOO_SMALL (`capacity` < `*size`; nothing is written to
+ * `buffer`).
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `buffer` NULL or writable for `capacity` bytes;
+ * `size` NULL or writable.
+ */
+nbhd_status nbhd_tree_save_to_buffer(const nbhd_tree *tree,
+                                     void *buffer,
+                                     size_t capacity,
+                                     size_t *size);
+
+/**
+ * Loads the tree saved in the file `path` (by nbhd_tree_save or nbhd_tree_save_to_buffer,
+ * by any nbhd that writes format version 1) and stores a new handle in `*out_tree`. The tree
+ * has the scalar type it was saved with (nbhd_tree_stats tells it) and answers every query
+ * exactly as the saved tree did.
+ *
+ * Nothing in the file is trusted: the header and data are checked (magic, byte order, format
+ * version, checksums, every field, the node structure) before a tree is handed out, so a
+ * damaged or crafted file is refused, never answered wrong. On any error `*out_tree` is set
+ * to NULL (if `out_tree` is not NULL).
+ *
+ * Errors: NULL_POINTER (`path`, `out_tree`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
+ * `path`; off Unix, not UTF-8), IO_ERROR (the file cannot be read; the message names it),
+ * FORMAT_MISMATCH (not a saved nbhd tree, or one of another format version or byte order: the
+ * message names the file's value and this library's), CORRUPT_DATA (truncated, followed by
+ * other bytes, a checksum that does not match, an inconsistent field or node structure: the
+ * message says which).
+ *
+ * Ownership: the caller owns `*out_tree` and frees it with nbhd_tree_free.
+ *
+ * # Safety
+ * `path` must be NULL or a NUL-terminated string; `out_tree` NULL or writable.
+ */
+nbhd_status nbhd_tree_load(const char *path, nbhd_tree **out_tree);
+
+/**
+ * Loads the tree saved in the `size` bytes at `data` (as nbhd_tree_save_to_buffer wrote
+ * them, or read from a file nbhd_tree_save wrote) and stores a new handle in `*out_tree`. The
+ * bytes are copied: `data` may be freed as soon as this returns. Checks and errors as
+ * nbhd_tree_load, without IO_ERROR: NULL_POINTER (`data`, `out_tree`), MISALIGNED_POINTER,
+ * INVALID_ARGUMENT (`size` above PTRDIFF_MAX), FORMAT_MISMATCH, CORRUPT_DATA. On any error
+ * `*out_tree` is set to NULL (if `out_tree` is not NULL).
+ *
+ * Ownership: the caller owns `*out_tree` and frees it with nbhd_tree_free.
+ *
+ * # Safety
+ * `data` must be NULL or readable for `size` bytes, not written during the call; `out_tree`
+ * NULL or writable.
+ */
+nbhd_status nbhd_tree_load_from_buffer(const void *data, size_t size, nbhd_tree **out_tree);
 
 /**
  * The `k` points of the tree nearest to the point `query`.

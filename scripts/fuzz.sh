@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Fuzzes each reader of nbhd::io (PLY, PCD, PCD binary_compressed data, OBJ, XYZ, LAS/LAZ) and
+# Fuzzes each reader of nbhd::io (PLY, PCD, PCD binary_compressed data, OBJ, XYZ, LAS/LAZ),
+# the saved-tree loader (load_tree, fuzz/tree_bodies.rs) and
 # the C ABI's build/query, table and smoothing entry points (abi_*, fuzz/abi_bodies.rs) with
 # cargo-fuzz (libFuzzer) for a few seconds each: scripts/test.sh runs it so.
 #
@@ -30,7 +31,7 @@ export CARGO_TARGET_DIR="$target_dir/fuzz"
 targets=("$@")
 if [ "${#targets[@]}" -eq 0 ]; then
     targets=(read_ply read_pcd read_pcd_compressed read_obj read_xyz read_las
-        abi_build_query abi_tables abi_smoothing)
+        abi_build_query abi_tables abi_smoothing load_tree)
 fi
 
 echo "== building the fuzz targets"

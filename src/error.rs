@@ -128,6 +128,125 @@ pub enum NbhdError {
         /// Whether ε was given relative to `h`.
         relative: bool,
     },
+    /// A saved tree (`KdTree::load`, docs/tree-file-format.md) was refused: another format,
+    /// version, scalar type, dimension or byte order, or damaged data. Says what differs.
+    SavedTree(SavedTreeError),
+    /// Reading or writing a file or stream failed.
+    Io {
+        /// What was being done, e.g. "reading the saved tree from scan.nbhdtree".
+        context: String,
+        /// The operating system's kind of error.
+        kind: std::io::ErrorKind,
+        /// The operating system's message.
+        message: String,
+    },
+}
+
+/// Why a saved tree was refused; each variant names what differs from what this library reads.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SavedTreeError {
+    /// The input does not start with the magic bytes of a saved tree.
+    NotATree {
+        /// The first bytes found (at most 8).
+        found: Vec<u8>,
+    },
+    /// The file was written on a machine of the other byte order.
+    ByteOrder {
+        /// The file's byte order ("big-endian" or "little-endian").
+        file: &'static str,
+        /// This machine's.
+        machine: &'static str,
+    },
+    /// The file's format version is not the one this library reads.
+    FormatVersion {
+        /// The file's format version.
+        file: u32,
+        /// The version this library reads.
+        supported: u32,
+        /// The library version that wrote the file, as "MAJOR.MINOR.PATCH".
+        written_by: String,
+    },
+    /// The file holds coordinates of another scalar type than the tree asked for.
+    ScalarType {
+        /// The file's type ("f32" or "f64").
+        file: &'static str,
+        /// The type asked for.
+        expected: &'static str,
+    },
+    /// The file's tree has another dimension than the one asked for.
+    Dimension {
+        /// The file's dimension.
+        file: usize,
+        /// The dimension asked for.
+        expected: usize,
+    },
+    /// The input ends before the data its header declares.
+    Truncated {
+        /// Bytes the header declares (header and payload).
+        needed: u64,
+        /// Bytes present.
+        available: u64,
+    },
+    /// A checksum does not match: the data were changed after they were written.
+    Checksum {
+        /// "header" or "payload".
+        part: &'static str,
+        /// The CRC-32 stored in the file.
+        stored: u32,
+        /// The CRC-32 of the bytes read.
+        computed: u32,
+    },
+    /// A field or the tree's structure is inconsistent (the message names which and why).
+    Invalid(String),
+}
+
+impl fmt::Display for SavedTreeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use SavedTreeError::*;
+        match self {
+            NotATree { found } => write!(
+                f,
+                "not a saved nbhd tree: it starts with {:?}, not \"NBHDTREE\"",
+                String::from_utf8_lossy(found)
+            ),
+            ByteOrder { file, machine } => write!(
+                f,
+                "the saved tree was written on a {file} machine and this one is {machine}"
+            ),
+            FormatVersion {
+                file,
+                supported,
+                written_by,
+            } => write!(
+                f,
+                "the saved tree has format version {file} (written by nbhd {written_by}); this \
+                 library reads format version {supported}"
+            ),
+            ScalarType { file, expected } => write!(
+                f,
+                "the saved tree holds {file} coordinates but a tree of {expected} was asked for"
+            ),
+            Dimension { file, expected } => write!(
+                f,
+                "the saved tree has dimension {file} but dimension {expected} was asked for"
+            ),
+            Truncated { needed, available } => write!(
+                f,
+                "the saved tree is truncated: its header declares {needed} bytes but only \
+                 {available} are present"
+            ),
+            Checksum {
+                part,
+                stored,
+                computed,
+            } => write!(
+                f,
+                "the saved tree's {part} is corrupted: its CRC-32 is {computed:#010x} but \
+                 {stored:#010x} was stored"
+            ),
+            Invalid(what) => write!(f, "the saved tree is corrupted: {what}"),
+        }
+    }
 }
 
 /// Bytes as a short human-readable size, e.g. "7.2 GB".
@@ -257,11 +376,32 @@ impl fmt::Display for NbhdError {
                     write!(f, "; epsilon was taken in the points' units (ABSOLUTE)")
                 }
             }
+            SavedTree(e) => e.fmt(f),
+            Io {
+                context, message, ..
+            } => write!(f, "{context}: {message}"),
         }
     }
 }
 
 impl std::error::Error for NbhdError {}
+
+impl From<SavedTreeError> for NbhdError {
+    fn from(e: SavedTreeError) -> Self {
+        NbhdError::SavedTree(e)
+    }
+}
+
+impl NbhdError {
+    /// An I/O error while `context` (e.g. "writing the saved tree").
+    pub(crate) fn io(context: impl Into<String>, e: &std::io::Error) -> Self {
+        NbhdError::Io {
+            context: context.into(),
+            kind: e.kind(),
+            message: e.to_string(),
+        }
+    }
+}
 
 impl NbhdError {
     /// The error of query `index` of a batch: a non-finite query names it.

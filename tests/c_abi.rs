@@ -393,6 +393,30 @@ fn c_subset_trees_are_clean_under_valgrind() {
     }
 }
 
+/// A scratch directory for a C test's files, emptied first.
+fn scratch(name: &str) -> PathBuf {
+    let dir = built().out_dir.join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn c_saved_trees_load_back() {
+    let mut cmd = Command::new(compiled("persist_test"));
+    cmd.arg(scratch("persist"));
+    run(cmd, "tests/c/persist_test");
+}
+
+#[test]
+fn c_saved_trees_are_clean_under_valgrind() {
+    let exe = compiled("persist_test");
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(exe).arg(scratch("persist-valgrind"));
+        run(cmd, "valgrind tests/c/persist_test");
+    }
+}
+
 /// Names of the functions the header declares.
 fn header_functions() -> Vec<String> {
     let header = std::fs::read_to_string(Path::new(ROOT).join("include/nbhd.h")).unwrap();

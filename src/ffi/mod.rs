@@ -36,6 +36,8 @@ pub mod types;
 
 pub mod tree;
 
+pub mod persist;
+
 pub mod query;
 
 pub mod table;
@@ -56,6 +58,7 @@ mod fields;
 
 pub use enums::*;
 pub use normals::*;
+pub use persist::*;
 pub use prepared::*;
 pub use query::*;
 pub use robust::*;

@@ -6,7 +6,7 @@ use std::ffi::{c_char, c_int, CStr, CString};
 use std::fmt;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use crate::error::NbhdError;
+use crate::error::{NbhdError, SavedTreeError};
 
 /// What a fallible nbhd function returns. NBHD_STATUS_OK is 0; every other value is an
 /// error, described in words for the calling thread by nbhd_last_error_message().
@@ -73,10 +73,20 @@ pub enum nbhd_status {
     /// (a table with very many neighbours, a huge k) failed. The message says how many bytes
     /// were needed. Nothing is written and the process is unharmed.
     OutOfMemory = 21,
+    /// A file could not be opened, read or written (the message names the file and gives
+    /// the operating system's reason).
+    IoError = 22,
+    /// The bytes are not a saved tree this library reads: not a saved nbhd tree at all, or one
+    /// of another format version or byte order (the message names what differs: the file's
+    /// value and this library's).
+    FormatMismatch = 23,
+    /// A saved tree is damaged: truncated, followed by other bytes, a checksum that does not
+    /// match, or a field or node structure that is inconsistent (the message says which).
+    CorruptData = 24,
 }
 
 impl nbhd_status {
-    const ALL: [nbhd_status; 22] = [
+    const ALL: [nbhd_status; 25] = [
         nbhd_status::Ok,
         nbhd_status::NullPointer,
         nbhd_status::MisalignedPointer,
@@ -99,6 +109,9 @@ impl nbhd_status {
         nbhd_status::Internal,
         nbhd_status::Degenerate,
         nbhd_status::OutOfMemory,
+        nbhd_status::IoError,
+        nbhd_status::FormatMismatch,
+        nbhd_status::CorruptData,
     ];
 
     /// A short, static description.
@@ -127,6 +140,9 @@ impl nbhd_status {
             Internal => c"internal error in nbhd (a bug; please report it)",
             Degenerate => c"every neighbourhood is degenerate (is epsilon in the right units?)",
             OutOfMemory => c"out of memory",
+            IoError => c"a file could not be read or written",
+            FormatMismatch => c"not a saved tree of this format version and byte order",
+            CorruptData => c"the saved tree is damaged (truncated or corrupted)",
         }
     }
 }
@@ -186,6 +202,17 @@ impl FfiError {
                 NbhdError::SizeOverflow { .. } => S::InvalidArgument,
                 NbhdError::OutOfMemory { .. } => S::OutOfMemory,
                 NbhdError::Degenerate { .. } => S::Degenerate,
+                NbhdError::Io { .. } => S::IoError,
+                NbhdError::SavedTree(e) => match e {
+                    SavedTreeError::NotATree { .. }
+                    | SavedTreeError::ByteOrder { .. }
+                    | SavedTreeError::FormatVersion { .. }
+                    | SavedTreeError::ScalarType { .. } => S::FormatMismatch,
+                    SavedTreeError::Dimension { .. } => S::DimensionMismatch,
+                    SavedTreeError::Truncated { .. }
+                    | SavedTreeError::Checksum { .. }
+                    | SavedTreeError::Invalid(_) => S::CorruptData,
+                },
             },
         }
     }
@@ -396,7 +423,7 @@ mod tests {
             let text = unsafe { CStr::from_ptr(nbhd_status_string(s as c_int)) };
             assert!(!text.to_bytes().is_empty());
         }
-        for bad in [-1, 22, c_int::MAX, c_int::MIN] {
+        for bad in [-1, 25, c_int::MAX, c_int::MIN] {
             // SAFETY: as above.
             let text = unsafe { CStr::from_ptr(nbhd_status_string(bad)) };
             assert_eq!(text.to_str().unwrap(), "unknown status");

@@ -9,7 +9,7 @@ use crate::NeighborSearch;
 
 /// A built k-d tree (opaque). It holds its own copy of the points, in the scalar type of the
 /// points it was built from, and is immutable: any number of threads may query one tree at
-/// once. Made by nbhd_tree_build, freed by nbhd_tree_free.
+/// once. Made by nbhd_tree_build or nbhd_tree_load(_from_buffer), freed by nbhd_tree_free.
 pub struct nbhd_tree {
     pub(crate) inner: AnyTree,
 }
@@ -161,11 +161,12 @@ pub unsafe extern "C" fn nbhd_tree_build_indices(
     })
 }
 
-/// Frees a tree made by nbhd_tree_build(_indices). NULL is ignored. The tree must not be in use by
-/// another thread, and must not be used after this call.
+/// Frees a tree made by nbhd_tree_build(_indices) or nbhd_tree_load(_from_buffer). NULL is
+/// ignored. The tree must not be in use by another thread, and must not be used after this call.
 ///
 /// # Safety
-/// `tree` must be NULL or a handle from nbhd_tree_build not freed before.
+/// `tree` must be NULL or a handle from nbhd_tree_build or nbhd_tree_load(_from_buffer) not
+/// freed before.
 #[no_mangle]
 pub unsafe extern "C" fn nbhd_tree_free(tree: *mut nbhd_tree) {
     guard_value("nbhd_tree_free", (), || {
@@ -179,7 +180,7 @@ pub unsafe extern "C" fn nbhd_tree_free(tree: *mut nbhd_tree) {
             });
             return;
         }
-        // SAFETY: `tree` came from Box::into_raw in nbhd_tree_build and is freed only once
+        // SAFETY: `tree` came from Box::into_raw in nbhd_tree_build or a load and is freed only once
         // (caller).
         drop(unsafe { Box::from_raw(tree) });
     })

@@ -9,7 +9,8 @@
 //!   itself (Algorithm 3.1) and what it works on;
 //! - `neighborhoods.rs`: the table driver, [`KdTree::neighborhoods`] and
 //!   [`KdTree::neighborhoods_of`];
-//! - `search.rs`, `group_search.rs`: the descents that answer one query or a group.
+//! - `search.rs`, `group_search.rs`: the descents that answer one query or a group;
+//! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
 
 mod build;
 mod construct;
@@ -18,6 +19,7 @@ mod layout;
 mod neighborhoods;
 mod node;
 pub mod options;
+mod persist;
 mod presorted;
 mod search;
 mod split;
@@ -31,6 +33,7 @@ use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
 use node::Node;
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
+pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
 use search::TreeView;
 
 /// Shape and memory of a built tree.
