@@ -73,10 +73,13 @@ pub enum nbhd_status {
     /// (a table with very many neighbours, a huge k) failed. The message says how many bytes
     /// were needed. Nothing is written and the process is unharmed.
     OutOfMemory = 21,
+    /// An index passed to a dynamic tree names a point already removed (indices are never
+    /// reused), or is named twice in one removal.
+    RemovedPoint = 22,
 }
 
 impl nbhd_status {
-    const ALL: [nbhd_status; 22] = [
+    const ALL: [nbhd_status; 23] = [
         nbhd_status::Ok,
         nbhd_status::NullPointer,
         nbhd_status::MisalignedPointer,
@@ -99,6 +102,7 @@ impl nbhd_status {
         nbhd_status::Internal,
         nbhd_status::Degenerate,
         nbhd_status::OutOfMemory,
+        nbhd_status::RemovedPoint,
     ];
 
     /// A short, static description.
@@ -127,6 +131,7 @@ impl nbhd_status {
             Internal => c"internal error in nbhd (a bug; please report it)",
             Degenerate => c"every neighbourhood is degenerate (is epsilon in the right units?)",
             OutOfMemory => c"out of memory",
+            RemovedPoint => c"the point was removed from the dynamic tree",
         }
     }
 }
@@ -178,6 +183,7 @@ impl FfiError {
                 NbhdError::DimensionMismatch { .. } => S::DimensionMismatch,
                 NbhdError::IndexOutOfRange { .. } => S::IndexOutOfRange,
                 NbhdError::SkippedPoint { .. } => S::SkippedPoint,
+                NbhdError::RemovedPoint { .. } => S::RemovedPoint,
                 NbhdError::InvalidOption { .. } => S::InvalidOption,
                 NbhdError::Cancelled => S::Cancelled,
                 NbhdError::ThreadPool(_) => S::ThreadPool,

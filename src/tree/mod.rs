@@ -17,6 +17,7 @@ mod group_search;
 mod layout;
 mod neighborhoods;
 mod node;
+mod part;
 pub mod options;
 mod presorted;
 mod search;
