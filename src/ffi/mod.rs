@@ -40,6 +40,8 @@ pub mod query;
 
 pub mod table;
 
+pub mod dynamic;
+
 pub mod smoothing_io;
 
 pub mod smooth;
@@ -54,6 +56,7 @@ mod args;
 
 mod fields;
 
+pub use dynamic::*;
 pub use enums::*;
 pub use normals::*;
 pub use prepared::*;

@@ -401,7 +401,7 @@ mod tests {
             let text = unsafe { CStr::from_ptr(nbhd_status_string(s as c_int)) };
             assert!(!text.to_bytes().is_empty());
         }
-        for bad in [-1, 22, c_int::MAX, c_int::MIN] {
+        for bad in [-1, 23, c_int::MAX, c_int::MIN] {
             // SAFETY: as above.
             let text = unsafe { CStr::from_ptr(nbhd_status_string(bad)) };
             assert_eq!(text.to_str().unwrap(), "unknown status");
