@@ -78,7 +78,11 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
         Err(NbhdError::IndexOutOfRange { .. })
     ));
     let free: Vec<Vec<T>> = (0..3)
-        .map(|_| (0..d).map(|_| T::from_f64(rng.unit() * 2.0 - 0.5)).collect())
+        .map(|_| {
+            (0..d)
+                .map(|_| T::from_f64(rng.unit() * 2.0 - 0.5))
+                .collect()
+        })
         .collect();
     if live.is_empty() {
         for q in &free {
@@ -96,7 +100,11 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
     let brute = BruteForce::<T>::new(&view, NonFinitePolicy::Skip).unwrap();
     // A radius through a real neighbour distance, so boundary points exist.
     brute
-        .search(Query::point(&free[0]), Neighborhood::Knn { k: 5 }, &mut want)
+        .search(
+            Query::point(&free[0]),
+            Neighborhood::Knn { k: 5 },
+            &mut want,
+        )
         .unwrap();
     let radius = T::from_f64(want.last().unwrap().sq_dist.to_f64().sqrt());
     let some_live = live[rng.below(live.len())];
@@ -200,6 +208,9 @@ fn run<T: Scalar>(kind: Kind, d: usize, options: BuildOptions, seed: u64, steps:
         });
     }
     let mut tree = DynamicKdTree::<T>::new(d, &options).unwrap();
+    // growth factors 2 to 5: other forests, the same answers
+    tree.set_growth(2 + (seed % 4) as usize).unwrap();
+    assert!(tree.set_growth(1).is_err());
     let mut model = Model {
         dim: d,
         coords: Vec::new(),
@@ -250,7 +261,8 @@ fn run<T: Scalar>(kind: Kind, d: usize, options: BuildOptions, seed: u64, steps:
                 v
             };
             // A removal naming a removed index changes nothing.
-            if let Some(dead) = (0..model.live.len()).find(|&i| !model.live[i] && !model.skipped[i]) {
+            if let Some(dead) = (0..model.live.len()).find(|&i| !model.live[i] && !model.skipped[i])
+            {
                 let mut bad = victims.clone();
                 bad.push(dead as u32);
                 assert_eq!(
@@ -339,7 +351,9 @@ fn sliding_window_and_accumulation() {
             model.live.extend(std::iter::repeat_n(true, frame));
             model.skipped.extend(std::iter::repeat_n(false, frame));
             if f >= 6 {
-                let old: Vec<u32> = ((f - 6) * frame..(f - 5) * frame).map(|i| i as u32).collect();
+                let old: Vec<u32> = ((f - 6) * frame..(f - 5) * frame)
+                    .map(|i| i as u32)
+                    .collect();
                 tree.remove(&old).unwrap();
                 for &i in &old {
                     model.live[i as usize] = false;
@@ -351,7 +365,11 @@ fn sliding_window_and_accumulation() {
                 assert!(w[0].0 >= 2 * w[1].0, "sizes {:?}", stats.trees);
             }
             for t in &stats.trees {
-                assert!(t.1 <= t.0, "a tree with more removed than live {:?}", stats.trees);
+                assert!(
+                    t.1 <= t.0,
+                    "a tree with more removed than live {:?}",
+                    stats.trees
+                );
             }
             check(&tree, &model, &mut rng);
         }
@@ -373,11 +391,17 @@ fn bad_input() {
     let p3 = PointsView::from_flat(&[1.0f64, 2.0, 3.0], 3).unwrap();
     assert!(matches!(
         tree.insert(&p3),
-        Err(NbhdError::DimensionMismatch { expected: 2, got: 3 })
+        Err(NbhdError::DimensionMismatch {
+            expected: 2,
+            got: 3
+        })
     ));
     assert!(matches!(
         tree.insert_flat(&[0.0, 0.0, 1.0, f64::NAN]),
-        Err(NbhdError::NonFinite { index: 1, coordinate: 1 })
+        Err(NbhdError::NonFinite {
+            index: 1,
+            coordinate: 1
+        })
     ));
     // f64 values beyond f32 are not finite in an f32 tree
     let mut t32 = DynamicKdTree::<f32>::new(1, &BuildOptions::default()).unwrap();
@@ -394,11 +418,19 @@ fn bad_input() {
     ));
     tree.remove(&[1]).unwrap();
     assert_eq!(tree.remove(&[1]), Err(NbhdError::RemovedPoint { index: 1 }));
-    assert_eq!(tree.remove(&[0, 2, 1]), Err(NbhdError::RemovedPoint { index: 1 }));
+    assert_eq!(
+        tree.remove(&[0, 2, 1]),
+        Err(NbhdError::RemovedPoint { index: 1 })
+    );
     assert_eq!(tree.len(), 2);
     let mut out = Vec::new();
-    assert!(tree.knn(Query::point(&[0.0, f64::NAN]), 1, &mut out).is_err());
-    assert_eq!(tree.knn(Query::point(&[0.0, 0.0]), 0, &mut out), Err(NbhdError::ZeroK));
+    assert!(tree
+        .knn(Query::point(&[0.0, f64::NAN]), 1, &mut out)
+        .is_err());
+    assert_eq!(
+        tree.knn(Query::point(&[0.0, 0.0]), 0, &mut out),
+        Err(NbhdError::ZeroK)
+    );
     // a removed index is never given again
     assert_eq!(tree.insert_flat(&[1.0, 0.0]), Ok(3));
     tree.knn(Query::point(&[1.0, 0.0]), 3, &mut out).unwrap();

@@ -10,7 +10,9 @@
 //! - **Insertion.** A batch becomes a new tree of its own; then, while an older tree holds
 //!   fewer than [`GROWTH`] times the live points of the next newer one, the two are merged
 //!   (rebuilt as one). With batches of equal size this is a binary counter: a point takes part
-//!   in O(log(n / batch)) builds, and the forest holds O(log(n / batch)) trees.
+//!   in O(log(n / batch)) builds, and the forest holds O(log(n / batch)) trees. A larger factor
+//!   ([`DynamicKdTree::set_growth`]) keeps fewer, larger trees (faster queries) for more
+//!   rebuilding.
 //! - **Removal.** A removed point becomes a tombstone: its tree keeps it, and every search
 //!   skips it. A tree whose tombstones outnumber its live points is rebuilt over the live
 //!   ones, so tombstones never cost a search more than a factor 2; a tree whose points are all
@@ -47,8 +49,9 @@ use crate::points::PointsView;
 use crate::scalar::Scalar;
 use crate::tree::{BuildOptions, KdTree};
 
-/// Two neighbouring trees are merged when the older holds fewer than `GROWTH` times the live
-/// points of the newer: sizes at least double from the newest tree to the oldest.
+/// The default growth factor: two neighbouring trees are merged when the older holds fewer than
+/// `GROWTH` times the live points of the newer, so sizes at least double from the newest tree
+/// to the oldest.
 pub const GROWTH: usize = 2;
 
 /// One tree of the forest: the indices `lo..hi` it was built over (those live at its build),
@@ -99,6 +102,8 @@ pub struct DynamicKdTree<T> {
     /// The trees, oldest first; their index ranges are disjoint and increasing.
     parts: Vec<Part<T>>,
     live: usize,
+    /// Neighbouring trees merge while the older holds fewer than `growth` times the newer.
+    growth: usize,
 }
 
 #[inline(always)]
@@ -136,7 +141,25 @@ impl<T: Scalar> DynamicKdTree<T> {
             skipped: Vec::new(),
             parts: Vec::new(),
             live: 0,
+            growth: GROWTH,
         })
+    }
+
+    /// Sets the growth factor (at least 2; [`GROWTH`] by default): from the next insertion or
+    /// removal on, neighbouring trees merge while the older holds fewer than `growth` times the
+    /// live points of the newer. Larger values keep fewer, larger trees — queries visit fewer
+    /// trees — at the price of more rebuilding. Results do not depend on it.
+    ///
+    /// Errors: [`NbhdError::InvalidOption`] below 2.
+    pub fn set_growth(&mut self, growth: usize) -> Result<()> {
+        if growth < 2 {
+            return Err(NbhdError::InvalidOption {
+                name: "growth",
+                reason: format!("must be at least 2 (got {growth})"),
+            });
+        }
+        self.growth = growth;
+        Ok(())
     }
 
     /// Dimension of the points.
@@ -383,14 +406,14 @@ impl<T: Scalar> DynamicKdTree<T> {
 
     /// The forest `parts` with empty trees dropped, trees rebuilt whose removed points
     /// outnumber their live ones, and neighbours merged until every tree holds at least
-    /// [`GROWTH`] times the live points of the next newer one. One build per step, newest
+    /// `growth` times the live points of the next newer one. One build per step, newest
     /// first; every step drops a tree or all tombstones of one, so it ends.
     fn normalized(&self, mut parts: Vec<Part<T>>) -> Result<Vec<Part<T>>> {
         loop {
             parts.retain(|p| p.live > 0);
             let merge = (0..parts.len().saturating_sub(1))
                 .rev()
-                .find(|&i| parts[i].live < GROWTH * parts[i + 1].live);
+                .find(|&i| parts[i].live < self.growth * parts[i + 1].live);
             if let Some(i) = merge {
                 let merged = self.build_part(parts[i].lo, parts[i + 1].hi)?;
                 parts.splice(i..i + 2, [merged]);
@@ -416,4 +439,3 @@ impl<T: Scalar> DynamicKdTree<T> {
         }
     }
 }
-

@@ -289,7 +289,15 @@ pub unsafe extern "C" fn nbhd_dynamic_knn(
         count,
     };
     // SAFETY: the caller's contract is the one `query` requires.
-    unsafe { self::query("nbhd_dynamic_knn", tree, At::Point(query), NbhdArg::Knn(k), out) }
+    unsafe {
+        self::query(
+            "nbhd_dynamic_knn",
+            tree,
+            At::Point(query),
+            NbhdArg::Knn(k),
+            out,
+        )
+    }
 }
 
 /// All live points within `radius` of the point `query`; as nbhd_tree_radius.
