@@ -339,6 +339,11 @@ typedef enum {
      * match, or a field or node structure that is inconsistent (the message says which).
      */
     NBHD_STATUS_CORRUPT_DATA = 24,
+    /**
+     * An index passed to a dynamic tree names a point already removed (indices are never
+     * reused), or is named twice in one removal.
+     */
+    NBHD_STATUS_REMOVED_POINT = 25,
 } nbhd_status;
 
 /**
@@ -481,9 +486,25 @@ typedef enum {
 } nbhd_stage;
 
 /**
+ * A k-d tree that accepts insertions and removals (opaque); see nbhd_dynamic_create.
+ *
+ * Index rule: the points of each inserted batch get consecutive indices continuing from the
+ * previous batch (the first batch gets 0, 1, ...); a point keeps its index until it is
+ * removed, and a removed index is never given again (queries and removals naming it fail
+ * with NBHD_STATUS_REMOVED_POINT). Every query answers exactly what a static tree
+ * (nbhd_tree_build) over the live points, under these indices, answers.
+ *
+ * Thread safety: any number of threads may query one dynamic tree at once, but
+ * nbhd_dynamic_insert and nbhd_dynamic_remove must not run at the same time as any other
+ * call on the same tree.
+ */
+typedef struct nbhd_dynamic_tree nbhd_dynamic_tree;
+
+/**
  * A table of neighbourhoods (opaque): row i holds the neighbours of point i (or of query i),
  * ordered by (squared distance, index). Made by nbhd_tree_neighborhoods or
- * nbhd_tree_neighborhoods_of, freed by nbhd_neighborhoods_free. It does not refer to the
+ * nbhd_tree_neighborhoods_of (or their nbhd_dynamic_* twins), freed by
+ * nbhd_neighborhoods_free. It does not refer to the
  * tree: either may be freed first. Immutable: any number of threads may read it at once.
  */
 typedef struct nbhd_neighborhoods nbhd_neighborhoods;
@@ -636,6 +657,37 @@ typedef struct {
      */
     double radius;
 } nbhd_neighborhood_spec;
+
+/**
+ * Size and shape of a dynamic tree.
+ */
+typedef struct {
+    /**
+     * Live points.
+     */
+    size_t live;
+    /**
+     * Indices given so far (live, removed and skipped points): the index the next inserted
+     * point gets, and the number of rows of nbhd_dynamic_neighborhoods.
+     */
+    size_t next_index;
+    /**
+     * Static trees in the forest.
+     */
+    size_t trees;
+    /**
+     * Removed points still held by the trees (skipped by every query).
+     */
+    size_t removed_held;
+    /**
+     * Dimension.
+     */
+    size_t dim;
+    /**
+     * The tree's scalar type: of query coordinates and of squared distances.
+     */
+    nbhd_scalar_type scalar_type;
+} nbhd_dynamic_stats;
 
 /**
  * A progress callback: `fraction` grows from 0 to 1 over the run; return `true` to go on,
@@ -1473,6 +1525,203 @@ nbhd_status nbhd_neighborhoods_row(const nbhd_neighborhoods *table,
                                    const uint32_t **indices,
                                    const void **sq_dists,
                                    size_t *len);
+
+/**
+ * Makes an empty dynamic tree of dimension `dim` computing in `scalar_type` (an
+ * nbhd_scalar_type value) and stores the handle in `*out_tree`. `options` (NULL for the
+ * defaults) shape every static tree of the forest; its `non_finite` decides what inserting a
+ * NaN or infinite point does: REJECT refuses the batch, SKIP gives the point its index but
+ * leaves it out (queries naming it fail with NBHD_STATUS_SKIPPED_POINT).
+ *
+ * Errors: NULL_POINTER (`out_tree`), MISALIGNED_POINTER, ZERO_DIMENSION, INVALID_ARGUMENT
+ * (`scalar_type` not a value of nbhd_scalar_type), INVALID_OPTION. On error `*out_tree` is
+ * NULL.
+ *
+ * Ownership: the caller frees `*out_tree` with nbhd_dynamic_free.
+ *
+ * # Safety
+ * `options` must be NULL or point to an nbhd_build_options; `out_tree` NULL or writable.
+ */
+nbhd_status nbhd_dynamic_create(size_t dim,
+                                int scalar_type,
+                                const nbhd_build_options *options,
+                                nbhd_dynamic_tree **out_tree);
+
+/**
+ * Inserts the points `*points` (of either scalar type, converted to the tree's; of the
+ * tree's dimension) as one batch. `*out_first` (may be NULL) receives the index of the
+ * first: the batch gets `first .. first + points->count - 1`, in order. The point buffer
+ * may be freed as soon as this returns (the tree copies the points).
+ *
+ * Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data`),
+ * MISALIGNED_POINTER, the errors of a points description (see nbhd_tree_build: EMPTY_INPUT
+ * for count 0, INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
+ * NON_FINITE (with options.non_finite REJECT; the message names the point's position in the
+ * batch), TOO_MANY_POINTS (indices would pass UINT32_MAX - 1 over the tree's life),
+ * OUT_OF_MEMORY, THREAD_POOL.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle not in use by another thread; `points` NULL or a
+ * true description of readable memory; `out_first` NULL or writable.
+ */
+nbhd_status nbhd_dynamic_insert(nbhd_dynamic_tree *tree,
+                                const nbhd_points *points,
+                                uint32_t *out_first);
+
+/**
+ * Removes the live points `indices[0 .. count - 1]` (any order). Their indices are never
+ * given again. `indices` may be NULL when `count` is 0 (nothing to do).
+ *
+ * Errors, with nothing removed: NULL_POINTER, MISALIGNED_POINTER, INVALID_ARGUMENT (`count`
+ * larger than an array can be), INDEX_OUT_OF_RANGE (an index not given yet),
+ * REMOVED_POINT (an index already removed, or named twice), SKIPPED_POINT (a non-finite
+ * point skipped at insertion), THREAD_POOL.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle not in use by another thread; `indices` NULL or
+ * `count` readable `uint32_t`.
+ */
+nbhd_status nbhd_dynamic_remove(nbhd_dynamic_tree *tree, const uint32_t *indices, size_t count);
+
+/**
+ * Frees a dynamic tree. NULL is ignored.
+ *
+ * # Safety
+ * `tree` must be NULL or a handle from nbhd_dynamic_create not freed before, in use by no
+ * other thread.
+ */
+void nbhd_dynamic_free(nbhd_dynamic_tree *tree);
+
+/**
+ * Writes the size and shape of `tree` to `*out_stats`.
+ *
+ * Errors: NULL_POINTER, MISALIGNED_POINTER.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `out_stats` NULL or writable.
+ */
+nbhd_status nbhd_dynamic_tree_stats(const nbhd_dynamic_tree *tree, nbhd_dynamic_stats *out_stats);
+
+/**
+ * The `k` live points nearest to the point `query` (`dim` values of the tree's scalar type).
+ * Arguments, results, buffers and errors as nbhd_tree_knn; an empty tree gives `*count` 0.
+ *
+ * # Safety
+ * As nbhd_tree_knn, with `tree` a live dynamic tree not being changed by another thread.
+ */
+nbhd_status nbhd_dynamic_knn(const nbhd_dynamic_tree *tree,
+                             const void *query,
+                             size_t k,
+                             uint32_t *indices,
+                             void *sq_dists,
+                             size_t capacity,
+                             size_t *count);
+
+/**
+ * All live points within `radius` of the point `query`; as nbhd_tree_radius.
+ *
+ * # Safety
+ * As nbhd_dynamic_knn.
+ */
+nbhd_status nbhd_dynamic_radius(const nbhd_dynamic_tree *tree,
+                                const void *query,
+                                double radius,
+                                uint32_t *indices,
+                                void *sq_dists,
+                                size_t capacity,
+                                size_t *count);
+
+/**
+ * The `k` nearest among the live points within `radius` of the point `query`; as
+ * nbhd_tree_knn_radius.
+ *
+ * # Safety
+ * As nbhd_dynamic_knn.
+ */
+nbhd_status nbhd_dynamic_knn_radius(const nbhd_dynamic_tree *tree,
+                                    const void *query,
+                                    size_t k,
+                                    double radius,
+                                    uint32_t *indices,
+                                    void *sq_dists,
+                                    size_t capacity,
+                                    size_t *count);
+
+/**
+ * The `k` nearest neighbours of the live point `index`, optionally without the point itself;
+ * as nbhd_tree_knn_index, plus REMOVED_POINT for a removed index.
+ *
+ * # Safety
+ * As nbhd_dynamic_knn (there is no `query` pointer).
+ */
+nbhd_status nbhd_dynamic_knn_index(const nbhd_dynamic_tree *tree,
+                                   size_t index,
+                                   bool exclude_self,
+                                   size_t k,
+                                   uint32_t *indices,
+                                   void *sq_dists,
+                                   size_t capacity,
+                                   size_t *count);
+
+/**
+ * All live points within `radius` of the live point `index`; as nbhd_tree_radius_index,
+ * plus REMOVED_POINT.
+ *
+ * # Safety
+ * As nbhd_dynamic_knn (there is no `query` pointer).
+ */
+nbhd_status nbhd_dynamic_radius_index(const nbhd_dynamic_tree *tree,
+                                      size_t index,
+                                      bool exclude_self,
+                                      double radius,
+                                      uint32_t *indices,
+                                      void *sq_dists,
+                                      size_t capacity,
+                                      size_t *count);
+
+/**
+ * The `k` nearest within `radius` of the live point `index`; as
+ * nbhd_tree_knn_radius_index, plus REMOVED_POINT.
+ *
+ * # Safety
+ * As nbhd_dynamic_knn (there is no `query` pointer).
+ */
+nbhd_status nbhd_dynamic_knn_radius_index(const nbhd_dynamic_tree *tree,
+                                          size_t index,
+                                          bool exclude_self,
+                                          size_t k,
+                                          double radius,
+                                          uint32_t *indices,
+                                          void *sq_dists,
+                                          size_t capacity,
+                                          size_t *count);
+
+/**
+ * The neighbourhood `*spec` of every live point, as a new table in `*out_table`: row i for
+ * index i (nbhd_dynamic_stats.next_index rows; rows of removed and skipped points are
+ * empty), the bytes a static tree over the live points gives. Options, errors and ownership
+ * as nbhd_tree_neighborhoods.
+ *
+ * # Safety
+ * As nbhd_tree_neighborhoods, with `tree` a live dynamic tree not being changed.
+ */
+nbhd_status nbhd_dynamic_neighborhoods(const nbhd_dynamic_tree *tree,
+                                       const nbhd_neighborhood_spec *spec,
+                                       const nbhd_table_options *options,
+                                       nbhd_neighborhoods **out_table);
+
+/**
+ * The neighbourhood `*spec` of each point of `*queries` among the live points, as a new
+ * table (row i for query i); as nbhd_tree_neighborhoods_of.
+ *
+ * # Safety
+ * As nbhd_tree_neighborhoods_of, with `tree` a live dynamic tree not being changed.
+ */
+nbhd_status nbhd_dynamic_neighborhoods_of(const nbhd_dynamic_tree *tree,
+                                          const nbhd_points *queries,
+                                          const nbhd_neighborhood_spec *spec,
+                                          const nbhd_table_options *options,
+                                          nbhd_neighborhoods **out_table);
 
 /**
  * The default smoothing options: the thesis' anisotropic flow with g_sharp at λ = 0.2/h on

@@ -75,6 +75,11 @@ pub enum NbhdError {
         /// The index given.
         index: usize,
     },
+    /// An index of a dynamic tree names a point that was removed (indices are never reused).
+    RemovedPoint {
+        /// The index given.
+        index: usize,
+    },
     /// An option has a value outside its range.
     InvalidOption {
         /// Which option.
@@ -321,6 +326,10 @@ impl fmt::Display for NbhdError {
             SkippedPoint { index } => write!(
                 f,
                 "point {index} was skipped at build time (non-finite) and cannot be queried"
+            ),
+            RemovedPoint { index } => write!(
+                f,
+                "point {index} was removed from the dynamic tree (its index is not reused)"
             ),
             InvalidOption { name, reason } => write!(f, "option {name}: {reason}"),
             Cancelled => write!(f, "cancelled by the progress callback"),

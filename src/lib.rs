@@ -12,6 +12,7 @@
 #![warn(clippy::undocumented_unsafe_blocks)]
 
 pub(crate) mod cloud;
+pub mod dynamic;
 pub mod error;
 pub mod ffi;
 pub mod geometry;
@@ -30,6 +31,7 @@ pub mod table;
 pub mod tree;
 
 pub use cloud::NonFinitePolicy;
+pub use dynamic::DynamicKdTree;
 pub use error::{NbhdError, Result};
 pub use parallel::MAX_THREADS;
 pub use points::{PointsView, MAX_POINTS};

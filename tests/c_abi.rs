@@ -338,6 +338,23 @@ fn c_program_is_clean_under_valgrind() {
 }
 
 #[test]
+fn c_dynamic_tree_answers_as_the_static_tree() {
+    run(
+        Command::new(compiled("dynamic_test")),
+        "tests/c/dynamic_test",
+    );
+}
+
+#[test]
+fn c_dynamic_tree_is_clean_under_valgrind() {
+    let exe = compiled("dynamic_test");
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(exe);
+        run(cmd, "valgrind tests/c/dynamic_test");
+    }
+}
+
+#[test]
 fn c_threads_share_one_tree() {
     run(
         Command::new(compiled("threads_test")),

@@ -42,6 +42,8 @@ pub mod query;
 
 pub mod table;
 
+pub mod dynamic;
+
 pub mod smoothing_io;
 
 pub mod smooth;
@@ -56,6 +58,7 @@ mod args;
 
 mod fields;
 
+pub use dynamic::*;
 pub use enums::*;
 pub use normals::*;
 pub use persist::*;

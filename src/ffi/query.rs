@@ -10,7 +10,6 @@ use super::tree::{nbhd_tree, with_tree};
 use super::types::NbhdArg;
 use crate::error::NbhdError;
 use crate::query::{Neighbor, NeighborSearch, Query};
-use crate::tree::KdTree;
 use crate::Scalar;
 
 /// Scalar types with a per-thread result vector, so that a loop of single queries does not
@@ -52,7 +51,7 @@ scratch!(f64, SCRATCH_F64);
 
 /// Where to search around.
 #[derive(Clone, Copy)]
-enum At {
+pub(crate) enum At {
     /// `dim` coordinates of the tree's scalar type.
     Point(*const c_void),
     /// A stored point by the caller's index.
@@ -61,11 +60,11 @@ enum At {
 
 /// The caller's result buffers.
 #[derive(Clone, Copy)]
-struct Results {
-    indices: *mut u32,
-    sq_dists: *mut c_void,
-    capacity: usize,
-    count: *mut usize,
+pub(crate) struct Results {
+    pub(crate) indices: *mut u32,
+    pub(crate) sq_dists: *mut c_void,
+    pub(crate) capacity: usize,
+    pub(crate) count: *mut usize,
 }
 
 /// The common body of every single query.
@@ -91,12 +90,12 @@ unsafe fn query(
     })
 }
 
-/// Runs one query on a typed tree and copies the result out.
+/// Runs one query on a typed tree (static or dynamic) and copies the result out.
 ///
 /// # Safety
 /// As for [`query`]; `count` is checked and writable.
-unsafe fn run<T: FfiScalar>(
-    tree: &KdTree<T>,
+pub(crate) unsafe fn run<T: FfiScalar, S: NeighborSearch<T>>(
+    tree: &S,
     at: At,
     nbhd: NbhdArg,
     out: Results,

@@ -83,10 +83,13 @@ pub enum nbhd_status {
     /// A saved tree is damaged: truncated, followed by other bytes, a checksum that does not
     /// match, or a field or node structure that is inconsistent (the message says which).
     CorruptData = 24,
+    /// An index passed to a dynamic tree names a point already removed (indices are never
+    /// reused), or is named twice in one removal.
+    RemovedPoint = 25,
 }
 
 impl nbhd_status {
-    const ALL: [nbhd_status; 25] = [
+    const ALL: [nbhd_status; 26] = [
         nbhd_status::Ok,
         nbhd_status::NullPointer,
         nbhd_status::MisalignedPointer,
@@ -112,6 +115,7 @@ impl nbhd_status {
         nbhd_status::IoError,
         nbhd_status::FormatMismatch,
         nbhd_status::CorruptData,
+        nbhd_status::RemovedPoint,
     ];
 
     /// A short, static description.
@@ -143,6 +147,7 @@ impl nbhd_status {
             IoError => c"a file could not be read or written",
             FormatMismatch => c"not a saved tree of this format version and byte order",
             CorruptData => c"the saved tree is damaged (truncated or corrupted)",
+            RemovedPoint => c"the point was removed from the dynamic tree",
         }
     }
 }
@@ -195,6 +200,7 @@ impl FfiError {
                 NbhdError::IndexOutOfRange { .. } => S::IndexOutOfRange,
                 NbhdError::SkippedPoint { .. } => S::SkippedPoint,
                 NbhdError::DuplicateIndex { .. } => S::InvalidArgument,
+                NbhdError::RemovedPoint { .. } => S::RemovedPoint,
                 NbhdError::InvalidOption { .. } => S::InvalidOption,
                 NbhdError::Cancelled => S::Cancelled,
                 NbhdError::ThreadPool(_) => S::ThreadPool,
@@ -423,7 +429,7 @@ mod tests {
             let text = unsafe { CStr::from_ptr(nbhd_status_string(s as c_int)) };
             assert!(!text.to_bytes().is_empty());
         }
-        for bad in [-1, 25, c_int::MAX, c_int::MIN] {
+        for bad in [-1, 26, c_int::MAX, c_int::MIN] {
             // SAFETY: as above.
             let text = unsafe { CStr::from_ptr(nbhd_status_string(bad)) };
             assert_eq!(text.to_str().unwrap(), "unknown status");

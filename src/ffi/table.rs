@@ -13,7 +13,8 @@ use crate::table::{NeighborTable, TableOptions};
 
 /// A table of neighbourhoods (opaque): row i holds the neighbours of point i (or of query i),
 /// ordered by (squared distance, index). Made by nbhd_tree_neighborhoods or
-/// nbhd_tree_neighborhoods_of, freed by nbhd_neighborhoods_free. It does not refer to the
+/// nbhd_tree_neighborhoods_of (or their nbhd_dynamic_* twins), freed by
+/// nbhd_neighborhoods_free. It does not refer to the
 /// tree: either may be freed first. Immutable: any number of threads may read it at once.
 pub struct nbhd_neighborhoods {
     table: AnyTable,
@@ -35,7 +36,7 @@ impl nbhd_neighborhoods {
 }
 
 /// A table of either scalar type.
-enum AnyTable {
+pub(super) enum AnyTable {
     F32(NeighborTable<f32>),
     F64(NeighborTable<f64>),
 }
@@ -72,7 +73,7 @@ pub extern "C" fn nbhd_table_options_default() -> nbhd_table_options {
 ///
 /// # Safety
 /// `out` was checked by `init_out`.
-unsafe fn hand_out(out: *mut *mut nbhd_neighborhoods, table: AnyTable) {
+pub(super) unsafe fn hand_out(out: *mut *mut nbhd_neighborhoods, table: AnyTable) {
     let handle = Box::into_raw(Box::new(nbhd_neighborhoods { table }));
     // SAFETY: `out` is non-NULL, aligned and writable (checked by the caller); the handle is
     // a fresh Box that the C caller now owns.

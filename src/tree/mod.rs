@@ -20,6 +20,7 @@ mod neighborhoods;
 mod node;
 pub mod options;
 mod persist;
+mod part;
 mod presorted;
 mod search;
 mod split;

@@ -1,0 +1,516 @@
+//! The dynamic tree handle (`src/dynamic/`): create, insert a batch, remove indices, the
+//! single queries and tables of the static tree, statistics, free.
+
+use std::ffi::{c_int, c_void};
+
+use super::args::{check_optional, deref, init_out};
+use super::enums::{nbhd_scalar_type, CEnum};
+use super::query::{run, At, Results};
+use super::status::{guard, guard_value, nbhd_status, FfiError};
+use super::table::{hand_out, nbhd_neighborhoods, AnyTable};
+use super::types::{
+    nbhd_build_options, nbhd_neighborhood_spec, nbhd_points, nbhd_table_options,
+    read_build_options, read_table_options, NbhdArg, PointsArg,
+};
+use crate::dynamic::DynamicKdTree;
+use crate::scalar::ScalarType;
+
+/// A k-d tree that accepts insertions and removals (opaque); see nbhd_dynamic_create.
+///
+/// Index rule: the points of each inserted batch get consecutive indices continuing from the
+/// previous batch (the first batch gets 0, 1, ...); a point keeps its index until it is
+/// removed, and a removed index is never given again (queries and removals naming it fail
+/// with NBHD_STATUS_REMOVED_POINT). Every query answers exactly what a static tree
+/// (nbhd_tree_build) over the live points, under these indices, answers.
+///
+/// Thread safety: any number of threads may query one dynamic tree at once, but
+/// nbhd_dynamic_insert and nbhd_dynamic_remove must not run at the same time as any other
+/// call on the same tree.
+pub struct nbhd_dynamic_tree {
+    inner: AnyDynamic,
+}
+
+/// A dynamic tree of either scalar type.
+enum AnyDynamic {
+    F32(DynamicKdTree<f32>),
+    F64(DynamicKdTree<f64>),
+}
+
+macro_rules! with_dynamic {
+    ($tree:expr, $t:ident => $body:expr) => {
+        match $tree {
+            AnyDynamic::F32($t) => $body,
+            AnyDynamic::F64($t) => $body,
+        }
+    };
+}
+
+/// Size and shape of a dynamic tree.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct nbhd_dynamic_stats {
+    /// Live points.
+    pub live: usize,
+    /// Indices given so far (live, removed and skipped points): the index the next inserted
+    /// point gets, and the number of rows of nbhd_dynamic_neighborhoods.
+    pub next_index: usize,
+    /// Static trees in the forest.
+    pub trees: usize,
+    /// Removed points still held by the trees (skipped by every query).
+    pub removed_held: usize,
+    /// Dimension.
+    pub dim: usize,
+    /// The tree's scalar type: of query coordinates and of squared distances.
+    pub scalar_type: nbhd_scalar_type,
+}
+
+/// Makes an empty dynamic tree of dimension `dim` computing in `scalar_type` (an
+/// nbhd_scalar_type value) and stores the handle in `*out_tree`. `options` (NULL for the
+/// defaults) shape every static tree of the forest; its `non_finite` decides what inserting a
+/// NaN or infinite point does: REJECT refuses the batch, SKIP gives the point its index but
+/// leaves it out (queries naming it fail with NBHD_STATUS_SKIPPED_POINT).
+///
+/// Errors: NULL_POINTER (`out_tree`), MISALIGNED_POINTER, ZERO_DIMENSION, INVALID_ARGUMENT
+/// (`scalar_type` not a value of nbhd_scalar_type), INVALID_OPTION. On error `*out_tree` is
+/// NULL.
+///
+/// Ownership: the caller frees `*out_tree` with nbhd_dynamic_free.
+///
+/// # Safety
+/// `options` must be NULL or point to an nbhd_build_options; `out_tree` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_create(
+    dim: usize,
+    scalar_type: c_int,
+    options: *const nbhd_build_options,
+    out_tree: *mut *mut nbhd_dynamic_tree,
+) -> nbhd_status {
+    guard("nbhd_dynamic_create", || {
+        // SAFETY: `out_tree` is NULL or writable (caller).
+        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
+        // SAFETY: `options` is NULL or readable (caller).
+        let options = unsafe { read_build_options(options) }?;
+        let scalar = nbhd_scalar_type::from_value(scalar_type).ok_or_else(|| {
+            FfiError::InvalidArgument(format!(
+                "scalar_type {scalar_type} is not a value of nbhd_scalar_type"
+            ))
+        })?;
+        let inner = match ScalarType::from(scalar) {
+            ScalarType::F32 => AnyDynamic::F32(DynamicKdTree::new(dim, &options)?),
+            ScalarType::F64 => AnyDynamic::F64(DynamicKdTree::new(dim, &options)?),
+        };
+        let handle = Box::into_raw(Box::new(nbhd_dynamic_tree { inner }));
+        // SAFETY: `out` was checked by `init_out`; the handle is a fresh Box the caller owns.
+        unsafe { out.write(handle) };
+        Ok(())
+    })
+}
+
+/// Inserts the points `*points` (of either scalar type, converted to the tree's; of the
+/// tree's dimension) as one batch. `*out_first` (may be NULL) receives the index of the
+/// first: the batch gets `first .. first + points->count - 1`, in order. The point buffer
+/// may be freed as soon as this returns (the tree copies the points).
+///
+/// Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data`),
+/// MISALIGNED_POINTER, the errors of a points description (see nbhd_tree_build: EMPTY_INPUT
+/// for count 0, INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
+/// NON_FINITE (with options.non_finite REJECT; the message names the point's position in the
+/// batch), TOO_MANY_POINTS (indices would pass UINT32_MAX - 1 over the tree's life),
+/// OUT_OF_MEMORY, THREAD_POOL.
+///
+/// # Safety
+/// `tree` must be NULL or a live handle not in use by another thread; `points` NULL or a
+/// true description of readable memory; `out_first` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_insert(
+    tree: *mut nbhd_dynamic_tree,
+    points: *const nbhd_points,
+    out_first: *mut u32,
+) -> nbhd_status {
+    guard("nbhd_dynamic_insert", || {
+        check_optional(out_first.cast_const(), "out_first")?;
+        super::args::check_ptr(tree.cast_const(), "tree")?;
+        // SAFETY: non-NULL and aligned (checked); a live handle used by no other thread
+        // (caller).
+        let tree = unsafe { &mut *tree };
+        // SAFETY: `points` is NULL or readable (caller).
+        let arg = unsafe { PointsArg::read(points, "points") }?;
+        // SAFETY: the caller's description of the point memory is true (contract above).
+        let view = unsafe { arg.view() }?;
+        let first = with_dynamic!(&mut tree.inner, t => t.insert(&view)?);
+        if !out_first.is_null() {
+            // SAFETY: non-NULL, aligned (checked above) and writable (caller).
+            unsafe { out_first.write(first) };
+        }
+        Ok(())
+    })
+}
+
+/// Removes the live points `indices[0 .. count - 1]` (any order). Their indices are never
+/// given again. `indices` may be NULL when `count` is 0 (nothing to do).
+///
+/// Errors, with nothing removed: NULL_POINTER, MISALIGNED_POINTER, INVALID_ARGUMENT (`count`
+/// larger than an array can be), INDEX_OUT_OF_RANGE (an index not given yet),
+/// REMOVED_POINT (an index already removed, or named twice), SKIPPED_POINT (a non-finite
+/// point skipped at insertion), THREAD_POOL.
+///
+/// # Safety
+/// `tree` must be NULL or a live handle not in use by another thread; `indices` NULL or
+/// `count` readable `uint32_t`.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_remove(
+    tree: *mut nbhd_dynamic_tree,
+    indices: *const u32,
+    count: usize,
+) -> nbhd_status {
+    guard("nbhd_dynamic_remove", || {
+        super::args::check_ptr(tree.cast_const(), "tree")?;
+        if count > isize::MAX as usize / std::mem::size_of::<u32>() {
+            return Err(FfiError::InvalidArgument(format!(
+                "count {count} is larger than an array of uint32_t can be"
+            )));
+        }
+        let ids: &[u32] = if count == 0 {
+            check_optional(indices, "indices")?;
+            &[]
+        } else {
+            super::args::check_ptr(indices, "indices")?;
+            // SAFETY: non-NULL and aligned (checked), `count` readable values (caller), and
+            // `count * 4` fits in isize (checked above).
+            unsafe { std::slice::from_raw_parts(indices, count) }
+        };
+        // SAFETY: non-NULL and aligned (checked); a live handle used by no other thread
+        // (caller).
+        let tree = unsafe { &mut *tree };
+        with_dynamic!(&mut tree.inner, t => t.remove(ids)?);
+        Ok(())
+    })
+}
+
+/// Frees a dynamic tree. NULL is ignored.
+///
+/// # Safety
+/// `tree` must be NULL or a handle from nbhd_dynamic_create not freed before, in use by no
+/// other thread.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_free(tree: *mut nbhd_dynamic_tree) {
+    guard_value("nbhd_dynamic_free", (), || {
+        if tree.is_null() {
+            return;
+        }
+        if (tree as usize) % std::mem::align_of::<nbhd_dynamic_tree>() != 0 {
+            // Not a handle of ours: freeing it would corrupt the heap. Leak it, and say so.
+            let _ = guard("nbhd_dynamic_free", || {
+                super::args::check_ptr(tree.cast_const(), "tree")
+            });
+            return;
+        }
+        // SAFETY: `tree` came from Box::into_raw in nbhd_dynamic_create and is freed only once
+        // (caller).
+        drop(unsafe { Box::from_raw(tree) });
+    })
+}
+
+/// Writes the size and shape of `tree` to `*out_stats`.
+///
+/// Errors: NULL_POINTER, MISALIGNED_POINTER.
+///
+/// # Safety
+/// `tree` must be NULL or a live handle; `out_stats` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_tree_stats(
+    tree: *const nbhd_dynamic_tree,
+    out_stats: *mut nbhd_dynamic_stats,
+) -> nbhd_status {
+    guard("nbhd_dynamic_tree_stats", || {
+        // SAFETY: `out_stats` is NULL or writable (caller).
+        let out = unsafe { init_out(out_stats, "out_stats", nbhd_dynamic_stats::default()) }?;
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        let (scalar_type, dim) = match &tree.inner {
+            AnyDynamic::F32(t) => (nbhd_scalar_type::F32, t.dim()),
+            AnyDynamic::F64(t) => (nbhd_scalar_type::F64, t.dim()),
+        };
+        let s = with_dynamic!(&tree.inner, t => t.stats());
+        let stats = nbhd_dynamic_stats {
+            live: s.live,
+            next_index: s.next_index as usize,
+            trees: s.trees.len(),
+            removed_held: s.trees.iter().map(|t| t.1).sum(),
+            dim,
+            scalar_type,
+        };
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { out.write(stats) };
+        Ok(())
+    })
+}
+
+/// The common body of the single queries.
+///
+/// # Safety
+/// As nbhd_dynamic_knn.
+unsafe fn query(
+    func: &str,
+    tree: *const nbhd_dynamic_tree,
+    at: At,
+    nbhd: NbhdArg,
+    out: Results,
+) -> nbhd_status {
+    guard(func, || {
+        // SAFETY: `count` is NULL or writable (caller).
+        let count = unsafe { init_out(out.count, "count", 0) }?;
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: the buffers are as the caller describes (contract of nbhd_dynamic_knn).
+        with_dynamic!(&tree.inner, t => unsafe { run(t, at, nbhd, out, count) })
+    })
+}
+
+/// The `k` live points nearest to the point `query` (`dim` values of the tree's scalar type).
+/// Arguments, results, buffers and errors as nbhd_tree_knn; an empty tree gives `*count` 0.
+///
+/// # Safety
+/// As nbhd_tree_knn, with `tree` a live dynamic tree not being changed by another thread.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_knn(
+    tree: *const nbhd_dynamic_tree,
+    query: *const c_void,
+    k: usize,
+    indices: *mut u32,
+    sq_dists: *mut c_void,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    let out = Results {
+        indices,
+        sq_dists,
+        capacity,
+        count,
+    };
+    // SAFETY: the caller's contract is the one `query` requires.
+    unsafe {
+        self::query(
+            "nbhd_dynamic_knn",
+            tree,
+            At::Point(query),
+            NbhdArg::Knn(k),
+            out,
+        )
+    }
+}
+
+/// All live points within `radius` of the point `query`; as nbhd_tree_radius.
+///
+/// # Safety
+/// As nbhd_dynamic_knn.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_radius(
+    tree: *const nbhd_dynamic_tree,
+    query: *const c_void,
+    radius: f64,
+    indices: *mut u32,
+    sq_dists: *mut c_void,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    let out = Results {
+        indices,
+        sq_dists,
+        capacity,
+        count,
+    };
+    let nbhd = NbhdArg::Radius(radius);
+    // SAFETY: the caller's contract is the one `query` requires.
+    unsafe { self::query("nbhd_dynamic_radius", tree, At::Point(query), nbhd, out) }
+}
+
+/// The `k` nearest among the live points within `radius` of the point `query`; as
+/// nbhd_tree_knn_radius.
+///
+/// # Safety
+/// As nbhd_dynamic_knn.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_knn_radius(
+    tree: *const nbhd_dynamic_tree,
+    query: *const c_void,
+    k: usize,
+    radius: f64,
+    indices: *mut u32,
+    sq_dists: *mut c_void,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    let out = Results {
+        indices,
+        sq_dists,
+        capacity,
+        count,
+    };
+    let nbhd = NbhdArg::KnnRadius(k, radius);
+    // SAFETY: the caller's contract is the one `query` requires.
+    unsafe { self::query("nbhd_dynamic_knn_radius", tree, At::Point(query), nbhd, out) }
+}
+
+/// The `k` nearest neighbours of the live point `index`, optionally without the point itself;
+/// as nbhd_tree_knn_index, plus REMOVED_POINT for a removed index.
+///
+/// # Safety
+/// As nbhd_dynamic_knn (there is no `query` pointer).
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_knn_index(
+    tree: *const nbhd_dynamic_tree,
+    index: usize,
+    exclude_self: bool,
+    k: usize,
+    indices: *mut u32,
+    sq_dists: *mut c_void,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    let out = Results {
+        indices,
+        sq_dists,
+        capacity,
+        count,
+    };
+    let at = At::Stored {
+        index,
+        exclude_self,
+    };
+    // SAFETY: the caller's contract is the one `query` requires.
+    unsafe { self::query("nbhd_dynamic_knn_index", tree, at, NbhdArg::Knn(k), out) }
+}
+
+/// All live points within `radius` of the live point `index`; as nbhd_tree_radius_index,
+/// plus REMOVED_POINT.
+///
+/// # Safety
+/// As nbhd_dynamic_knn (there is no `query` pointer).
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_radius_index(
+    tree: *const nbhd_dynamic_tree,
+    index: usize,
+    exclude_self: bool,
+    radius: f64,
+    indices: *mut u32,
+    sq_dists: *mut c_void,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    let out = Results {
+        indices,
+        sq_dists,
+        capacity,
+        count,
+    };
+    let at = At::Stored {
+        index,
+        exclude_self,
+    };
+    let nbhd = NbhdArg::Radius(radius);
+    // SAFETY: the caller's contract is the one `query` requires.
+    unsafe { self::query("nbhd_dynamic_radius_index", tree, at, nbhd, out) }
+}
+
+/// The `k` nearest within `radius` of the live point `index`; as
+/// nbhd_tree_knn_radius_index, plus REMOVED_POINT.
+///
+/// # Safety
+/// As nbhd_dynamic_knn (there is no `query` pointer).
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn nbhd_dynamic_knn_radius_index(
+    tree: *const nbhd_dynamic_tree,
+    index: usize,
+    exclude_self: bool,
+    k: usize,
+    radius: f64,
+    indices: *mut u32,
+    sq_dists: *mut c_void,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    let out = Results {
+        indices,
+        sq_dists,
+        capacity,
+        count,
+    };
+    let at = At::Stored {
+        index,
+        exclude_self,
+    };
+    let nbhd = NbhdArg::KnnRadius(k, radius);
+    // SAFETY: the caller's contract is the one `query` requires.
+    unsafe { self::query("nbhd_dynamic_knn_radius_index", tree, at, nbhd, out) }
+}
+
+/// The neighbourhood `*spec` of every live point, as a new table in `*out_table`: row i for
+/// index i (nbhd_dynamic_stats.next_index rows; rows of removed and skipped points are
+/// empty), the bytes a static tree over the live points gives. Options, errors and ownership
+/// as nbhd_tree_neighborhoods.
+///
+/// # Safety
+/// As nbhd_tree_neighborhoods, with `tree` a live dynamic tree not being changed.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_neighborhoods(
+    tree: *const nbhd_dynamic_tree,
+    spec: *const nbhd_neighborhood_spec,
+    options: *const nbhd_table_options,
+    out_table: *mut *mut nbhd_neighborhoods,
+) -> nbhd_status {
+    guard("nbhd_dynamic_neighborhoods", || {
+        // SAFETY: `out_table` is NULL or writable (caller).
+        let out = unsafe { init_out(out_table, "out_table", std::ptr::null_mut()) }?;
+        // SAFETY: `tree` is NULL or a live handle; `spec`, `options` NULL or readable (caller).
+        let (tree, nbhd, options) = unsafe {
+            (
+                deref(tree, "tree")?,
+                NbhdArg::read(spec)?,
+                read_table_options(options)?,
+            )
+        };
+        let table: AnyTable =
+            with_dynamic!(&tree.inner, t => t.neighborhoods(nbhd.to_core()?, &options)?.into());
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out(out, table) };
+        Ok(())
+    })
+}
+
+/// The neighbourhood `*spec` of each point of `*queries` among the live points, as a new
+/// table (row i for query i); as nbhd_tree_neighborhoods_of.
+///
+/// # Safety
+/// As nbhd_tree_neighborhoods_of, with `tree` a live dynamic tree not being changed.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_neighborhoods_of(
+    tree: *const nbhd_dynamic_tree,
+    queries: *const nbhd_points,
+    spec: *const nbhd_neighborhood_spec,
+    options: *const nbhd_table_options,
+    out_table: *mut *mut nbhd_neighborhoods,
+) -> nbhd_status {
+    guard("nbhd_dynamic_neighborhoods_of", || {
+        // SAFETY: `out_table` is NULL or writable (caller).
+        let out = unsafe { init_out(out_table, "out_table", std::ptr::null_mut()) }?;
+        // SAFETY: `tree` is NULL or a live handle; the structs NULL or readable (caller).
+        let (tree, queries, nbhd, options) = unsafe {
+            (
+                deref(tree, "tree")?,
+                PointsArg::read(queries, "queries")?,
+                NbhdArg::read(spec)?,
+                read_table_options(options)?,
+            )
+        };
+        // SAFETY: the caller's description of the query memory is true (contract above).
+        let view = unsafe { queries.view() }?;
+        let table: AnyTable = with_dynamic!(&tree.inner, t => {
+            t.neighborhoods_of(&view, nbhd.to_core()?, &options)?.into()
+        });
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out(out, table) };
+        Ok(())
+    })
+}

@@ -1,0 +1,47 @@
+//! What a structure made of several trees (the dynamic forest, `src/dynamic/`) reads from one
+//! of them: the single-query descent into a result set of its own (so that one result set
+//! collects over every tree of the forest), the leaf a query falls into (to order a batch of
+//! queries for the cache), and the bounding box of the points.
+
+use super::search;
+use super::KdTree;
+use crate::query::result_set::ResultSet;
+use crate::scalar::Scalar;
+
+impl<T: Scalar> KdTree<T> {
+    /// Runs the exact search of `src/tree/search.rs` for the point `q` (of the tree's
+    /// dimension, finite), offering every point of every visited leaf except the caller index
+    /// `exclude` to `out`; the cells visited depend only on `out`'s distance bound.
+    pub(crate) fn search_into<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, out: &mut C) {
+        search::search(&self.view(), q, exclude, out);
+    }
+
+    /// The first tree position of the leaf `q` descends to.
+    pub(crate) fn leaf_position(&self, q: &[T]) -> u32 {
+        let mut node = 0;
+        loop {
+            let n = &self.nodes[node];
+            if n.is_leaf() {
+                return n.a;
+            }
+            node = if q[n.dim as usize] < n.split {
+                node + 1
+            } else {
+                n.a as usize
+            };
+        }
+    }
+
+    /// The smallest and largest coordinate of the points in every dimension.
+    pub(crate) fn bounding_box(&self) -> (Vec<T>, Vec<T>) {
+        let mut lo = vec![T::INFINITY; self.dim];
+        let mut hi = vec![T::ZERO - T::INFINITY; self.dim];
+        for p in self.coords.chunks_exact(self.dim) {
+            for j in 0..self.dim {
+                lo[j] = lo[j].min_of(p[j]);
+                hi[j] = hi[j].max_of(p[j]);
+            }
+        }
+        (lo, hi)
+    }
+}

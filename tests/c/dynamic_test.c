@@ -1,0 +1,384 @@
+/*
+ * The dynamic tree from C: batches inserted and indices removed in turn, with every query and
+ * table compared after each step with a static tree (nbhd_tree_build) over the live points
+ * (removed points given as NaN and skipped), which must answer identically; and every status
+ * of bad input (unknown, removed, skipped and repeated indices, NaN points, zero points,
+ * absurd sizes, NULL and misaligned pointers), each leaving the tree unchanged.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+#include "check.h"
+
+#define DIM 3
+#define POOL 700
+#define CAP 1024
+
+static double pool[POOL * DIM];
+static float poolf[POOL * DIM];
+/* The model: coordinates of every index given, and whether it is live. */
+static double coords_d[POOL * DIM];
+static float coords_f[POOL * DIM];
+static int live[POOL];
+static int skipped[POOL];
+static size_t given = 0;
+
+static uint64_t rng_state = 0x9E3779B97F4A7C15ULL;
+
+static uint64_t next_u64(void) {
+    rng_state ^= rng_state >> 12;
+    rng_state ^= rng_state << 25;
+    rng_state ^= rng_state >> 27;
+    return rng_state * 0x2545F4914F6CDD1DULL;
+}
+
+static size_t below(size_t n) { return (size_t)(next_u64() >> 11) % n; }
+
+static void make_pool(void) {
+    size_t i, j;
+    for (i = 0; i < POOL; i++) {
+        for (j = 0; j < DIM; j++) {
+            /* a coarse grid: many duplicates and exact distance ties */
+            pool[i * DIM + j] = (double)below(6) * 0.25;
+        }
+    }
+    pool[17 * DIM + 1] = NAN;
+    pool[333 * DIM + 0] = INFINITY;
+    for (i = 0; i < POOL * DIM; i++) poolf[i] = (float)pool[i];
+}
+
+static nbhd_points points_of(int f32, const void *base, size_t first, size_t count) {
+    nbhd_points p;
+    p.data = f32 ? (const void *)((const float *)base + first * DIM)
+                 : (const void *)((const double *)base + first * DIM);
+    p.count = count;
+    p.dim = DIM;
+    p.stride = 0;
+    p.scalar_type = f32 ? NBHD_SCALAR_TYPE_F32 : NBHD_SCALAR_TYPE_F64;
+    return p;
+}
+
+/* A static tree over the model: every index given, NaN where not live, skipped. NULL if no
+ * point is live. */
+static nbhd_tree *static_tree(int f32) {
+    static double masked_d[POOL * DIM];
+    static float masked_f[POOL * DIM];
+    nbhd_build_options o = nbhd_build_options_default();
+    nbhd_tree *t = NULL;
+    size_t i, j, n_live = 0;
+    for (i = 0; i < given; i++) {
+        n_live += (size_t)live[i];
+        for (j = 0; j < DIM; j++) {
+            masked_d[i * DIM + j] = live[i] ? coords_d[i * DIM + j] : NAN;
+            masked_f[i * DIM + j] = live[i] ? coords_f[i * DIM + j] : NAN;
+        }
+    }
+    if (n_live == 0) return NULL;
+    o.non_finite = NBHD_NON_FINITE_POLICY_SKIP;
+    o.leaf_size = 3;
+    CHECK_STATUS(nbhd_tree_build(&(nbhd_points){f32 ? (const void *)masked_f
+                                                     : (const void *)masked_d,
+                                                 given, DIM, 0,
+                                                 f32 ? NBHD_SCALAR_TYPE_F32
+                                                     : NBHD_SCALAR_TYPE_F64},
+                                 &o, &t),
+                 NBHD_STATUS_OK);
+    return t;
+}
+
+static uint32_t ia[CAP], ib[CAP];
+static double da[CAP], db[CAP];
+
+/* Same status, count, indices and distances (compared as bytes of the tree's type). */
+static void same(nbhd_status sa, size_t ca, nbhd_status sb, size_t cb, int f32) {
+    CHECK(sa == sb);
+    CHECK(ca == cb);
+    if (sa == NBHD_STATUS_OK && ca == cb) {
+        CHECK(memcmp(ia, ib, ca * sizeof(uint32_t)) == 0);
+        CHECK(memcmp(da, db, ca * (f32 ? sizeof(float) : sizeof(double))) == 0);
+    }
+}
+
+static int same_table(const nbhd_neighborhoods *a, const nbhd_neighborhoods *b, int f32) {
+    size_t rows = nbhd_neighborhoods_rows(a), total = nbhd_neighborhoods_total(a);
+    if (rows != nbhd_neighborhoods_rows(b) || total != nbhd_neighborhoods_total(b)) return 0;
+    if (memcmp(nbhd_neighborhoods_offsets(a), nbhd_neighborhoods_offsets(b),
+               (rows + 1) * sizeof(size_t)) != 0)
+        return 0;
+    if (total == 0) return 1;
+    return memcmp(nbhd_neighborhoods_indices(a), nbhd_neighborhoods_indices(b),
+                  total * sizeof(uint32_t)) == 0 &&
+           memcmp(nbhd_neighborhoods_sq_dists(a), nbhd_neighborhoods_sq_dists(b),
+                  total * (f32 ? sizeof(float) : sizeof(double))) == 0;
+}
+
+/* Every query and table of `dyn` against the static tree over the live points. */
+static void compare(const nbhd_dynamic_tree *dyn, int f32) {
+    nbhd_tree *st = static_tree(f32);
+    nbhd_dynamic_stats stats;
+    size_t i, ca, cb, n_live = 0;
+    CHECK_STATUS(nbhd_dynamic_tree_stats(dyn, &stats), NBHD_STATUS_OK);
+    for (i = 0; i < given; i++) n_live += (size_t)live[i];
+    CHECK(stats.live == n_live);
+    CHECK(stats.next_index == given);
+    CHECK(stats.dim == DIM);
+    CHECK(stats.scalar_type == (f32 ? NBHD_SCALAR_TYPE_F32 : NBHD_SCALAR_TYPE_F64));
+    if (st == NULL) {
+        float qf[DIM] = {0.5f, 0.5f, 0.5f};
+        double qd[DIM] = {0.5, 0.5, 0.5};
+        CHECK_STATUS(nbhd_dynamic_knn(dyn, f32 ? (const void *)qf : (const void *)qd, 4, ia,
+                                      da, CAP, &ca),
+                     NBHD_STATUS_OK);
+        CHECK(ca == 0);
+        return;
+    }
+    for (i = 0; i < 6; i++) {
+        float qf[DIM];
+        double qd[DIM];
+        const void *q = f32 ? (const void *)qf : (const void *)qd;
+        size_t j, k = 1 + below(12);
+        double r = 0.25 * (double)below(4);
+        size_t idx = below(given + 1);
+        int ex = (int)below(2);
+        nbhd_status sa, sb;
+        for (j = 0; j < DIM; j++) {
+            qd[j] = 0.125 * (double)below(12);
+            qf[j] = (float)qd[j];
+        }
+        sa = nbhd_dynamic_knn(dyn, q, k, ia, da, CAP, &ca);
+        sb = nbhd_tree_knn(st, q, k, ib, db, CAP, &cb);
+        same(sa, ca, sb, cb, f32);
+        sa = nbhd_dynamic_radius(dyn, q, r, ia, da, CAP, &ca);
+        sb = nbhd_tree_radius(st, q, r, ib, db, CAP, &cb);
+        same(sa, ca, sb, cb, f32);
+        sa = nbhd_dynamic_knn_radius(dyn, q, k, r, ia, da, CAP, &ca);
+        sb = nbhd_tree_knn_radius(st, q, k, r, ib, db, CAP, &cb);
+        same(sa, ca, sb, cb, f32);
+        /* by index: live points answer as the static tree; others by their status */
+        sa = nbhd_dynamic_knn_index(dyn, idx, ex, k, ia, da, CAP, &ca);
+        if (idx < given && live[idx]) {
+            sb = nbhd_tree_knn_index(st, idx, ex, k, ib, db, CAP, &cb);
+            same(sa, ca, sb, cb, f32);
+            sa = nbhd_dynamic_radius_index(dyn, idx, ex, r, ia, da, CAP, &ca);
+            sb = nbhd_tree_radius_index(st, idx, ex, r, ib, db, CAP, &cb);
+            same(sa, ca, sb, cb, f32);
+            sa = nbhd_dynamic_knn_radius_index(dyn, idx, ex, k, r, ia, da, CAP, &ca);
+            sb = nbhd_tree_knn_radius_index(st, idx, ex, k, r, ib, db, CAP, &cb);
+            same(sa, ca, sb, cb, f32);
+        } else if (idx >= given) {
+            CHECK(sa == NBHD_STATUS_INDEX_OUT_OF_RANGE);
+        } else if (skipped[idx]) {
+            CHECK(sa == NBHD_STATUS_SKIPPED_POINT);
+        } else {
+            CHECK(sa == NBHD_STATUS_REMOVED_POINT);
+            CHECK_STATUS(nbhd_dynamic_radius_index(dyn, idx, ex, r, ia, da, CAP, &ca),
+                         NBHD_STATUS_REMOVED_POINT);
+            CHECK(ca == 0);
+        }
+    }
+    {
+        nbhd_neighborhood_spec spec = {NBHD_NEIGHBORHOOD_KIND_KNN, 5, 0.0};
+        nbhd_neighborhood_spec eps = {NBHD_NEIGHBORHOOD_KIND_KNN_RADIUS, 4, 0.3};
+        nbhd_table_options two = {true, 2};
+        nbhd_neighborhoods *a = NULL, *b = NULL;
+        nbhd_points qs = points_of(f32, f32 ? (const void *)poolf : (const void *)pool, 0, 40);
+        CHECK_STATUS(nbhd_dynamic_neighborhoods(dyn, &spec, NULL, &a), NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_tree_neighborhoods(st, &spec, NULL, &b), NBHD_STATUS_OK);
+        CHECK(a != NULL && b != NULL && same_table(a, b, f32));
+        nbhd_neighborhoods_free(a);
+        CHECK_STATUS(nbhd_dynamic_neighborhoods(dyn, &eps, &two, &a), NBHD_STATUS_OK);
+        nbhd_neighborhoods_free(b);
+        CHECK_STATUS(nbhd_tree_neighborhoods(st, &eps, NULL, &b), NBHD_STATUS_OK);
+        CHECK(a != NULL && b != NULL && same_table(a, b, f32));
+        nbhd_neighborhoods_free(a);
+        nbhd_neighborhoods_free(b);
+        /* the pool's first points hold a NaN at 17: NON_FINITE_QUERY for both */
+        CHECK_STATUS(nbhd_dynamic_neighborhoods_of(dyn, &qs, &spec, NULL, &a),
+                     NBHD_STATUS_NON_FINITE_QUERY);
+        CHECK(a == NULL);
+        qs.count = 17;
+        CHECK_STATUS(nbhd_dynamic_neighborhoods_of(dyn, &qs, &spec, &two, &a), NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_tree_neighborhoods_of(st, &qs, &spec, NULL, &b), NBHD_STATUS_OK);
+        CHECK(a != NULL && b != NULL && same_table(a, b, f32));
+        nbhd_neighborhoods_free(a);
+        nbhd_neighborhoods_free(b);
+    }
+    nbhd_tree_free(st);
+}
+
+/* Random batches and removals, compared after each step. */
+static void test_interleaved(int f32) {
+    nbhd_build_options o = nbhd_build_options_default();
+    nbhd_dynamic_tree *dyn = NULL;
+    size_t used = 0, step;
+    given = 0;
+    o.non_finite = NBHD_NON_FINITE_POLICY_SKIP;
+    o.leaf_size = 3;
+    o.threads = 1;
+    CHECK_STATUS(nbhd_dynamic_create(DIM, f32 ? NBHD_SCALAR_TYPE_F32 : NBHD_SCALAR_TYPE_F64, &o,
+                                     &dyn),
+                 NBHD_STATUS_OK);
+    if (dyn == NULL) return;
+    for (step = 0; step < 24; step++) {
+        if (below(2) == 0 && used < POOL) {
+            size_t m = 1 + below(90), i, j;
+            uint32_t first = 12345;
+            nbhd_points p;
+            if (m > POOL - used) m = POOL - used;
+            /* the batch in the other type: converted to the tree's */
+            p = points_of(!f32, f32 ? (const void *)pool : (const void *)poolf, used, m);
+            CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+            CHECK(first == given);
+            for (i = 0; i < m; i++, given++) {
+                int ok = 1;
+                for (j = 0; j < DIM; j++) {
+                    double c = f32 ? (double)pool[(used + i) * DIM + j]
+                                   : (double)poolf[(used + i) * DIM + j];
+                    coords_d[given * DIM + j] = c;
+                    coords_f[given * DIM + j] = (float)c;
+                    ok &= isfinite(c) != 0;
+                }
+                live[given] = ok;
+                skipped[given] = !ok;
+            }
+            used += m;
+        } else {
+            uint32_t victims[64];
+            size_t n = 0, tries;
+            for (tries = 0; tries < 200 && n < 64 && given > 0; tries++) {
+                size_t i = below(given), v;
+                int dup = 0;
+                for (v = 0; v < n; v++) dup |= victims[v] == i;
+                if (live[i] && !dup) victims[n++] = (uint32_t)i;
+            }
+            CHECK_STATUS(nbhd_dynamic_remove(dyn, victims, n), NBHD_STATUS_OK);
+            while (n > 0) live[victims[--n]] = 0;
+        }
+        compare(dyn, f32);
+    }
+    nbhd_dynamic_free(dyn);
+}
+
+static void test_errors(void) {
+    nbhd_build_options o = nbhd_build_options_default();
+    nbhd_dynamic_tree *dyn = (nbhd_dynamic_tree *)&o;
+    nbhd_dynamic_stats stats;
+    double two[2 * DIM] = {0, 0, 0, 1, 1, 1};
+    double bad[2 * DIM] = {0, 0, 0, 1, NAN, 1};
+    float q[DIM] = {0, 0, 0};
+    nbhd_points p = {two, 2, DIM, 0, NBHD_SCALAR_TYPE_F64};
+    uint32_t first = 77, ids[3];
+    size_t count = 5;
+
+    CHECK_STATUS(nbhd_dynamic_create(0, NBHD_SCALAR_TYPE_F32, NULL, &dyn),
+                 NBHD_STATUS_ZERO_DIMENSION);
+    CHECK(dyn == NULL);
+    CHECK_STATUS(nbhd_dynamic_create(DIM, 7, NULL, &dyn), NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_MESSAGE("scalar_type");
+    CHECK_STATUS(nbhd_dynamic_create(DIM, NBHD_SCALAR_TYPE_F32, NULL, NULL),
+                 NBHD_STATUS_NULL_POINTER);
+    o.leaf_size = 0;
+    CHECK_STATUS(nbhd_dynamic_create(DIM, NBHD_SCALAR_TYPE_F32, &o, &dyn),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK_STATUS(nbhd_dynamic_create(DIM, NBHD_SCALAR_TYPE_F32, NULL, &dyn), NBHD_STATUS_OK);
+    if (dyn == NULL) return;
+
+    /* an empty tree answers nothing; its indices are out of range */
+    CHECK_STATUS(nbhd_dynamic_knn(dyn, q, 3, ids, NULL, 3, &count), NBHD_STATUS_OK);
+    CHECK(count == 0);
+    CHECK_STATUS(nbhd_dynamic_knn_index(dyn, 0, false, 3, ids, NULL, 3, &count),
+                 NBHD_STATUS_INDEX_OUT_OF_RANGE);
+
+    /* inserts: NULL, zero points, dimension, NaN (rejected by default), absurd sizes */
+    CHECK_STATUS(nbhd_dynamic_insert(NULL, &p, &first), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, NULL, &first), NBHD_STATUS_NULL_POINTER);
+    p.count = 0;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_EMPTY_INPUT);
+    p.count = (size_t)1 << 40;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_TOO_MANY_POINTS);
+    p.count = 2;
+    p.stride = SIZE_MAX / 2;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_INVALID_ARGUMENT);
+    p.stride = 0;
+    p.dim = 2;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_DIMENSION_MISMATCH);
+    p.dim = DIM;
+    p.data = bad;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_NON_FINITE);
+    CHECK_MESSAGE("point 1");
+    CHECK_STATUS(nbhd_dynamic_tree_stats(dyn, &stats), NBHD_STATUS_OK);
+    CHECK(stats.next_index == 0 && stats.live == 0 && stats.trees == 0);
+    p.data = two;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+    CHECK(first == 0);
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, NULL), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+    CHECK(first == 4);
+
+    /* removals: unknown, repeated, absurd count, NULL, misaligned; nothing removed */
+    ids[0] = 1;
+    ids[1] = 6;
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, ids, 2), NBHD_STATUS_INDEX_OUT_OF_RANGE);
+    ids[1] = 1;
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, ids, 2), NBHD_STATUS_REMOVED_POINT);
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, ids, SIZE_MAX), NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, NULL, 2), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, (const uint32_t *)((const char *)ids + 1), 1),
+                 NBHD_STATUS_MISALIGNED_POINTER);
+    CHECK_STATUS(nbhd_dynamic_remove(NULL, ids, 1), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_tree_stats(dyn, &stats), NBHD_STATUS_OK);
+    CHECK(stats.live == 6);
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, NULL, 0), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, ids, 1), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, ids, 1), NBHD_STATUS_REMOVED_POINT);
+    CHECK_MESSAGE("removed");
+    CHECK_STATUS(nbhd_dynamic_knn_index(dyn, 1, true, 2, ids, NULL, 3, &count),
+                 NBHD_STATUS_REMOVED_POINT);
+    CHECK(count == 0);
+    /* a removed index is never given again */
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+    CHECK(first == 6);
+    CHECK_STATUS(nbhd_dynamic_knn(dyn, q, 3, ids, NULL, 3, &count), NBHD_STATUS_OK);
+    CHECK(count == 3 && ids[0] == 0 && ids[1] == 2 && ids[2] == 4);
+
+    /* queries: NaN, k = 0, small buffers, NULL stats */
+    q[1] = NAN;
+    CHECK_STATUS(nbhd_dynamic_knn(dyn, q, 3, ids, NULL, 3, &count),
+                 NBHD_STATUS_NON_FINITE_QUERY);
+    q[1] = 0;
+    CHECK_STATUS(nbhd_dynamic_knn(dyn, q, 0, ids, NULL, 3, &count), NBHD_STATUS_INVALID_K);
+    CHECK_STATUS(nbhd_dynamic_radius(dyn, q, -1.0, ids, NULL, 3, &count),
+                 NBHD_STATUS_INVALID_RADIUS);
+    CHECK_STATUS(nbhd_dynamic_knn(dyn, q, 5, ids, NULL, 3, &count),
+                 NBHD_STATUS_BUFFER_TOO_SMALL);
+    CHECK(count == 5);
+    CHECK_STATUS(nbhd_dynamic_tree_stats(dyn, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_tree_stats(NULL, &stats), NBHD_STATUS_NULL_POINTER);
+    nbhd_dynamic_free(dyn);
+    nbhd_dynamic_free(NULL);
+
+    /* with SKIP a NaN point takes its index but is not live */
+    o = nbhd_build_options_default();
+    o.non_finite = NBHD_NON_FINITE_POLICY_SKIP;
+    CHECK_STATUS(nbhd_dynamic_create(DIM, NBHD_SCALAR_TYPE_F64, &o, &dyn), NBHD_STATUS_OK);
+    if (dyn == NULL) return;
+    p.data = bad;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_dynamic_knn_index(dyn, 1, false, 1, ids, NULL, 3, &count),
+                 NBHD_STATUS_SKIPPED_POINT);
+    ids[0] = 1;
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, ids, 1), NBHD_STATUS_SKIPPED_POINT);
+    CHECK_STATUS(nbhd_dynamic_tree_stats(dyn, &stats), NBHD_STATUS_OK);
+    CHECK(stats.live == 1 && stats.next_index == 2);
+    nbhd_dynamic_free(dyn);
+}
+
+int main(void) {
+    make_pool();
+    test_errors();
+    test_interleaved(1);
+    test_interleaved(0);
+    printf("dynamic_test: %d checks, %d failures\n", checks, failures);
+    return failures == 0 ? 0 : 1;
+}
