@@ -417,7 +417,7 @@ impl PyTable {
     /// batch: min(k, size) each).
     fn dense<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let total = *self.starts.last().unwrap_or(&0);
-        let width = if self.rows == 0 { 0 } else { total / self.rows };
+        let width = total.checked_div(self.rows).unwrap_or(0);
         if self.starts.iter().enumerate().any(|(i, &o)| o != i * width) {
             return Err(value_err("internal: k-nearest rows of unequal length"));
         }

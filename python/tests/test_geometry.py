@@ -146,7 +146,7 @@ def test_knn_equals_the_cli_csv(cli, tmp_path):
     csv = tmp_path / "knn.csv"
     run(cli, "knn", src, "-k", 8, "--exclude-self", "-o", csv)
     rows = np.genfromtxt(csv, delimiter=",", names=True)
-    pts = nbhd.read(src)["positions"].astype(np.float32)  # the CLI's trees are float32
+    pts = nbhd.read(src)["positions"]  # the CLI's trees are float64
     t = nbhd.KdTree(pts).neighborhoods(k=8)
     np.testing.assert_array_equal(rows["index"].astype(np.uint32), t.indices)
-    np.testing.assert_array_equal(rows["sq_dist"].astype(np.float32), t.sq_dists)
+    np.testing.assert_array_equal(rows["sq_dist"], t.sq_dists)  # every digit written
