@@ -43,6 +43,9 @@ echo "== cargo test"
 export NBHD_REQUIRE_VALGRIND=1
 cargo test --workspace
 
+# --- the Python package (python/): built with maturin, installed by pip, tested by pytest ----
+scripts/python-test.sh
+
 # --- fuzzing: a few seconds of each reader of nbhd::io and of the C ABI (scripts/fuzz.sh) -----
 echo "== fuzzing the file readers and the C ABI (FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"
 scripts/fuzz.sh

@@ -33,6 +33,13 @@ impl<T: Copy> NeighborTable<T> {
         })
     }
 
+    /// The parts `(offsets, indices, sq_dists)`, moved out without a copy (what
+    /// [`Self::from_parts`] takes): for bindings that hand the rows to another owner, such as
+    /// the Python package's numpy arrays.
+    pub fn into_parts(self) -> (Vec<usize>, Vec<u32>, Vec<T>) {
+        (self.offsets, self.indices, self.sq_dists)
+    }
+
     /// Number of rows.
     pub fn len(&self) -> usize {
         self.offsets.len().saturating_sub(1)
@@ -483,6 +490,10 @@ mod tests {
         assert_eq!((t.min_row_len(), t.max_row_len()), (0, 2));
         assert!(NeighborTable::<f32>::from_parts(vec![0, 2], vec![1], vec![1.0]).is_none());
         assert!(NeighborTable::<f32>::from_parts(vec![1, 1], vec![], vec![]).is_none());
+        assert_eq!(
+            t.into_parts(),
+            (vec![0, 2, 2, 3], vec![1, 2, 0], vec![1.0, 2.0, 3.0])
+        );
     }
 }
 

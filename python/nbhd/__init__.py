@@ -1,0 +1,51 @@
+"""nbhd — exact neighbourhoods in point clouds, and the smoothing that needs them.
+
+Python bindings of the Rust library nbhd (k-d trees with the build variants of M. Skrodzki's
+thesis *Neighborhood Computation of Point Set Surfaces*, exact k-nearest, radius and ε-k
+queries, PCA normals, curvatures and point-set smoothing). Every computation runs in Rust with
+the GIL released.
+
+Conventions (as in the Rust library): indices are the caller's row indices; a radius is a plain
+Euclidean radius and inclusive (‖p − q‖ ≤ r); distances come back squared (``sq_dists``);
+results are ordered by (sq_dist, index) and identical for any number of threads.
+"""
+
+from ._errors import (
+    CancelledError,
+    DegenerateError,
+    NbhdError,
+    NbhdIOError,
+    NbhdMemoryError,
+    NbhdValueError,
+)
+from ._nbhd import (
+    MAX_THREADS,
+    KdTree,
+    Table,
+    __version__,
+    curvatures,
+    normals,
+    read,
+    smooth,
+    smooth_robust,
+    write,
+)
+
+__all__ = [
+    "KdTree",
+    "Table",
+    "normals",
+    "curvatures",
+    "smooth",
+    "smooth_robust",
+    "read",
+    "write",
+    "MAX_THREADS",
+    "NbhdError",
+    "NbhdValueError",
+    "DegenerateError",
+    "NbhdMemoryError",
+    "NbhdIOError",
+    "CancelledError",
+    "__version__",
+]

@@ -1,0 +1,209 @@
+"""Type stubs of the compiled module nbhd._nbhd (python/src/). Conventions: indices are the
+caller's row indices (uint32); distances are squared (``sq_dists``) in the tree's type; a radius
+is a plain Euclidean radius, inclusive; rows are ordered by (sq_dist, index) and identical for
+any thread count."""
+
+import os
+from typing import Any, Literal, Optional, Sequence, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+F64 = npt.NDArray[np.float64]
+Floats = Union[npt.NDArray[np.float32], npt.NDArray[np.float64]]
+U32 = npt.NDArray[np.uint32]
+Path = Union[str, os.PathLike[str]]
+
+Pivot = Literal["sliding-midpoint", "cyclic-median", "spread-median", "closest-to-middle"]
+Median = Literal["floyd-rivest", "presorted", "sort", "quickselect", "median-of-medians"]
+NonFinite = Literal["reject", "skip"]
+Units = Literal["relative", "absolute"]
+OrientationName = Literal["unoriented", "toward-point", "away-from-point", "propagate"]
+
+MAX_THREADS: int
+__version__: str
+
+class Table:
+    """Neighbourhoods as compressed rows: row i is ``indices[offsets[i]:offsets[i+1]]`` with
+    its ``sq_dists``."""
+
+    offsets: npt.NDArray[np.uint64]
+    indices: U32
+    sq_dists: Floats
+    n_points: int
+    def __len__(self) -> int: ...
+    def row(self, i: int) -> tuple[U32, Floats]: ...
+    def row_lengths(self) -> npt.NDArray[np.uint64]: ...
+    def to_csr(self, *, distances: bool = False) -> Any:
+        """A ``scipy.sparse.csr_matrix`` (rows, n_points) of squared distances (or distances)."""
+
+class KdTree:
+    """A k-d tree over the rows of an (n, d) float32/float64 array."""
+
+    def __init__(
+        self,
+        points: ArrayLike,
+        *,
+        pivot: Pivot = "sliding-midpoint",
+        median: Median = "floyd-rivest",
+        leaf_size: int = 12,
+        non_finite: NonFinite = "reject",
+        threads: int = 0,
+    ) -> None: ...
+    @property
+    def size(self) -> int:
+        """Points held (skipped non-finite points not counted)."""
+    @property
+    def n(self) -> int:
+        """Rows of the array the tree was built from."""
+    @property
+    def m(self) -> int:
+        """Dimension."""
+    @property
+    def dtype_name(self) -> Literal["float32", "float64"]: ...
+    @property
+    def tree_order(self) -> U32: ...
+    def stats(self) -> dict[str, int]: ...
+    def options(self) -> dict[str, Any]: ...
+    def __len__(self) -> int: ...
+    def knn(self, x: ArrayLike, k: int, *, threads: int = 0) -> tuple[U32, Floats]:
+        """1-D x: (indices, sq_dists) of length min(k, size); 2-D x (m, d): arrays (m, min(k, size))."""
+    def radius(
+        self, x: ArrayLike, radius: float, *, sorted: bool = True, threads: int = 0
+    ) -> Union[tuple[U32, Floats], Table]:
+        """1-D x: (indices, sq_dists); 2-D x: a Table with one row per query."""
+    def knn_radius(self, x: ArrayLike, k: int, radius: float, *, threads: int = 0) -> Union[tuple[U32, Floats], Table]:
+        """1-D x: (indices, sq_dists); 2-D x: a Table with one row per query."""
+    def neighborhoods(
+        self,
+        *,
+        k: Optional[int] = None,
+        radius: Optional[float] = None,
+        exclude_self: bool = True,
+        sorted: bool = True,
+        threads: int = 0,
+    ) -> Table: ...
+
+class Outputs(TypedDict):
+    normals: F64
+    k1: F64
+    k2: F64
+    dir1: F64
+    dir2: F64
+    mean_curvature: F64
+    max_principal_curvature: F64
+    surface_variation: F64
+    principal_curvature_quotient: F64
+    max_covariance: F64
+    anisotropic_mean_curvature: F64
+    flags: npt.NDArray[np.uint8]
+    feature: npt.NDArray[np.bool_]
+    interior: npt.NDArray[np.bool_]
+
+class Curvatures(Outputs):
+    spacing: float
+    epsilon: float
+    min_neighbors: int
+
+class SmoothResult(TypedDict):
+    points: F64
+    spacing: float
+    epsilon: float
+    min_neighbors: int
+    outputs: Optional[Outputs]
+
+class RobustResult(SmoothResult):
+    normals: F64
+    noise: F64
+    moved: F64
+
+def normals(
+    points: ArrayLike,
+    *,
+    k: int = 15,
+    epsilon: float = 6.0,
+    epsilon_units: Units = "relative",
+    orientation: OrientationName = "unoriented",
+    orientation_point: Sequence[float] = (0.0, 0.0, 0.0),
+    non_finite: NonFinite = "reject",
+    threads: int = 0,
+) -> tuple[F64, F64, npt.NDArray[np.uint8]]:
+    """(normals (n, 3), surface variation (n,), flags (n,))."""
+
+def curvatures(
+    points: ArrayLike,
+    *,
+    k: int = 15,
+    epsilon: float = 6.0,
+    epsilon_units: Units = "relative",
+    orientation: OrientationName = "unoriented",
+    orientation_point: Sequence[float] = (0.0, 0.0, 0.0),
+    density: Literal["abs-linear", "quadratic"] = "abs-linear",
+    formula: Literal["eq2.25", "exact-moments"] = "eq2.25",
+    non_finite: NonFinite = "reject",
+    threads: int = 0,
+) -> Curvatures: ...
+def smooth(
+    points: ArrayLike,
+    *,
+    method: Literal["anisotropic", "isotropic"] = "anisotropic",
+    k: int = 15,
+    epsilon: float = 6.0,
+    epsilon_units: Units = "relative",
+    steps: Optional[int] = None,
+    tau: float = 0.5,
+    weighting: Optional[Literal["isotropic", "sharp", "continuous"]] = None,
+    lambda_: float = 0.2,
+    lambda_units: Units = "relative",
+    feature: Literal["all", "edge-quotient", "principal", "directional"] = "all",
+    feature_threshold: Optional[float] = None,
+    feature_units: Units = "relative",
+    constrain_interior: Optional[float] = None,
+    update_neighbors: bool = False,
+    orientation: OrientationName = "unoriented",
+    orientation_point: Sequence[float] = (0.0, 0.0, 0.0),
+    non_finite: NonFinite = "reject",
+    outputs: bool = False,
+    threads: int = 0,
+) -> SmoothResult: ...
+def smooth_robust(
+    points: ArrayLike,
+    *,
+    k: int = 24,
+    k_plane: int = 48,
+    epsilon: float = 12.0,
+    epsilon_units: Units = "relative",
+    max_iterations: int = 10,
+    tolerance: float = 0.05,
+    inlier_width: float = 5.0,
+    feature_angle: float = 20.0,
+    tau: float = 1.0,
+    orientation: OrientationName = "unoriented",
+    orientation_point: Sequence[float] = (0.0, 0.0, 0.0),
+    non_finite: NonFinite = "reject",
+    outputs: bool = False,
+    threads: int = 0,
+) -> RobustResult: ...
+
+class CloudFile(TypedDict):
+    positions: F64
+    normals: Optional[F64]
+    scalars: dict[str, F64]
+    grid: Optional[tuple[int, int]]
+    format: Literal["PLY", "PCD", "OBJ", "LAS", "XYZ"]
+    source_precision: Optional[Literal["single", "double"]]
+    text_columns: Optional[list[str]]
+
+def read(path: Path, *, format: Optional[str] = None, columns: Optional[str] = None) -> CloudFile: ...
+def write(
+    path: Path,
+    positions: ArrayLike,
+    *,
+    normals: Optional[ArrayLike] = None,
+    scalars: Optional[dict[str, ArrayLike]] = None,
+    format: Optional[Literal["ply", "pcd", "las", "laz", "xyz"]] = None,
+    encoding: Optional[Literal["ascii", "binary", "binary-big-endian", "binary-compressed"]] = None,
+    precision: Literal["single", "double", "keep"] = "single",
+) -> None: ...
+def _reads_in_place(points: ArrayLike) -> bool: ...

@@ -1,0 +1,40 @@
+//! The Python package `nbhd` (module `nbhd._nbhd`): a thin binding of the Rust crate `nbhd`.
+//! Every computation is the library's; this crate converts numpy arrays and keyword options to
+//! the library's types and back, releases the GIL while the library runs, and turns the
+//! library's errors into Python exceptions with its messages.
+
+mod arrays;
+mod errors;
+mod geometry;
+mod io;
+mod options;
+mod tree;
+
+use pyo3::prelude::*;
+
+/// Whether `points` (an (n, d) array) would be read in place by `KdTree` rather than copied:
+/// for the tests of the zero-copy paths.
+#[pyfunction]
+fn _reads_in_place(points: &Bound<'_, PyAny>) -> PyResult<bool> {
+    let (arr, dtype) = arrays::float_array(points, None)?;
+    Ok(match dtype {
+        arrays::Dtype::F32 => arrays::Points::<f32>::new(&arr)?.is_in_place(),
+        arrays::Dtype::F64 => arrays::Points::<f64>::new(&arr)?.is_in_place(),
+    })
+}
+
+#[pymodule]
+fn _nbhd(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<tree::PyKdTree>()?;
+    m.add_class::<tree::PyTable>()?;
+    m.add_function(wrap_pyfunction!(geometry::normals, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::curvatures, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::smooth, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::smooth_robust, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write, m)?)?;
+    m.add_function(wrap_pyfunction!(_reads_in_place, m)?)?;
+    m.add("MAX_THREADS", nbhd::MAX_THREADS)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,66 @@
+"""The GIL is released while the library computes: another Python thread runs meanwhile, and a
+tree is queried from several Python threads at once with the answers of one thread."""
+
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+import nbhd
+
+
+def runs_meanwhile(work):
+    """Timestamps at which a second Python thread ran during `work()`, a call into the library:
+    with the GIL held by the call, that thread could not run at all until it returned."""
+    stamps = []
+    stop = threading.Event()
+
+    def ticker():
+        while not stop.is_set():
+            stamps.append(time.perf_counter())
+            time.sleep(0.001)
+
+    t = threading.Thread(target=ticker)
+    t.start()
+    time.sleep(0.05)
+    start = time.perf_counter()
+    work()
+    end = time.perf_counter()
+    stop.set()
+    t.join()
+    inside = [s for s in stamps if start + 0.02 < s < end - 0.02]
+    return end - start, len(inside)
+
+
+def test_gil_is_released_during_tables_and_smoothing(rng):
+    pts = rng.random((300_000, 3))
+    tree = nbhd.KdTree(pts)
+    secs, ticks = runs_meanwhile(lambda: tree.neighborhoods(k=30, threads=1))
+    assert secs > 0.1 and ticks > 5, (secs, ticks)
+    secs, ticks = runs_meanwhile(lambda: nbhd.KdTree(pts, threads=1, median="presorted"))
+    assert secs > 0.1 and ticks > 5, (secs, ticks)
+    sph = rng.normal(size=(60_000, 3))
+    sph /= np.linalg.norm(sph, axis=1, keepdims=True)
+    secs, ticks = runs_meanwhile(lambda: nbhd.smooth(sph, threads=1, steps=5))
+    assert secs > 0.1 and ticks > 5, (secs, ticks)
+
+
+def test_one_tree_queried_from_many_python_threads(rng):
+    pts = rng.random((20_000, 3))
+    tree = nbhd.KdTree(pts)
+    qs = [rng.random((2000, 3)) for _ in range(8)]
+    alone = [tree.knn(q, 9, threads=1) for q in qs]
+    with ThreadPoolExecutor(4) as ex:
+        together = list(ex.map(lambda q: tree.knn(q, 9), qs))
+    for (a, b), (c, d) in zip(alone, together):
+        assert a.tobytes() == c.tobytes() and b.tobytes() == d.tobytes()
+
+
+def test_the_probe_sees_a_call_that_holds_the_gil():
+    # control: a C call that never releases the GIL (the regex engine backtracking) lets the
+    # other thread run not once, so the probe above can fail
+    import re
+
+    secs, ticks = runs_meanwhile(lambda: re.match("(a|aa)*c", "a" * 29))
+    assert secs > 0.1 and ticks == 0, (secs, ticks)

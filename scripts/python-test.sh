@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Builds and tests the Python package `nbhd` (python/): a virtual environment under the cargo
+# target directory (created once), maturin, numpy, scipy and pytest installed into it only when
+# missing, the binding crate formatted and linted (it is a workspace of its own, see
+# python/Cargo.toml), the package built in release mode and installed with pip exactly as a user
+# does (`pip install ./python`), then the pytest suite — with the command-line tool built, so
+# that the geometry is compared with the Rust results the CLI writes.
+#
+# Idempotent: a second run reuses the environment and cargo's incremental build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
+venv="$CARGO_TARGET_DIR/pyenv"
+
+if [ ! -x "$venv/bin/python" ]; then
+    echo "== creating the Python environment $venv"
+    if ! python3 -m venv "$venv" 2>/dev/null; then
+        # Debian splits venv (ensurepip) out of python3
+        sudo=""
+        [ "$(id -u)" -eq 0 ] || sudo="sudo"
+        $sudo apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends python3-venv >/dev/null
+        rm -rf "$venv"
+        python3 -m venv "$venv"
+    fi
+fi
+export PATH="$venv/bin:$PATH"
+missing=()
+for pkg in maturin numpy scipy pytest; do
+    python -c "import $pkg" >/dev/null 2>&1 || missing+=("$pkg")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+    echo "== installing into $venv: ${missing[*]} (pip)"
+    python -m pip install --quiet --disable-pip-version-check "${missing[@]}"
+fi
+
+echo "== python/: cargo fmt --check, clippy"
+cargo fmt --manifest-path python/Cargo.toml -- --check
+cargo clippy --manifest-path python/Cargo.toml --all-targets -- -D warnings
+
+echo "== pip install ./python (maturin, release build)"
+python -m pip install --quiet --disable-pip-version-check --no-build-isolation \
+    --force-reinstall --no-deps ./python
+
+echo "== the command-line tool, for the comparisons with the Rust results"
+cargo build --quiet -p nbhd-cli
+export NBHD_CLI="$CARGO_TARGET_DIR/debug/nbhd" NBHD_REQUIRE_CLI=1
+
+echo "== pytest python/tests"
+# run from the repository root: python/ itself would shadow the installed package
+python -m pytest -q -p no:cacheprovider --rootdir python python/tests
