@@ -28,7 +28,7 @@ sudo=""
 # --- Debian packages ----------------------------------------------------------------------
 missing=()
 for pkg in meshlab qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev libpcl-dev cmake g++ \
-    dpkg-dev xvfb xauth libgl1-mesa-dri; do
+    dpkg-dev xvfb libgl1-mesa-dri; do
     dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 if [ "${#missing[@]}" -gt 0 ]; then
