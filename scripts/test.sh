@@ -55,4 +55,5 @@ if [ -f cpp_examples/CMakeLists.txt ]; then
     echo "== C++ examples (ctest)"
     scripts/cpp-test.sh
 fi
+scripts/meshlab-test.sh  # the MeshLab plugin in Debian's meshlabserver (installs what it needs)
 echo "== all tests passed"
