@@ -65,6 +65,15 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
     let mut index = vec![0u32; n * width];
     let mut nearest = vec![None; n];
     let mut unproven = Vec::new();
+    if searched == 0 {
+        // a single point: no other points, empty rows
+        return Ok(Nearest {
+            order,
+            width,
+            index,
+            nearest,
+        });
+    }
     let mut each = |positions: std::ops::Range<usize>, table: NeighborTable<f32>| {
         let rows =
             index[positions.start * width..positions.end * width].par_chunks_mut(width.max(1));
@@ -282,6 +291,7 @@ mod tests {
         assert_exact(&pts, 24);
         assert_exact(&noisy_sphere(20, 0.0), 24);
         assert_exact(&noisy_sphere(2, 0.0), 24);
+        assert_exact(&noisy_sphere(1, 0.0), 24);
     }
 
     #[test]
