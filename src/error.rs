@@ -123,6 +123,18 @@ pub enum NbhdError {
         /// Whether ε was given relative to `h`.
         relative: bool,
     },
+    /// A query box has a NaN bound or `min > max` in some coordinate (an inverted box is
+    /// refused rather than taken as empty: it is nearly always a pair of swapped corners).
+    InvalidBox {
+        /// Which box of a batch (`None` for a single box).
+        query: Option<usize>,
+        /// The first offending coordinate.
+        coordinate: usize,
+        /// Its lower bound.
+        min: f64,
+        /// Its upper bound.
+        max: f64,
+    },
 }
 
 /// Bytes as a short human-readable size, e.g. "7.2 GB".
@@ -246,6 +258,23 @@ impl fmt::Display for NbhdError {
                     )
                 } else {
                     write!(f, "; epsilon was taken in the points' units (ABSOLUTE)")
+                }
+            }
+            InvalidBox {
+                query,
+                coordinate,
+                min,
+                max,
+            } => {
+                match query {
+                    Some(q) => write!(f, "box {q}")?,
+                    None => write!(f, "the box")?,
+                }
+                write!(f, " has min {min} and max {max} in coordinate {coordinate}: ")?;
+                if min.is_nan() || max.is_nan() {
+                    write!(f, "a bound is NaN")
+                } else {
+                    write!(f, "min > max (swapped corners?); a box is closed, min <= x <= max")
                 }
             }
         }

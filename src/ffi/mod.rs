@@ -38,6 +38,10 @@ pub mod tree;
 
 pub mod query;
 
+pub mod region;
+
+pub mod filter;
+
 pub mod table;
 
 pub mod smoothing_io;
@@ -58,6 +62,8 @@ pub use enums::*;
 pub use normals::*;
 pub use prepared::*;
 pub use query::*;
+pub use region::*;
+pub use filter::*;
 pub use robust::*;
 pub use smooth::*;
 pub use smoothing_io::*;

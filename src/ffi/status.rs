@@ -73,10 +73,14 @@ pub enum nbhd_status {
     /// (a table with very many neighbours, a huge k) failed. The message says how many bytes
     /// were needed. Nothing is written and the process is unharmed.
     OutOfMemory = 21,
+    /// A query box has a NaN bound or min > max in some coordinate (boxes are closed,
+    /// min <= x <= max; infinite bounds are allowed). The message names the box and the
+    /// coordinate.
+    InvalidBox = 22,
 }
 
 impl nbhd_status {
-    const ALL: [nbhd_status; 22] = [
+    const ALL: [nbhd_status; 23] = [
         nbhd_status::Ok,
         nbhd_status::NullPointer,
         nbhd_status::MisalignedPointer,
@@ -99,6 +103,7 @@ impl nbhd_status {
         nbhd_status::Internal,
         nbhd_status::Degenerate,
         nbhd_status::OutOfMemory,
+        nbhd_status::InvalidBox,
     ];
 
     /// A short, static description.
@@ -127,6 +132,7 @@ impl nbhd_status {
             Internal => c"internal error in nbhd (a bug; please report it)",
             Degenerate => c"every neighbourhood is degenerate (is epsilon in the right units?)",
             OutOfMemory => c"out of memory",
+            InvalidBox => c"a query box has a NaN bound or min > max",
         }
     }
 }
@@ -185,6 +191,7 @@ impl FfiError {
                 NbhdError::SizeOverflow { .. } => S::InvalidArgument,
                 NbhdError::OutOfMemory { .. } => S::OutOfMemory,
                 NbhdError::Degenerate { .. } => S::Degenerate,
+                NbhdError::InvalidBox { .. } => S::InvalidBox,
             },
         }
     }
@@ -395,7 +402,7 @@ mod tests {
             let text = unsafe { CStr::from_ptr(nbhd_status_string(s as c_int)) };
             assert!(!text.to_bytes().is_empty());
         }
-        for bad in [-1, 22, c_int::MAX, c_int::MIN] {
+        for bad in [-1, 23, c_int::MAX, c_int::MIN] {
             // SAFETY: as above.
             let text = unsafe { CStr::from_ptr(nbhd_status_string(bad)) };
             assert_eq!(text.to_str().unwrap(), "unknown status");

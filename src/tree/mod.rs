@@ -9,7 +9,9 @@
 //!   itself (Algorithm 3.1) and what it works on;
 //! - `neighborhoods.rs`: the table driver, [`KdTree::neighborhoods`] and
 //!   [`KdTree::neighborhoods_of`];
-//! - `search.rs`, `group_search.rs`: the descents that answer one query or a group.
+//! - `search.rs`, `group_search.rs`: the descents that answer one query or a group;
+//! - `range.rs`: box (orthogonal range) queries, [`KdTree::in_box`] and [`KdTree::in_boxes`];
+//! - `spacing.rs`: the nearest-neighbour spacing `h`, [`KdTree::spacing`].
 
 mod build;
 mod construct;
@@ -19,7 +21,9 @@ mod neighborhoods;
 mod node;
 pub mod options;
 mod presorted;
+mod range;
 mod search;
+mod spacing;
 mod split;
 
 use std::sync::OnceLock;
@@ -31,6 +35,8 @@ use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
 use node::Node;
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
+pub use range::IndexRows;
+pub use spacing::Spacing;
 use search::TreeView;
 
 /// Shape and memory of a built tree.
