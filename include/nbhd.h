@@ -1319,6 +1319,60 @@ nbhd_status nbhd_tree_boxes(const nbhd_tree *tree,
 nbhd_status nbhd_tree_spacing(const nbhd_tree *tree, size_t threads, nbhd_spacing *out);
 
 /**
+ * Statistical outlier removal (PCL's StatisticalOutlierRemoval, Open3D's
+ * remove_statistical_outlier): for each point its mean distance d_i to its `k` nearest
+ * other points (PCL's setMeanK(k): PCL searches k + 1 and skips the point itself); over all
+ * points the mean m and the sample standard deviation s (n - 1 in the denominator, as PCL);
+ * a point is kept when d_i <= m + std_ratio * s. Points skipped at build time are never
+ * kept and take no part in m and s (PCL 1.13 keeps NaN points in its output).
+ *
+ * - `kept`: `capacity` values (uint32_t); receives the caller indices of the kept points,
+ *   ascending, `*count` of them. The number of points given to nbhd_tree_build always
+ *   suffices; with less, `*count` receives the number needed and the status is
+ *   NBHD_STATUS_BUFFER_TOO_SMALL (nothing written; `kept` may be NULL with capacity 0).
+ * - `mask`: NULL, or one byte per point given to nbhd_tree_build: 1 kept, 0 removed.
+ *
+ * Errors: NULL_POINTER (`tree`, `count`, `kept` when needed), MISALIGNED_POINTER, INVALID_K
+ * (k = 0), INVALID_OPTION (k >= the number of points, std_ratio NaN or infinite, threads),
+ * BUFFER_TOO_SMALL, OUT_OF_MEMORY. On error `*count` is 0 except for BUFFER_TOO_SMALL.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `kept` NULL or writable for `capacity` values;
+ * `count` NULL or writable; `mask` NULL or writable for the number of points given.
+ */
+nbhd_status nbhd_remove_statistical_outliers(const nbhd_tree *tree,
+                                             size_t k,
+                                             double std_ratio,
+                                             size_t threads,
+                                             uint32_t *kept,
+                                             size_t capacity,
+                                             size_t *count,
+                                             uint8_t *mask);
+
+/**
+ * Radius outlier removal (PCL's RadiusOutlierRemoval, Open3D's remove_radius_outlier): a
+ * point is kept when at least `min_neighbors` other points lie within `radius` (plain
+ * Euclidean, inclusive: |x - p| <= radius). PCL's setMinNeighborsInRadius(m) is the same m
+ * (its count includes the point itself and keeps counts > m). 0 keeps every point the tree
+ * holds. Points skipped at build time are never kept. Results as
+ * nbhd_remove_statistical_outliers.
+ *
+ * Errors: NULL_POINTER, MISALIGNED_POINTER, INVALID_RADIUS (negative, NaN, infinite, or too
+ * large for the tree's type), INVALID_OPTION (threads), BUFFER_TOO_SMALL, OUT_OF_MEMORY.
+ *
+ * # Safety
+ * As nbhd_remove_statistical_outliers.
+ */
+nbhd_status nbhd_remove_radius_outliers(const nbhd_tree *tree,
+                                        double radius,
+                                        size_t min_neighbors,
+                                        size_t threads,
+                                        uint32_t *kept,
+                                        size_t capacity,
+                                        size_t *count,
+                                        uint8_t *mask);
+
+/**
  * The default table options: each point left out of its own row, the shared thread pool.
  */
 nbhd_table_options nbhd_table_options_default(void);

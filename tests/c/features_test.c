@@ -206,12 +206,109 @@ static void test_spacing(int f32) {
     }
 }
 
+/* Outlier removal against brute force from the definitions (distances in double from the
+   double points; the grid's distances are exact in float too). */
+static void test_outliers(int f32) {
+    nbhd_tree *tree = build(f32);
+    static double dmean[N];
+    uint32_t kept[N], want[N];
+    uint8_t mask[N];
+    size_t count = 0, nwant = 0, i, j, c, kk;
+    const size_t K = 4;
+    double sum = 0.0, sq = 0.0, mean, sd;
+    for (i = 0; i < N; i++) {
+        double best[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
+        double s = 0.0;
+        for (j = 0; j < N; j++) {
+            double d2 = 0.0;
+            if (i == j) continue;
+            for (c = 0; c < DIM; c++) {
+                double t = pts[i * DIM + c] - pts[j * DIM + c];
+                d2 += t * t;
+            }
+            for (kk = 0; kk < K; kk++) {
+                if (d2 < best[kk]) {
+                    double tmp = best[kk];
+                    best[kk] = d2;
+                    d2 = tmp;
+                }
+            }
+        }
+        for (kk = 0; kk < K; kk++) s += sqrt(best[kk]);
+        dmean[i] = s / (double)K;
+        sum += dmean[i];
+    }
+    mean = sum / N;
+    for (i = 0; i < N; i++) sq += (dmean[i] - mean) * (dmean[i] - mean);
+    sd = sqrt(sq / (N - 1));
+    for (i = 0; i < N; i++)
+        if (dmean[i] <= mean + 0.5 * sd) want[nwant++] = (uint32_t)i;
+    CHECK(nwant > 0 && nwant < N);
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, K, 0.5, 2, kept, N, &count, mask),
+                 NBHD_STATUS_OK);
+    CHECK(count == nwant && memcmp(kept, want, nwant * sizeof(uint32_t)) == 0);
+    for (i = 0, c = 0; i < N; i++) c += mask[i];
+    CHECK(c == nwant && mask[want[0]] == 1);
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, K, 0.5, 0, NULL, 0, &count, NULL),
+                 NBHD_STATUS_BUFFER_TOO_SMALL);
+    CHECK(count == nwant);
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, 0, 0.5, 0, kept, N, &count, NULL),
+                 NBHD_STATUS_INVALID_K);
+    CHECK(count == 0);
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, N, 0.5, 0, kept, N, &count, NULL),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, K, NAN, 0, kept, N, &count, NULL),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK_STATUS(nbhd_remove_statistical_outliers(NULL, K, 0.5, 0, kept, N, &count, NULL),
+                 NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, K, 0.5, 0, kept, N, NULL, NULL),
+                 NBHD_STATUS_NULL_POINTER);
+    /* radius: at least 3 other points within 0.25 (grid step: points on the sphere count) */
+    nwant = 0;
+    for (i = 0; i < N; i++) {
+        size_t n = 0;
+        for (j = 0; j < N; j++) {
+            double d2 = 0.0;
+            if (i == j) continue;
+            for (c = 0; c < DIM; c++) {
+                double t = pts[i * DIM + c] - pts[j * DIM + c];
+                d2 += t * t;
+            }
+            if (d2 <= 0.25 * 0.25) n++;
+        }
+        if (n >= 3) want[nwant++] = (uint32_t)i;
+    }
+    CHECK(nwant > 0 && nwant < N);
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, 3, 3, kept, N, &count, mask),
+                 NBHD_STATUS_OK);
+    CHECK(count == nwant && memcmp(kept, want, nwant * sizeof(uint32_t)) == 0);
+    for (i = 0, c = 0; i < N; i++) c += mask[i];
+    CHECK(c == nwant);
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, 0, 0, kept, N, &count, NULL),
+                 NBHD_STATUS_OK);
+    CHECK(count == N);
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, -1.0, 3, 0, kept, N, &count, NULL),
+                 NBHD_STATUS_INVALID_RADIUS);
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, NAN, 3, 0, kept, N, &count, NULL),
+                 NBHD_STATUS_INVALID_RADIUS);
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, 3, 5000, kept, N, &count, NULL),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, 3, 0, kept, 1, &count, NULL),
+                 NBHD_STATUS_BUFFER_TOO_SMALL);
+    CHECK(count == nwant);
+    CHECK_STATUS(nbhd_remove_radius_outliers(NULL, 0.25, 3, 0, kept, N, &count, NULL),
+                 NBHD_STATUS_NULL_POINTER);
+    nbhd_tree_free(tree);
+}
+
 int main(void) {
     make_points();
     test_boxes(0);
     test_boxes(1);
     test_spacing(0);
     test_spacing(1);
+    test_outliers(0);
+    test_outliers(1);
     printf("features_test: %d checks, %d failures\n", checks, failures);
     return failures == 0 ? 0 : 1;
 }
