@@ -270,11 +270,17 @@ impl fmt::Display for NbhdError {
                     Some(q) => write!(f, "box {q}")?,
                     None => write!(f, "the box")?,
                 }
-                write!(f, " has min {min} and max {max} in coordinate {coordinate}: ")?;
+                write!(
+                    f,
+                    " has min {min} and max {max} in coordinate {coordinate}: "
+                )?;
                 if min.is_nan() || max.is_nan() {
                     write!(f, "a bound is NaN")
                 } else {
-                    write!(f, "min > max (swapped corners?); a box is closed, min <= x <= max")
+                    write!(
+                        f,
+                        "min > max (swapped corners?); a box is closed, min <= x <= max"
+                    )
                 }
             }
         }

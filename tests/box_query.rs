@@ -158,7 +158,20 @@ fn bad_boxes_are_refused() {
         })
     ));
     // a batch names the box
-    let batch = [0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, f64::NAN, 1.0];
+    let batch = [
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        1.0,
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        f64::NAN,
+        1.0,
+    ];
     assert!(matches!(
         tree.in_boxes(&batch, 2),
         Err(NbhdError::InvalidBox {

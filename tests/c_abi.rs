@@ -366,7 +366,10 @@ fn c_pools_are_bounded_and_survive_fork() {
 
 #[test]
 fn c_boxes_spacing_and_filters_match_brute_force() {
-    run(Command::new(compiled("features_test")), "tests/c/features_test");
+    run(
+        Command::new(compiled("features_test")),
+        "tests/c/features_test",
+    );
 }
 
 #[test]

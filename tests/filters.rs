@@ -57,7 +57,10 @@ fn brute_sor<T: Scalar>(coords: &[T], d: usize, k: usize, alpha: f64) -> Vec<u32
         .collect();
     let m = dist.len() as f64;
     let mean = dist.iter().fold(0.0, |a, x| a + x.1) / m;
-    let var = dist.iter().fold(0.0, |a, x| a + (x.1 - mean) * (x.1 - mean)) / (m - 1.0);
+    let var = dist
+        .iter()
+        .fold(0.0, |a, x| a + (x.1 - mean) * (x.1 - mean))
+        / (m - 1.0);
     let t = mean + alpha * var.sqrt();
     dist.iter().filter(|x| x.1 <= t).map(|x| x.0).collect()
 }
@@ -67,7 +70,13 @@ fn brute_ror<T: Scalar>(coords: &[T], d: usize, r: f64, m: usize) -> Vec<u32> {
     let r2 = T::from_f64(r) * T::from_f64(r);
     (0..n)
         .filter(|&i| finite(coords, d, i))
-        .filter(|&i| others(coords, d, i).iter().filter(|&&x| x <= r2.to_f64()).count() >= m)
+        .filter(|&i| {
+            others(coords, d, i)
+                .iter()
+                .filter(|&&x| x <= r2.to_f64())
+                .count()
+                >= m
+        })
         .map(|i| i as u32)
         .collect()
 }
@@ -100,7 +109,10 @@ fn check<T: Scalar>(coords: &[T], d: usize) {
                 },
             )
             .unwrap();
-            assert_eq!(got.indices, want, "sor k {k} alpha {alpha} threads {threads}");
+            assert_eq!(
+                got.indices, want,
+                "sor k {k} alpha {alpha} threads {threads}"
+            );
             let mask = got.mask();
             assert_eq!(mask.len(), coords.len() / d);
             assert_eq!(mask.iter().filter(|&&b| b).count(), want.len());
@@ -108,7 +120,12 @@ fn check<T: Scalar>(coords: &[T], d: usize) {
     }
     // radii through actual distances, so points lie exactly on the sphere
     let o = others(coords, d, 0);
-    for (r, m) in [(o[0].sqrt(), 1), (o[o.len() / 2].sqrt(), 3), (0.0, 1), (o[2].sqrt(), 0)] {
+    for (r, m) in [
+        (o[0].sqrt(), 1),
+        (o[o.len() / 2].sqrt(), 3),
+        (0.0, 1),
+        (o[2].sqrt(), 0),
+    ] {
         let want = brute_ror(coords, d, r, m);
         for threads in [1, 2] {
             let got = radius_outlier_removal(
@@ -178,14 +195,23 @@ fn bad_options_are_refused() {
         )
     };
     assert_eq!(sor(0, 1.0, 0), Err(NbhdError::ZeroK));
-    assert!(matches!(sor(20, 1.0, 0), Err(NbhdError::InvalidOption { name: "k", .. })));
+    assert!(matches!(
+        sor(20, 1.0, 0),
+        Err(NbhdError::InvalidOption { name: "k", .. })
+    ));
     assert!(matches!(
         sor(3, f64::NAN, 0),
-        Err(NbhdError::InvalidOption { name: "std_ratio", .. })
+        Err(NbhdError::InvalidOption {
+            name: "std_ratio",
+            ..
+        })
     ));
     assert!(matches!(
         sor(3, 1.0, 5000),
-        Err(NbhdError::InvalidOption { name: "threads", .. })
+        Err(NbhdError::InvalidOption {
+            name: "threads",
+            ..
+        })
     ));
     let ror = |radius, threads| {
         radius_outlier_removal(
@@ -199,7 +225,10 @@ fn bad_options_are_refused() {
     };
     assert!(matches!(ror(-1.0, 0), Err(NbhdError::InvalidRadius(_))));
     assert!(matches!(ror(f64::NAN, 0), Err(NbhdError::InvalidRadius(_))));
-    assert!(matches!(ror(f64::INFINITY, 0), Err(NbhdError::InvalidRadius(_))));
+    assert!(matches!(
+        ror(f64::INFINITY, 0),
+        Err(NbhdError::InvalidRadius(_))
+    ));
     let tf = tree(&to_f32(&c), 3);
     assert!(matches!(
         radius_outlier_removal(

@@ -59,11 +59,11 @@ mod args;
 mod fields;
 
 pub use enums::*;
+pub use filter::*;
 pub use normals::*;
 pub use prepared::*;
 pub use query::*;
 pub use region::*;
-pub use filter::*;
 pub use robust::*;
 pub use smooth::*;
 pub use smoothing_io::*;

@@ -113,7 +113,12 @@ unsafe fn one_box<T: Scalar>(
 ) -> Result<(), FfiError> {
     let dim = tree.stats().dim;
     // SAFETY: `min` and `max` are NULL or `dim` readable values of `T` (caller).
-    let (lo, hi) = unsafe { (slice_of::<T>(min, dim, "min")?, slice_of::<T>(max, dim, "max")?) };
+    let (lo, hi) = unsafe {
+        (
+            slice_of::<T>(min, dim, "min")?,
+            slice_of::<T>(max, dim, "max")?,
+        )
+    };
     let mut found = Vec::new();
     tree.in_box(lo, hi, &mut found)?;
     // SAFETY: `count` is non-NULL, aligned and writable (checked by the caller).

@@ -102,7 +102,9 @@ pub fn statistical_outlier_removal<T: Scalar>(
         .collect();
     let n = d.len() as f64;
     let mean = d.iter().fold(0.0, |acc, &(_, x)| acc + x) / n;
-    let sq = d.iter().fold(0.0, |acc, &(_, x)| acc + (x - mean) * (x - mean));
+    let sq = d
+        .iter()
+        .fold(0.0, |acc, &(_, x)| acc + (x - mean) * (x - mean));
     let sigma = if d.len() > 1 {
         (sq / (n - 1.0)).sqrt()
     } else {

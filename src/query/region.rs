@@ -20,8 +20,8 @@ pub(crate) fn check_box<T: Scalar>(
         }
     }
     for (j, (&lo, &hi)) in min.iter().zip(max).enumerate() {
-        // `!(lo <= hi)` is true for a NaN bound and for an inverted one
-        if !(lo <= hi) {
+        // refused: a NaN bound (unordered) or an inverted one
+        if lo.partial_cmp(&hi).is_none_or(|o| o == std::cmp::Ordering::Greater) {
             return Err(NbhdError::InvalidBox {
                 query,
                 coordinate: j,
@@ -40,4 +40,3 @@ pub(crate) fn in_closed_box<T: Scalar>(p: &[T], min: &[T], max: &[T]) -> bool {
         .zip(min.iter().zip(max))
         .all(|(&x, (&lo, &hi))| lo <= x && x <= hi)
 }
-

@@ -36,8 +36,8 @@ use crate::scalar::Scalar;
 use node::Node;
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
 pub use range::IndexRows;
-pub use spacing::Spacing;
 use search::TreeView;
+pub use spacing::Spacing;
 
 /// Shape and memory of a built tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -76,9 +76,9 @@ impl<T: Scalar> KdTree<T> {
                 threads,
             },
         )?;
-        Ok(Spacing::from_nearest((0..table.len()).map(|i| {
-            table.sq_dists_of(i).first().map(|d| d.to_f64())
-        })))
+        Ok(Spacing::from_nearest(
+            (0..table.len()).map(|i| table.sq_dists_of(i).first().map(|d| d.to_f64())),
+        ))
     }
 }
 

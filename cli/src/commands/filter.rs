@@ -81,7 +81,7 @@ fn tree(cloud: &PointCloud, name: &str) -> Result<KdTree<f64>> {
         non_finite: NonFinitePolicy::Skip,
         ..BuildOptions::default()
     };
-    Ok(KdTree::build(&view, &opts).context(name)?)
+    KdTree::build(&view, &opts).context(name)
 }
 
 /// The points `kept` (ascending indices) of `cloud`, with their normals and fields.
