@@ -21,7 +21,10 @@ pub(crate) fn check_box<T: Scalar>(
     }
     for (j, (&lo, &hi)) in min.iter().zip(max).enumerate() {
         // refused: a NaN bound (unordered) or an inverted one
-        if lo.partial_cmp(&hi).is_none_or(|o| o == std::cmp::Ordering::Greater) {
+        if lo
+            .partial_cmp(&hi)
+            .is_none_or(|o| o == std::cmp::Ordering::Greater)
+        {
             return Err(NbhdError::InvalidBox {
                 query,
                 coordinate: j,
