@@ -344,6 +344,12 @@ typedef enum {
      * reused), or is named twice in one removal.
      */
     NBHD_STATUS_REMOVED_POINT = 25,
+    /**
+     * A query box has a NaN bound or min > max in some coordinate (boxes are closed,
+     * min <= x <= max; infinite bounds are allowed). The message names the box and the
+     * coordinate.
+     */
+    NBHD_STATUS_INVALID_BOX = 26,
 } nbhd_status;
 
 /**
@@ -620,6 +626,25 @@ typedef struct {
      */
     nbhd_scalar_type scalar_type;
 } nbhd_stats;
+
+/**
+ * The nearest-neighbour spacing of a point set: the distance of each point to its nearest
+ * other point, summarised. `mean` is the h of every relative length (epsilon = 6 h).
+ */
+typedef struct {
+    /**
+     * Mean nearest-neighbour distance h, summed in index order.
+     */
+    double mean;
+    /**
+     * Median nearest-neighbour distance (the mean of the middle two for an even count).
+     */
+    double median;
+    /**
+     * Number of points the distances were taken over (the tree's points).
+     */
+    size_t points;
+} nbhd_spacing;
 
 /**
  * Options of nbhd_tree_neighborhoods. Start from nbhd_table_options_default().
@@ -1394,6 +1419,136 @@ nbhd_status nbhd_tree_knn_radius_index(const nbhd_tree *tree,
                                        void *sq_dists,
                                        size_t capacity,
                                        size_t *count);
+
+/**
+ * All points of the tree inside the closed axis-aligned box `min[j] <= x[j] <= max[j]`
+ * (every coordinate j).
+ *
+ * - `min`, `max`: `dim` values each in the tree's scalar type (`float` for a tree built from
+ *   NBHD_SCALAR_TYPE_F32 points, `double` for F64), aligned for it. Bounds may be infinite
+ *   (a slab, a half-space); min = max in a coordinate is a valid, zero-extent box.
+ * - Results: `*count` caller indices (uint32_t) ascending, in `indices` (`capacity` values).
+ *   If more than `capacity` points are inside, nothing is written to `indices`, `*count`
+ *   receives the number needed and the status is NBHD_STATUS_BUFFER_TOO_SMALL; `indices` may
+ *   be NULL with capacity 0 to ask for the size. Points skipped at build time are never
+ *   inside. On any other error `*count` is 0.
+ *
+ * Errors: NULL_POINTER (`tree`, `min`, `max`, `count`, `indices` when needed),
+ * MISALIGNED_POINTER, INVALID_BOX (a NaN bound, or min > max in some coordinate: an inverted
+ * box is refused, not taken as empty), BUFFER_TOO_SMALL.
+ *
+ * Thread safety: any number of threads may query one tree at once.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `min` and `max` NULL or `dim` readable values of the
+ * tree's scalar type; `indices` NULL or writable for `capacity` values; `count` NULL or
+ * writable.
+ */
+nbhd_status nbhd_tree_box(const nbhd_tree *tree,
+                          const void *min,
+                          const void *max,
+                          uint32_t *indices,
+                          size_t capacity,
+                          size_t *count);
+
+/**
+ * The points inside each box of a batch, computed in parallel; rows in the boxes' order,
+ * identical for any thread count.
+ *
+ * - `boxes`: `n_boxes * 2 * dim` values in the tree's scalar type: box i is its `min`
+ *   corner (`dim` values) then its `max` corner. Closed boxes, as nbhd_tree_box.
+ * - `threads`: 0 for a thread per core, else 1 ..= NBHD_MAX_THREADS.
+ * - `offsets`: `n_boxes + 1` values (size_t); row i is `indices[offsets[i] .. offsets[i + 1]]`,
+ *   the caller indices inside box i, ascending.
+ * - `indices`: `capacity` values; `*total` receives the number of indices over all rows.
+ *   If `capacity` is smaller, nothing is written to `offsets` or `indices` and the status is
+ *   NBHD_STATUS_BUFFER_TOO_SMALL: call again with `*total` values (`indices` may be NULL
+ *   with capacity 0 to ask for the size). On any other error `*total` is 0.
+ *
+ * Errors: NULL_POINTER (`tree`, `boxes` when n_boxes > 0, `offsets`, `total`, `indices`
+ * when needed), MISALIGNED_POINTER, INVALID_BOX (the message names the box), INVALID_OPTION
+ * (threads), INVALID_ARGUMENT (n_boxes * 2 * dim overflows), BUFFER_TOO_SMALL, OUT_OF_MEMORY.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `boxes` NULL or `n_boxes * 2 * dim` readable values
+ * of the tree's scalar type; `offsets` NULL or writable for `n_boxes + 1` values; `indices`
+ * NULL or writable for `capacity` values; `total` NULL or writable.
+ */
+nbhd_status nbhd_tree_boxes(const nbhd_tree *tree,
+                            const void *boxes,
+                            size_t n_boxes,
+                            size_t threads,
+                            size_t *offsets,
+                            uint32_t *indices,
+                            size_t capacity,
+                            size_t *total);
+
+/**
+ * The nearest-neighbour spacing of the tree's points, computed on `threads` workers (0: a
+ * thread per core); the same value for any thread count. Points skipped at build time are
+ * left out.
+ *
+ * Errors: NULL_POINTER (`tree`, `out`), MISALIGNED_POINTER, INVALID_OPTION (fewer than two
+ * points in the tree, or threads above NBHD_MAX_THREADS). On error `*out` is all zero.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `out` NULL or writable.
+ */
+nbhd_status nbhd_tree_spacing(const nbhd_tree *tree, size_t threads, nbhd_spacing *out);
+
+/**
+ * Statistical outlier removal (PCL's StatisticalOutlierRemoval, Open3D's
+ * remove_statistical_outlier): for each point its mean distance d_i to its `k` nearest
+ * other points (PCL's setMeanK(k): PCL searches k + 1 and skips the point itself); over all
+ * points the mean m and the sample standard deviation s (n - 1 in the denominator, as PCL);
+ * a point is kept when d_i <= m + std_ratio * s. Points skipped at build time are never
+ * kept and take no part in m and s (PCL 1.13 keeps NaN points in its output).
+ *
+ * - `kept`: `capacity` values (uint32_t); receives the caller indices of the kept points,
+ *   ascending, `*count` of them. The number of points given to nbhd_tree_build always
+ *   suffices; with less, `*count` receives the number needed and the status is
+ *   NBHD_STATUS_BUFFER_TOO_SMALL (nothing written; `kept` may be NULL with capacity 0).
+ * - `mask`: NULL, or one byte per point given to nbhd_tree_build: 1 kept, 0 removed.
+ *
+ * Errors: NULL_POINTER (`tree`, `count`, `kept` when needed), MISALIGNED_POINTER, INVALID_K
+ * (k = 0), INVALID_OPTION (k >= the number of points, std_ratio NaN or infinite, threads),
+ * BUFFER_TOO_SMALL, OUT_OF_MEMORY. On error `*count` is 0 except for BUFFER_TOO_SMALL.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `kept` NULL or writable for `capacity` values;
+ * `count` NULL or writable; `mask` NULL or writable for the number of points given.
+ */
+nbhd_status nbhd_remove_statistical_outliers(const nbhd_tree *tree,
+                                             size_t k,
+                                             double std_ratio,
+                                             size_t threads,
+                                             uint32_t *kept,
+                                             size_t capacity,
+                                             size_t *count,
+                                             uint8_t *mask);
+
+/**
+ * Radius outlier removal (PCL's RadiusOutlierRemoval, Open3D's remove_radius_outlier): a
+ * point is kept when at least `min_neighbors` other points lie within `radius` (plain
+ * Euclidean, inclusive: |x - p| <= radius). PCL's setMinNeighborsInRadius(m) is the same m
+ * (its count includes the point itself and keeps counts > m). 0 keeps every point the tree
+ * holds. Points skipped at build time are never kept. Results as
+ * nbhd_remove_statistical_outliers.
+ *
+ * Errors: NULL_POINTER, MISALIGNED_POINTER, INVALID_RADIUS (negative, NaN, infinite, or too
+ * large for the tree's type), INVALID_OPTION (threads), BUFFER_TOO_SMALL, OUT_OF_MEMORY.
+ *
+ * # Safety
+ * As nbhd_remove_statistical_outliers.
+ */
+nbhd_status nbhd_remove_radius_outliers(const nbhd_tree *tree,
+                                        double radius,
+                                        size_t min_neighbors,
+                                        size_t threads,
+                                        uint32_t *kept,
+                                        size_t capacity,
+                                        size_t *count,
+                                        uint8_t *mask);
 
 /**
  * The default table options: each point left out of its own row, the shared thread pool.

@@ -145,6 +145,18 @@ pub enum NbhdError {
         /// The operating system's message.
         message: String,
     },
+    /// A query box has a NaN bound or `min > max` in some coordinate (an inverted box is
+    /// refused rather than taken as empty: it is nearly always a pair of swapped corners).
+    InvalidBox {
+        /// Which box of a batch (`None` for a single box).
+        query: Option<usize>,
+        /// The first offending coordinate.
+        coordinate: usize,
+        /// Its lower bound.
+        min: f64,
+        /// Its upper bound.
+        max: f64,
+    },
 }
 
 /// Why a saved tree was refused; each variant names what differs from what this library reads.
@@ -389,6 +401,29 @@ impl fmt::Display for NbhdError {
             Io {
                 context, message, ..
             } => write!(f, "{context}: {message}"),
+            InvalidBox {
+                query,
+                coordinate,
+                min,
+                max,
+            } => {
+                match query {
+                    Some(q) => write!(f, "box {q}")?,
+                    None => write!(f, "the box")?,
+                }
+                write!(
+                    f,
+                    " has min {min} and max {max} in coordinate {coordinate}: "
+                )?;
+                if min.is_nan() || max.is_nan() {
+                    write!(f, "a bound is NaN")
+                } else {
+                    write!(
+                        f,
+                        "min > max (swapped corners?); a box is closed, min <= x <= max"
+                    )
+                }
+            }
         }
     }
 }

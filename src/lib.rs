@@ -15,6 +15,7 @@ pub(crate) mod cloud;
 pub mod dynamic;
 pub mod error;
 pub mod ffi;
+pub mod filter;
 pub mod geometry;
 #[cfg(feature = "io")]
 pub mod io;
@@ -40,4 +41,4 @@ pub use query::pca_sweep::PcaSweep;
 pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::{NeighborTable, TableOptions};
-pub use tree::{BuildOptions, KdTree, MedianAlgorithm, PivotPolicy, TreeStats};
+pub use tree::{BuildOptions, IndexRows, KdTree, MedianAlgorithm, PivotPolicy, Spacing, TreeStats};

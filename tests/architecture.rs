@@ -20,8 +20,8 @@ const LAYERS: &[&[&str]] = &[
     &["table"],
     // the k-d tree (Chapters 3, 5, 6)
     &["tree"],
-    // normals, curvatures (Chapter 2); files; the dynamic forest of trees
-    &["geometry", "io", "dynamic"],
+    // normals, curvatures (Chapter 2); files; the dynamic forest of trees; point filters (outlier removal)
+    &["geometry", "io", "dynamic", "filter"],
     // smoothing (Chapter 2); analytic test shapes and their metrics
     &["smooth", "shapes"],
     // the C ABI over all of it

@@ -382,6 +382,22 @@ fn c_pools_are_bounded_and_survive_fork() {
 }
 
 #[test]
+fn c_boxes_spacing_and_filters_match_brute_force() {
+    run(
+        Command::new(compiled("features_test")),
+        "tests/c/features_test",
+    );
+}
+
+#[test]
+fn c_features_are_clean_under_valgrind() {
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(compiled("features_test"));
+        run(cmd, "valgrind tests/c/features_test");
+    }
+}
+
+#[test]
 fn c_smoothing_checks_against_a_sphere() {
     run(Command::new(compiled("smooth_test")), "tests/c/smooth_test");
 }

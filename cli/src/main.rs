@@ -95,6 +95,9 @@ enum Command {
     Info(commands::info::Args),
     Convert(commands::convert::Args),
     Render(commands::render::Args),
+    Crop(commands::filter::CropArgs),
+    Sor(commands::filter::SorArgs),
+    Ror(commands::filter::RorArgs),
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -127,6 +130,9 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Info(a)) => commands::info::run(a, &out),
         Some(Command::Convert(a)) => commands::convert::run(a, &out),
         Some(Command::Render(a)) => commands::render::run(a, &out),
+        Some(Command::Crop(a)) => commands::filter::run_crop(a, &out),
+        Some(Command::Sor(a)) => commands::filter::run_sor(a, &out),
+        Some(Command::Ror(a)) => commands::filter::run_ror(a, &out),
     }
 }
 

@@ -1083,3 +1083,75 @@ fn text_columns_are_reported_and_las_converts() {
         stdout(&o)
     );
 }
+
+/// `info` prints the spacing; `crop`, `sor` and `ror` write exactly the points the library
+/// keeps (crop: against a brute-force test of the closed box), NaN points never.
+#[test]
+fn filters_write_the_kept_points_and_info_prints_the_spacing() {
+    let Some(f) = data("pcl/milk.pcd") else {
+        return;
+    };
+    let cloud = nbhd::io::read(&f).unwrap();
+    let view = cloud.view().unwrap();
+    let tree = nbhd::KdTree::<f64>::build(&view, &nbhd::BuildOptions::default()).unwrap();
+    let h = tree.spacing(1).unwrap();
+    let o = nbhd(&["info", "--json", &f]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["spacing"]["mean"].as_f64().unwrap(), h.mean);
+    assert_eq!(v["spacing"]["median"].as_f64().unwrap(), h.median);
+
+    let count = |path: &str| nbhd::io::read(path).unwrap().len();
+    let out = tmp("crop.ply");
+    // the middle third of the bounding box in x and y, all of z
+    let b = cloud.bounding_box().unwrap();
+    let third = |j: usize, t: f64| b.min[j] + t * (b.max[j] - b.min[j]);
+    let (x0, x1, y0, y1) = (
+        third(0, 1.0 / 3.0),
+        third(0, 2.0 / 3.0),
+        third(1, 0.4),
+        third(1, 0.6),
+    );
+    let (min, max) = (format!("{x0},{y0},-inf"), format!("{x1},{y1},inf"));
+    let o = nbhd(&["crop", &f, &out, "--min", &min, "--max", &max]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let inside = cloud
+        .positions
+        .iter()
+        .filter(|p| (x0..=x1).contains(&p[0]) && (y0..=y1).contains(&p[1]))
+        .count();
+    assert!(inside > 0);
+    assert_eq!(count(&out), inside);
+    let o = nbhd(&["crop", &f, &out, "--min", "1,0,0", "--max", "0,1,1"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("min > max"), "{}", stderr(&o));
+
+    let out = tmp("sor.pcd");
+    let o = nbhd(&["sor", &f, &out, "-k", "20", "--std-ratio", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let want = nbhd::filter::statistical_outlier_removal(
+        &tree,
+        &nbhd::filter::StatisticalOutlierOptions {
+            k: 20,
+            std_ratio: 1.0,
+            threads: 0,
+        },
+    )
+    .unwrap();
+    assert_eq!(count(&out), want.indices.len());
+    assert!(want.indices.len() < cloud.len());
+
+    let out = tmp("ror.xyz");
+    let o = nbhd(&["ror", &f, &out, "-r", "2h", "-m", "4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let want = nbhd::filter::radius_outlier_removal(
+        &tree,
+        &nbhd::filter::RadiusOutlierOptions {
+            radius: 2.0 * h.mean,
+            min_neighbors: 4,
+            threads: 0,
+        },
+    )
+    .unwrap();
+    assert_eq!(count(&out), want.indices.len());
+}

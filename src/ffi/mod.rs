@@ -40,6 +40,10 @@ pub mod persist;
 
 pub mod query;
 
+pub mod region;
+
+pub mod filter;
+
 pub mod table;
 
 pub mod dynamic;
@@ -60,10 +64,12 @@ mod fields;
 
 pub use dynamic::*;
 pub use enums::*;
+pub use filter::*;
 pub use normals::*;
 pub use persist::*;
 pub use prepared::*;
 pub use query::*;
+pub use region::*;
 pub use robust::*;
 pub use smooth::*;
 pub use smoothing_io::*;

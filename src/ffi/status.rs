@@ -86,10 +86,14 @@ pub enum nbhd_status {
     /// An index passed to a dynamic tree names a point already removed (indices are never
     /// reused), or is named twice in one removal.
     RemovedPoint = 25,
+    /// A query box has a NaN bound or min > max in some coordinate (boxes are closed,
+    /// min <= x <= max; infinite bounds are allowed). The message names the box and the
+    /// coordinate.
+    InvalidBox = 26,
 }
 
 impl nbhd_status {
-    const ALL: [nbhd_status; 26] = [
+    const ALL: [nbhd_status; 27] = [
         nbhd_status::Ok,
         nbhd_status::NullPointer,
         nbhd_status::MisalignedPointer,
@@ -116,6 +120,7 @@ impl nbhd_status {
         nbhd_status::FormatMismatch,
         nbhd_status::CorruptData,
         nbhd_status::RemovedPoint,
+        nbhd_status::InvalidBox,
     ];
 
     /// A short, static description.
@@ -148,6 +153,7 @@ impl nbhd_status {
             FormatMismatch => c"not a saved tree of this format version and byte order",
             CorruptData => c"the saved tree is damaged (truncated or corrupted)",
             RemovedPoint => c"the point was removed from the dynamic tree",
+            InvalidBox => c"a query box has a NaN bound or min > max",
         }
     }
 }
@@ -219,6 +225,7 @@ impl FfiError {
                     | SavedTreeError::Checksum { .. }
                     | SavedTreeError::Invalid(_) => S::CorruptData,
                 },
+                NbhdError::InvalidBox { .. } => S::InvalidBox,
             },
         }
     }
@@ -429,7 +436,7 @@ mod tests {
             let text = unsafe { CStr::from_ptr(nbhd_status_string(s as c_int)) };
             assert!(!text.to_bytes().is_empty());
         }
-        for bad in [-1, 26, c_int::MAX, c_int::MIN] {
+        for bad in [-1, 27, c_int::MAX, c_int::MIN] {
             // SAFETY: as above.
             let text = unsafe { CStr::from_ptr(nbhd_status_string(bad)) };
             assert_eq!(text.to_str().unwrap(), "unknown status");

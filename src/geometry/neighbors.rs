@@ -5,6 +5,7 @@
 use crate::error::{NbhdError, Result};
 use crate::query::Neighborhood;
 use crate::table::{NeighborTable, TableOptions};
+use crate::tree::Spacing;
 use crate::{BuildOptions, KdTree, PointsView};
 use glam::DVec3;
 
@@ -48,9 +49,9 @@ pub(crate) fn neighbor_table_and_order(
 }
 
 /// Mean distance of a point to its nearest other point — the spacing `h` that relative
-/// parameters and the quality metrics are measured in. Summed in index order, so the value does
-/// not depend on the number of threads. Needs at least two points
-/// ([`NbhdError::InvalidOption`] otherwise).
+/// parameters and the quality metrics are measured in ([`crate::tree::Spacing`], its one
+/// definition). Summed in index order, so the value does not depend on the number of threads.
+/// Needs at least two points ([`NbhdError::InvalidOption`] otherwise).
 pub fn mean_spacing(points: &[DVec3]) -> Result<f64> {
     if points.len() < 2 {
         return Err(NbhdError::InvalidOption {
@@ -69,18 +70,9 @@ pub fn mean_spacing_of(table: &NeighborTable<f64>) -> f64 {
 }
 
 /// [`mean_spacing_of`] from each point's squared distance to its nearest other point, in index
-/// order (`None` for a point without neighbours).
+/// order (`None` for a point without neighbours): the mean of [`Spacing::from_nearest`].
 pub(crate) fn mean_spacing_of_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> f64 {
-    let (mut sum, mut count) = (0.0, 0usize);
-    for d2 in nearest_sq_dist.flatten() {
-        sum += d2.sqrt();
-        count += 1;
-    }
-    if count == 0 {
-        0.0
-    } else {
-        sum / count as f64
-    }
+    Spacing::from_nearest(nearest_sq_dist).mean
 }
 
 #[cfg(test)]

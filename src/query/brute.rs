@@ -67,3 +67,20 @@ impl<T: Scalar> NeighborSearch<T> for BruteForce<T> {
         Ok(())
     }
 }
+
+impl<T: Scalar> BruteForce<T> {
+    /// The caller's indices of all points in the closed box `min ≤ x ≤ max`, ascending (the
+    /// convention of `src/query/region.rs`), by testing every point: the reference of the
+    /// tree's box query.
+    pub fn in_box(&self, min: &[T], max: &[T], out: &mut Vec<u32>) -> Result<()> {
+        super::region::check_box(min, max, self.cloud.dim, None)?;
+        out.clear();
+        for slot in 0..self.cloud.len() {
+            if super::region::in_closed_box(self.cloud.point(slot), min, max) {
+                out.push(self.cloud.ids[slot]);
+            }
+        }
+        out.sort_unstable();
+        Ok(())
+    }
+}

@@ -14,6 +14,7 @@ pub mod brute;
 mod heap;
 pub(crate) mod order;
 pub mod pca_sweep;
+pub(crate) mod region;
 pub(crate) mod result_set;
 
 use crate::error::{NbhdError, Result};

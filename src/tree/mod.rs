@@ -10,6 +10,8 @@
 //! - `neighborhoods.rs`: the table driver, [`KdTree::neighborhoods`] and
 //!   [`KdTree::neighborhoods_of`];
 //! - `search.rs`, `group_search.rs`: the descents that answer one query or a group;
+//! - `range.rs`: box (orthogonal range) queries, [`KdTree::in_box`] and [`KdTree::in_boxes`];
+//! - `spacing.rs`: the nearest-neighbour spacing `h`, [`KdTree::spacing`];
 //! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
 
 mod build;
@@ -22,7 +24,9 @@ pub mod options;
 mod part;
 mod persist;
 mod presorted;
+mod range;
 mod search;
+mod spacing;
 mod split;
 
 use std::sync::OnceLock;
@@ -35,7 +39,9 @@ use crate::scalar::Scalar;
 use node::Node;
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
 pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
+pub use range::IndexRows;
 use search::TreeView;
+pub use spacing::Spacing;
 
 /// Shape and memory of a built tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

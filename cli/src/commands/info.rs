@@ -8,11 +8,12 @@ use nbhd::io;
 use serde_json::json;
 use std::path::PathBuf;
 
-/// Show what a point-cloud file holds: point count, NaN points, bounding box, fields
+/// Show what a point-cloud file holds: point count, NaN points, bounding box, spacing, fields
 ///
 /// Points with a NaN or infinite coordinate (holes of organized depth scans) are counted
-/// but left out of the bounding box; they keep their indices, and the tree skips or rejects
-/// them.
+/// but left out of the bounding box and the spacing; they keep their indices, and the tree
+/// skips or rejects them. The spacing h is the mean (and median) distance of a finite point
+/// to its nearest other point: the unit of every relative length (6h).
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv)
@@ -29,6 +30,7 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
     let n = cloud.len();
     let bad = cloud.non_finite_count();
     let bbox = cloud.bounding_box();
+    let spacing = spacing(&cloud);
     let scalars: Vec<serde_json::Value> = cloud
         .scalars
         .iter()
@@ -48,6 +50,7 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
             "max": b.max.map(num),
             "diagonal": num(b.diagonal()),
         })),
+        "spacing": spacing.map(|s| json!({"mean": num(s.mean), "median": num(s.median)})),
         "normals": cloud.normals.is_some(),
         "fields": cloud.field_names(),
         "scalars": scalars,
@@ -85,6 +88,13 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
         }
         None => t.push_str("bbox       (no finite point)\n"),
     }
+    match spacing {
+        Some(s) => t.push_str(&format!(
+            "spacing h  mean {:.6}, median {:.6} (nearest-neighbour distance)\n",
+            s.mean, s.median
+        )),
+        None => t.push_str("spacing h  (fewer than two finite points)\n"),
+    }
     t.push_str(&format!("fields     {}\n", cloud.field_names().join(" ")));
     t.push_str(&format!(
         "normals    {}",
@@ -96,6 +106,17 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
     }
     out.text(t);
     Ok(())
+}
+
+/// The nearest-neighbour spacing of the finite points (`None` with fewer than two).
+fn spacing(cloud: &io::PointCloud) -> Option<nbhd::tree::Spacing> {
+    let view = cloud.view().ok()?;
+    let opts = nbhd::BuildOptions {
+        non_finite: nbhd::NonFinitePolicy::Skip,
+        ..nbhd::BuildOptions::default()
+    };
+    let tree = nbhd::KdTree::<f64>::build(&view, &opts).ok()?;
+    tree.spacing(0).ok()
 }
 
 fn finite_range(v: &[f64]) -> (f64, f64) {

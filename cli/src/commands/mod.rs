@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod convert;
 pub mod demo;
+pub mod filter;
 pub mod geometry;
 pub mod info;
 pub mod neighbors;

@@ -115,13 +115,10 @@ fn check_k(k: i64) -> Result<usize> {
     usize::try_from(k).map_err(|_| format!("k {k} is too large").into())
 }
 
-/// Mean distance of a point to its nearest other point, from the tree.
+/// Mean distance of a point to its nearest other point, from the tree (the library's one
+/// definition, `KdTree::spacing`).
 fn mean_spacing(tree: &KdTree<f64>) -> Result<f64> {
-    let t = tree.neighborhoods(Neighborhood::Knn { k: 1 }, &TableOptions::default())?;
-    let d: Vec<f64> = (0..t.len())
-        .filter_map(|i| t.sq_dists_of(i).first().map(|d| d.sqrt()))
-        .collect();
-    let h = d.iter().sum::<f64>() / d.len().max(1) as f64;
+    let h = tree.spacing(0).map(|s| s.mean).unwrap_or(0.0);
     if h > 0.0 && h.is_finite() {
         Ok(h)
     } else {

@@ -1,0 +1,183 @@
+//! The spacing estimate and the point filters (outlier removal, voxel-grid downsampling)
+//! of `src/filter/`, over a built tree.
+
+use super::args::{check_optional, check_ptr, deref, init_out};
+use super::status::{guard, nbhd_status, FfiError};
+use super::tree::{nbhd_tree, with_tree};
+use crate::error::NbhdError;
+use crate::filter::{
+    radius_outlier_removal, statistical_outlier_removal, RadiusOutlierOptions,
+    StatisticalOutlierOptions,
+};
+
+/// The nearest-neighbour spacing of a point set: the distance of each point to its nearest
+/// other point, summarised. `mean` is the h of every relative length (epsilon = 6 h).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct nbhd_spacing {
+    /// Mean nearest-neighbour distance h, summed in index order.
+    pub mean: f64,
+    /// Median nearest-neighbour distance (the mean of the middle two for an even count).
+    pub median: f64,
+    /// Number of points the distances were taken over (the tree's points).
+    pub points: usize,
+}
+
+/// The nearest-neighbour spacing of the tree's points, computed on `threads` workers (0: a
+/// thread per core); the same value for any thread count. Points skipped at build time are
+/// left out.
+///
+/// Errors: NULL_POINTER (`tree`, `out`), MISALIGNED_POINTER, INVALID_OPTION (fewer than two
+/// points in the tree, or threads above NBHD_MAX_THREADS). On error `*out` is all zero.
+///
+/// # Safety
+/// `tree` must be NULL or a live handle; `out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_tree_spacing(
+    tree: *const nbhd_tree,
+    threads: usize,
+    out: *mut nbhd_spacing,
+) -> nbhd_status {
+    guard("nbhd_tree_spacing", || {
+        // SAFETY: `out` is NULL or writable (caller).
+        let out = unsafe { init_out(out, "out", nbhd_spacing::default()) }?;
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        let s = with_tree!(&tree.inner, t => t.spacing(threads))?;
+        // SAFETY: `out` is non-NULL, aligned and writable (checked by init_out).
+        unsafe {
+            out.write(nbhd_spacing {
+                mean: s.mean,
+                median: s.median,
+                points: s.points,
+            })
+        };
+        Ok(())
+    })
+}
+
+/// Writes a filter's result: the kept indices (if they fit) and the mask (if asked for).
+///
+/// # Safety
+/// `kept` NULL or writable for `capacity` values; `count` checked and writable; `mask` NULL
+/// or writable for `kept.source_len` bytes.
+unsafe fn write_kept(
+    kept: &crate::filter::Kept,
+    out: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+    mask: *mut u8,
+) -> Result<(), FfiError> {
+    // SAFETY: `count` is non-NULL, aligned and writable (checked by the caller).
+    unsafe { count.write(kept.indices.len()) };
+    if kept.indices.len() > capacity {
+        return Err(NbhdError::BufferTooSmall {
+            what: "kept (the size needed is in *count; the number of points always suffices)",
+            len: capacity,
+            needed: kept.indices.len(),
+        }
+        .into());
+    }
+    if !kept.indices.is_empty() {
+        check_ptr(out.cast_const(), "kept")?;
+        // SAFETY: non-NULL, aligned, writable for `capacity` >= len values (caller).
+        unsafe { std::ptr::copy_nonoverlapping(kept.indices.as_ptr(), out, kept.indices.len()) };
+    }
+    if !mask.is_null() {
+        for (i, m) in kept.mask().into_iter().enumerate() {
+            // SAFETY: `mask` is writable for `source_len` bytes (caller), i < source_len.
+            unsafe { mask.add(i).write(u8::from(m)) };
+        }
+    }
+    Ok(())
+}
+
+/// Statistical outlier removal (PCL's StatisticalOutlierRemoval, Open3D's
+/// remove_statistical_outlier): for each point its mean distance d_i to its `k` nearest
+/// other points (PCL's setMeanK(k): PCL searches k + 1 and skips the point itself); over all
+/// points the mean m and the sample standard deviation s (n - 1 in the denominator, as PCL);
+/// a point is kept when d_i <= m + std_ratio * s. Points skipped at build time are never
+/// kept and take no part in m and s (PCL 1.13 keeps NaN points in its output).
+///
+/// - `kept`: `capacity` values (uint32_t); receives the caller indices of the kept points,
+///   ascending, `*count` of them. The number of points given to nbhd_tree_build always
+///   suffices; with less, `*count` receives the number needed and the status is
+///   NBHD_STATUS_BUFFER_TOO_SMALL (nothing written; `kept` may be NULL with capacity 0).
+/// - `mask`: NULL, or one byte per point given to nbhd_tree_build: 1 kept, 0 removed.
+///
+/// Errors: NULL_POINTER (`tree`, `count`, `kept` when needed), MISALIGNED_POINTER, INVALID_K
+/// (k = 0), INVALID_OPTION (k >= the number of points, std_ratio NaN or infinite, threads),
+/// BUFFER_TOO_SMALL, OUT_OF_MEMORY. On error `*count` is 0 except for BUFFER_TOO_SMALL.
+///
+/// # Safety
+/// `tree` must be NULL or a live handle; `kept` NULL or writable for `capacity` values;
+/// `count` NULL or writable; `mask` NULL or writable for the number of points given.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn nbhd_remove_statistical_outliers(
+    tree: *const nbhd_tree,
+    k: usize,
+    std_ratio: f64,
+    threads: usize,
+    kept: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+    mask: *mut u8,
+) -> nbhd_status {
+    guard("nbhd_remove_statistical_outliers", || {
+        // SAFETY: `count` is NULL or writable (caller).
+        let count = unsafe { init_out(count, "count", 0) }?;
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        check_optional(kept.cast_const(), "kept")?;
+        let options = StatisticalOutlierOptions {
+            k,
+            std_ratio,
+            threads,
+        };
+        let result = with_tree!(&tree.inner, t => statistical_outlier_removal(t, &options))?;
+        // SAFETY: the buffers are as the caller describes (contract above).
+        unsafe { write_kept(&result, kept, capacity, count, mask) }
+    })
+}
+
+/// Radius outlier removal (PCL's RadiusOutlierRemoval, Open3D's remove_radius_outlier): a
+/// point is kept when at least `min_neighbors` other points lie within `radius` (plain
+/// Euclidean, inclusive: |x - p| <= radius). PCL's setMinNeighborsInRadius(m) is the same m
+/// (its count includes the point itself and keeps counts > m). 0 keeps every point the tree
+/// holds. Points skipped at build time are never kept. Results as
+/// nbhd_remove_statistical_outliers.
+///
+/// Errors: NULL_POINTER, MISALIGNED_POINTER, INVALID_RADIUS (negative, NaN, infinite, or too
+/// large for the tree's type), INVALID_OPTION (threads), BUFFER_TOO_SMALL, OUT_OF_MEMORY.
+///
+/// # Safety
+/// As nbhd_remove_statistical_outliers.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn nbhd_remove_radius_outliers(
+    tree: *const nbhd_tree,
+    radius: f64,
+    min_neighbors: usize,
+    threads: usize,
+    kept: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+    mask: *mut u8,
+) -> nbhd_status {
+    guard("nbhd_remove_radius_outliers", || {
+        // SAFETY: `count` is NULL or writable (caller).
+        let count = unsafe { init_out(count, "count", 0) }?;
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        check_optional(kept.cast_const(), "kept")?;
+        let options = RadiusOutlierOptions {
+            radius,
+            min_neighbors,
+            threads,
+        };
+        let result = with_tree!(&tree.inner, t => radius_outlier_removal(t, &options))?;
+        // SAFETY: the buffers are as the caller describes (contract above).
+        unsafe { write_kept(&result, kept, capacity, count, mask) }
+    })
+}

@@ -1,0 +1,19 @@
+//! Point filters over a built k-d tree, as PCL and Open3D users know them: statistical outlier
+//! removal (PCL `StatisticalOutlierRemoval`, Open3D `remove_statistical_outlier`) and radius
+//! outlier removal (PCL `RadiusOutlierRemoval`, Open3D `remove_radius_outlier`). Each returns
+//! the caller's indices of the points it keeps, ascending, and can give them as a mask.
+//!
+//! Both are exact (the tree's exact neighbourhoods, `src/tree/`) and identical for any thread
+//! count (the per-point values come from an all-point table in the caller's order and are
+//! reduced in index order). Points skipped at build time (non-finite, with
+//! [`crate::NonFinitePolicy::Skip`]) are **never kept** and take no part in the statistics.
+//! (PCL 1.13's `StatisticalOutlierRemoval` keeps NaN points in its output — it gives them a
+//! mean distance of 0 — and its `RadiusOutlierRemoval` drops them; `cpp_examples/` bridges
+//! the first.)
+
+mod outliers;
+
+pub use outliers::{
+    radius_outlier_removal, statistical_outlier_removal, Kept, RadiusOutlierOptions,
+    StatisticalOutlierOptions,
+};

@@ -1,0 +1,182 @@
+//! Statistical and radius outlier removal.
+
+use crate::error::{NbhdError, Result};
+use crate::query::{NeighborSearch, Neighborhood};
+use crate::scalar::Scalar;
+use crate::table::TableOptions;
+use crate::tree::KdTree;
+
+/// The points a filter keeps.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Kept {
+    /// The caller's indices of the kept points, ascending.
+    pub indices: Vec<u32>,
+    /// Number of points the caller passed in (the length of [`Kept::mask`]).
+    pub source_len: usize,
+}
+
+impl Kept {
+    /// One flag per point the caller passed in: `true` if it is kept.
+    pub fn mask(&self) -> Vec<bool> {
+        let mut m = vec![false; self.source_len];
+        for &i in &self.indices {
+            m[i as usize] = true;
+        }
+        m
+    }
+}
+
+/// Options of [`statistical_outlier_removal`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StatisticalOutlierOptions {
+    /// Number of nearest *other* points whose distances are averaged (≥ 1). The same number as
+    /// PCL's `setMeanK` (PCL searches `k + 1` and skips the point itself) and Open3D's
+    /// `nb_neighbors`.
+    pub k: usize,
+    /// α: a point is kept when its mean distance is at most `mean + α · σ` (PCL's
+    /// `setStddevMulThresh`, Open3D's `std_ratio`). Finite; may be negative.
+    pub std_ratio: f64,
+    /// Worker threads (0: the current pool).
+    pub threads: usize,
+}
+
+impl Default for StatisticalOutlierOptions {
+    /// PCL's tutorial values: k = 50, α = 1.
+    fn default() -> Self {
+        Self {
+            k: 50,
+            std_ratio: 1.0,
+            threads: 0,
+        }
+    }
+}
+
+/// Statistical outlier removal. For every point `i` its mean distance to its `k` nearest other
+/// points, `d_i = (1/k) Σ_{j ∈ N_k(i)} ‖x_i − x_j‖`; over all `n` points the mean `μ` and the
+/// sample standard deviation `σ = √(Σ (d_i − μ)² / (n − 1))` (PCL's definition; σ = 0 when
+/// n = 1); point `i` is kept when `d_i ≤ μ + α σ`. Distances are taken in `f64` from the
+/// tree's squared distances.
+///
+/// Errors: `k` = 0 ([`NbhdError::ZeroK`]); `k` not below the number of points, or a
+/// non-finite `std_ratio`, or too many threads ([`NbhdError::InvalidOption`]).
+pub fn statistical_outlier_removal<T: Scalar>(
+    tree: &KdTree<T>,
+    options: &StatisticalOutlierOptions,
+) -> Result<Kept> {
+    let k = options.k;
+    if k == 0 {
+        return Err(NbhdError::ZeroK);
+    }
+    if !options.std_ratio.is_finite() {
+        return Err(NbhdError::InvalidOption {
+            name: "std_ratio",
+            reason: format!("{} is not finite", options.std_ratio),
+        });
+    }
+    if k >= tree.len() {
+        return Err(NbhdError::InvalidOption {
+            name: "k",
+            reason: format!(
+                "{k} nearest other points need more than {k} points; the tree holds {}",
+                tree.len()
+            ),
+        });
+    }
+    let table = tree.neighborhoods(
+        Neighborhood::Knn { k },
+        &TableOptions {
+            exclude_self: true,
+            threads: options.threads,
+        },
+    )?;
+    // d_i for the points the tree holds, in the caller's order
+    let d: Vec<(u32, f64)> = (0..table.len())
+        .filter(|&i| !table.sq_dists_of(i).is_empty())
+        .map(|i| {
+            let s: f64 = table
+                .sq_dists_of(i)
+                .iter()
+                .fold(0.0, |acc, d2| acc + d2.to_f64().sqrt());
+            (i as u32, s / k as f64)
+        })
+        .collect();
+    let n = d.len() as f64;
+    let mean = d.iter().fold(0.0, |acc, &(_, x)| acc + x) / n;
+    let sq = d
+        .iter()
+        .fold(0.0, |acc, &(_, x)| acc + (x - mean) * (x - mean));
+    let sigma = if d.len() > 1 {
+        (sq / (n - 1.0)).sqrt()
+    } else {
+        0.0
+    };
+    let threshold = mean + options.std_ratio * sigma;
+    Ok(Kept {
+        indices: d
+            .iter()
+            .filter(|&&(_, x)| x <= threshold)
+            .map(|&(i, _)| i)
+            .collect(),
+        source_len: tree.source_len(),
+    })
+}
+
+/// Options of [`radius_outlier_removal`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadiusOutlierOptions {
+    /// Plain Euclidean radius, inclusive (`‖x_j − x_i‖ ≤ radius`), finite and ≥ 0.
+    pub radius: f64,
+    /// A point is kept when at least this many *other* points lie within `radius`. PCL's
+    /// `setMinNeighborsInRadius(m)` keeps a point when its radius search, which counts the
+    /// point itself, finds more than `m`: the same `m`. 0 keeps every point.
+    pub min_neighbors: usize,
+    /// Worker threads (0: the current pool).
+    pub threads: usize,
+}
+
+/// Radius outlier removal: keeps point `i` when `|{j ≠ i : ‖x_j − x_i‖ ≤ radius}| ≥
+/// min_neighbors` (duplicates count). Each point's search stops at `min_neighbors` (an
+/// ε-k-neighbourhood, Section 2.1.1), so a large radius costs no more than a small one.
+///
+/// Errors: a negative, NaN or infinite radius ([`NbhdError::InvalidRadius`]), one too large
+/// for the tree's type ([`NbhdError::RadiusOutOfRange`]), too many threads.
+pub fn radius_outlier_removal<T: Scalar>(
+    tree: &KdTree<T>,
+    options: &RadiusOutlierOptions,
+) -> Result<Kept> {
+    let r = options.radius;
+    if !(r.is_finite() && r >= 0.0) {
+        return Err(NbhdError::InvalidRadius(r));
+    }
+    let radius = T::from_f64(r);
+    if !radius.is_finite() {
+        return Err(crate::query::radius_out_of_range::<T>(r));
+    }
+    let m = options.min_neighbors;
+    let positions = tree.tree_order();
+    if m == 0 {
+        crate::parallel::check_threads(options.threads)?;
+        let mut all = positions.to_vec();
+        all.sort_unstable();
+        return Ok(Kept {
+            indices: all,
+            source_len: tree.source_len(),
+        });
+    }
+    let nbhd = Neighborhood::KnnRadius { k: m, radius };
+    nbhd.validate()?;
+    let table = tree.neighborhoods(
+        nbhd,
+        &TableOptions {
+            exclude_self: true,
+            threads: options.threads,
+        },
+    )?;
+    Ok(Kept {
+        indices: (0..table.len())
+            .filter(|&i| table.indices_of(i).len() >= m)
+            .map(|i| i as u32)
+            .collect(),
+        source_len: tree.source_len(),
+    })
+}

@@ -1,0 +1,124 @@
+//! The spacing `h` of a point set: the distance of each point to its nearest other point,
+//! summarised by its mean and median. Every length given "relative" (ε = 6h, the robust
+//! smoothing's lengths, the CLI's `6h`) is a multiple of the mean; this file is its one
+//! definition.
+
+use super::KdTree;
+use crate::error::{NbhdError, Result};
+use crate::query::Neighborhood;
+use crate::scalar::Scalar;
+use crate::table::TableOptions;
+
+/// Nearest-neighbour distances of a point set: the distance `d_i = min_{j≠i} ‖x_i − x_j‖` of
+/// every point to its nearest other point (duplicates count, at distance 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spacing {
+    /// Mean of the `d_i`, summed in index order (so it does not depend on the thread count):
+    /// the `h` of every relative length.
+    pub mean: f64,
+    /// Median of the `d_i` (the mean of the two middle values for an even count), robust to
+    /// outliers and to clusters of duplicates far from the rest.
+    pub median: f64,
+    /// Number of points the distances were taken over (the finite points; 0 if none has a
+    /// neighbour).
+    pub points: usize,
+}
+
+impl Spacing {
+    /// From each point's squared distance to its nearest other point, in index order (`None`
+    /// for a point without one: skipped, or alone). `mean` and `median` are 0 without any.
+    pub(crate) fn from_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> Self {
+        let mut d: Vec<f64> = nearest_sq_dist.flatten().map(f64::sqrt).collect();
+        let n = d.len();
+        if n == 0 {
+            return Spacing {
+                mean: 0.0,
+                median: 0.0,
+                points: 0,
+            };
+        }
+        let mut sum = 0.0;
+        for &x in &d {
+            sum += x;
+        }
+        d.sort_unstable_by(f64::total_cmp);
+        let median = if n % 2 == 1 {
+            d[n / 2]
+        } else {
+            0.5 * (d[n / 2 - 1] + d[n / 2])
+        };
+        Spacing {
+            mean: sum / n as f64,
+            median,
+            points: n,
+        }
+    }
+}
+
+impl<T: Scalar> KdTree<T> {
+    /// The nearest-neighbour spacing of the tree's points ([`Spacing`]), from an all-point
+    /// 1-nearest table computed on `threads` workers (0: the current pool); the same value for
+    /// any thread count. Needs at least two points ([`NbhdError::InvalidOption`] otherwise).
+    pub fn spacing(&self, threads: usize) -> Result<Spacing> {
+        if self.len() < 2 {
+            return Err(NbhdError::InvalidOption {
+                name: "points",
+                reason: format!(
+                    "the spacing needs at least two (finite) points, the tree holds {}",
+                    self.len()
+                ),
+            });
+        }
+        let table = self.neighborhoods(
+            Neighborhood::Knn { k: 1 },
+            &TableOptions {
+                exclude_self: true,
+                threads,
+            },
+        )?;
+        Ok(Spacing::from_nearest(
+            (0..table.len()).map(|i| table.sq_dists_of(i).first().map(|d| d.to_f64())),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{BuildOptions, PointsView};
+
+    #[test]
+    fn mean_and_median_of_known_gaps() {
+        // points on a line at 0, 1, 3, 7, 8: nearest distances 1, 1, 2, 1, 1
+        let pts = [0.0, 1.0, 3.0, 7.0, 8.0];
+        let tree = KdTree::<f64>::build(
+            &PointsView::from_flat(&pts, 1).unwrap(),
+            &BuildOptions::default(),
+        )
+        .unwrap();
+        let s = tree.spacing(1).unwrap();
+        assert_eq!(s.points, 5);
+        assert_eq!(s.mean, 6.0 / 5.0);
+        assert_eq!(s.median, 1.0);
+        assert_eq!(tree.spacing(2).unwrap(), s);
+        // an even count: the mean of the middle two
+        let pts = [0.0, 1.0, 3.0, 6.0];
+        let tree = KdTree::<f64>::build(
+            &PointsView::from_flat(&pts, 1).unwrap(),
+            &BuildOptions::default(),
+        )
+        .unwrap();
+        // nearest: 1, 1, 2, 3
+        assert_eq!(tree.spacing(0).unwrap().median, 1.5);
+        let one = KdTree::<f64>::build(
+            &PointsView::from_flat(&[1.0], 1).unwrap(),
+            &BuildOptions::default(),
+        )
+        .unwrap();
+        assert!(matches!(
+            one.spacing(0),
+            Err(NbhdError::InvalidOption { name: "points", .. })
+        ));
+        assert_eq!(Spacing::from_nearest(std::iter::once(None)).points, 0);
+    }
+}
