@@ -62,5 +62,12 @@ def test_the_probe_sees_a_call_that_holds_the_gil():
     # other thread run not once, so the probe above can fail
     import re
 
-    secs, ticks = runs_meanwhile(lambda: re.match("(a|aa)*c", "a" * 29))
-    assert secs > 0.1 and ticks == 0, (secs, ticks)
+    # lengthen the backtracking (each 'a' about 1.6 times the work) until the call is long
+    # enough for the probe's window, however fast the machine
+    n = 24
+    while True:
+        secs, ticks = runs_meanwhile(lambda: re.match("(a|aa)*c", "a" * n))
+        if secs > 0.1 or n > 40:
+            break
+        n += 2
+    assert secs > 0.1 and ticks == 0, (n, secs, ticks)
