@@ -3,8 +3,7 @@
 //! candidate planes by a robust count of the points each explains.
 
 use super::rows::Rows;
-use crate::geometry::normals::offsets_normal;
-use crate::geometry::robust_plane::{biweight, weighted_plane_normal};
+use crate::geometry::robust_plane::Neighborhood;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -20,15 +19,15 @@ pub(super) struct Plane {
 pub(super) fn covariance_planes(points: &[DVec3], rows: &Rows) -> Vec<Plane> {
     (0..points.len())
         .into_par_iter()
-        .map_init(Vec::new, |offsets: &mut Vec<DVec3>, s| {
+        .map_init(Neighborhood::default, |local, s| {
             let p = points[s];
-            offsets.clear();
-            offsets.extend(rows.wide(s).iter().map(|&j| points[j as usize] - p));
-            let sum = offsets.iter().fold(DVec3::ZERO, |a, &d| a + d);
-            let (normal, _, _) = offsets_normal(offsets, sum);
+            local.fill(points, s, rows.wide(s));
+            let c = local
+                .covariance_plane()
+                .expect("a neighbourhood holds its own point");
             Plane {
-                normal,
-                barycentre: p + sum / (offsets.len() + 1) as f64,
+                normal: c.normal,
+                barycentre: p + c.sum / local.len() as f64,
             }
         })
         .collect()
@@ -56,8 +55,8 @@ const LANES: usize = 8;
 /// the refit reads them in `f64`.
 #[derive(Default)]
 struct Local {
-    /// The points relative to the point, unpadded, for the refit.
-    points: Vec<DVec3>,
+    /// The points relative to the point, for the refit.
+    points: Neighborhood,
     x: Vec<f32>,
     y: Vec<f32>,
     z: Vec<f32>,
@@ -65,20 +64,17 @@ struct Local {
 
 impl Local {
     fn gather(&mut self, points: &[DVec3], s: usize, row: &[u32]) {
-        let p = points[s];
-        self.points.clear();
-        self.points.push(DVec3::ZERO);
-        self.points
-            .extend(row.iter().map(|&j| points[j as usize] - p));
-        let padded = self.points.len().div_ceil(LANES) * LANES;
-        for v in [&mut self.x, &mut self.y, &mut self.z] {
+        self.points.fill(points, s, row);
+        let len = self.points.len();
+        let padded = len.div_ceil(LANES) * LANES;
+        for (v, f) in [
+            (&mut self.x, &self.points.x),
+            (&mut self.y, &self.points.y),
+            (&mut self.z, &self.points.z),
+        ] {
             v.clear();
+            v.extend(f[..len].iter().map(|&c| c as f32));
             v.resize(padded, f32::NAN);
-        }
-        for (k, d) in self.points.iter().enumerate() {
-            self.x[k] = d.x as f32;
-            self.y[k] = d.y as f32;
-            self.z[k] = d.z as f32;
         }
     }
 
@@ -127,8 +123,8 @@ impl Local {
     /// The normal of the covariance of the local points weighted by their biweight to the plane
     /// `⟨n, q⟩ = offset` (eq. 2.8–2.10 with a weight per point), or `None` if no point has
     /// weight.
-    fn refit(&self, n: DVec3, offset: f64, width: f64) -> Option<DVec3> {
-        weighted_plane_normal(&self.points, |q| biweight(n.dot(q) - offset, width))
+    fn refit(&mut self, n: DVec3, offset: f64, width: f64) -> Option<DVec3> {
+        self.points.weighted_normal(n, offset, width)
     }
 }
 
@@ -177,6 +173,7 @@ pub(super) fn selected_normals(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::robust_plane::biweight;
 
     #[test]
     fn lane_scores_match_the_biweight_sum() {
