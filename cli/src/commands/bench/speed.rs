@@ -573,8 +573,8 @@ fn floor_kernel<T: Scalar>(points: &[[T; 3]], exact: &NeighborTable<T>) -> Neigh
                 let j = exact.indices()[at];
                 let p = &points[j as usize];
                 let mut s = T::ZERO;
-                for c in 0..3 {
-                    let t = q[c] - p[c];
+                for (&a, &b) in q.iter().zip(p) {
+                    let t = a - b;
                     s = s + t * t;
                 }
                 out_i[at - base] = j;
