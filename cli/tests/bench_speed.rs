@@ -45,7 +45,9 @@ fn quick_run_has_every_row_and_counts_agree() {
     let s = stdout(&o);
     for set in ["torus-77k", "grid.xyz"] {
         for scalar in ["f32", "f64"] {
-            for op in ["build", "knn10", "knn30", "radius", "epsk"] {
+            for op in [
+                "build", "knn10", "knn30", "radius", "epsk", "single10", "single30",
+            ] {
                 for threads in [1, 2] {
                     let row = format!("| {set} | {scalar} | {op} | {threads} |");
                     assert_eq!(s.matches(&row).count(), 1, "no single row {row} in\n{s}");
@@ -68,6 +70,26 @@ fn quick_run_has_every_row_and_counts_agree() {
     };
     assert_ne!(brute("grid.xyz"), "–", "{s}");
     assert_eq!(brute("torus-77k"), "–", "{s}");
+    // The tables carry the floor, the single queries the C ABI's time.
+    let column = |set: &str, op: &str, at: usize| {
+        s.lines()
+            .find(|l| l.starts_with(&format!("| {set} | f32 | {op} | 1 |")))
+            .unwrap()
+            .split('|')
+            .nth(at)
+            .unwrap()
+            .trim()
+            .to_string()
+    };
+    for (op, c_abi, floor) in [
+        ("knn10", false, true),
+        ("single10", true, false),
+        ("radius", false, true),
+        ("build", false, false),
+    ] {
+        assert_eq!(column("torus-77k", op, 11) != "–", c_abi, "{op}: {s}");
+        assert_eq!(column("torus-77k", op, 13) != "–", floor, "{op}: {s}");
+    }
     assert!(!s.contains("differs"), "{s}");
     assert!(s.contains("Count check: all agree with kiddo."), "{s}");
 }

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::build::{build_parallel, build_serial, BuildInput, Subtree};
 use super::layout::{BySlot, Inline, Layout, Record};
 use super::presorted;
+use super::search;
 use super::{BuildOptions, KdTree, MedianAlgorithm};
 use crate::cloud::{Cloud, NonFinitePolicy};
 use crate::error::{NbhdError, Result};
@@ -117,6 +118,7 @@ impl<T: Scalar> KdTree<T> {
         Ok(Self {
             dim,
             coords,
+            min_id: search::min_ids(&subtree.nodes, &ids),
             ids,
             nodes: subtree.nodes,
             depth: subtree.depth,

@@ -416,16 +416,22 @@ impl<T: Scalar> RowSets<T> for RadiusRows<T> {
         if self.sorted {
             sort_row(r, &mut self.keys);
         }
+        // The shared row as two flat arrays, so that each member's row is at most two copies
+        // of contiguous runs (the rows of a large cluster of copies are most of such a table).
+        let ids: Vec<u32> = r.iter().map(|nb| nb.index).collect();
+        let dists: Vec<T> = r.iter().map(|nb| nb.sq_dist).collect();
         for &own in self_ids {
-            let len = r.iter().filter(|nb| nb.index != own).count();
+            let skip = ids.iter().position(|&i| i == own);
+            let len = ids.len() - usize::from(skip.is_some());
             if !out.reserve_row(len) {
                 return;
             }
             out.0.push(len);
-            for nb in r.iter().filter(|nb| nb.index != own) {
-                out.1.push(nb.index);
-                out.2.push(nb.sq_dist);
-            }
+            let (before, after) = skip.map_or((ids.len(), ids.len()), |p| (p, p + 1));
+            out.1.extend_from_slice(&ids[..before]);
+            out.1.extend_from_slice(&ids[after..]);
+            out.2.extend_from_slice(&dists[..before]);
+            out.2.extend_from_slice(&dists[after..]);
         }
     }
 }

@@ -33,9 +33,9 @@ use std::sync::OnceLock;
 
 use crate::error::Result;
 use crate::query::resolve_query;
-use crate::query::result_set::WithinRadius;
+use crate::query::result_set::{Key32, RowEntry, SortedRow, WithinRadius};
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
-use crate::scalar::Scalar;
+use crate::scalar::{Scalar, ScalarType};
 use node::Node;
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
 pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
@@ -58,7 +58,7 @@ pub struct TreeStats {
     pub leaves: usize,
     /// Most points in one leaf.
     pub max_leaf_points: usize,
-    /// Bytes of coordinates, index map and nodes (and the reverse index map once a stored-point
+    /// Bytes of coordinates, index map and nodes with their smallest indices (and the reverse index map once a stored-point
     /// query has created it).
     pub bytes: usize,
 }
@@ -73,6 +73,9 @@ pub struct KdTree<T> {
     /// Caller index of each point, in tree order.
     ids: Vec<u32>,
     nodes: Vec<Node<T>>,
+    /// Smallest caller index of every node's subtree (derived from `nodes` and `ids`, not
+    /// saved): lets a search skip cells whose points cannot win on index (`search.rs`).
+    min_id: Vec<u32>,
     depth: usize,
     source_len: usize,
     options: BuildOptions,
@@ -151,6 +154,7 @@ impl<T: Scalar> KdTree<T> {
             bytes: self.coords.len() * std::mem::size_of::<T>()
                 + self.ids.len() * 4
                 + self.nodes.len() * std::mem::size_of::<Node<T>>()
+                + self.min_id.len() * 4
                 + reverse,
         }
     }
@@ -160,6 +164,7 @@ impl<T: Scalar> KdTree<T> {
             nodes: &self.nodes,
             coords: &self.coords,
             ids: &self.ids,
+            min_id: &self.min_id,
             dim: self.dim,
         }
     }
@@ -239,10 +244,44 @@ impl<T: Scalar> KdTree<T> {
             if nbhd.is_sorted() {
                 out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
             }
+        } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
+            search_sorted::<T, Key32>(&tree, q, exclude, k, sq_radius, out);
+        } else if k <= SORTED_MAX_K {
+            search_sorted::<T, Neighbor<T>>(&tree, q, exclude, k, sq_radius, out);
         } else {
             let mut heap = NeighborHeap::new(out, k, sq_radius);
             search::search(&tree, q, exclude, &mut heap);
             heap.finish();
         }
     }
+}
+
+/// Single kNN queries up to this `k` keep their candidates sorted by insertion in an array on
+/// the call stack; larger ones in a heap in the result vector.
+const SORTED_MAX_K: usize = 32;
+
+/// A kNN search (`k ≤ SORTED_MAX_K`) into a [`SortedRow`] on the call stack — entries `E` the
+/// packed `f32` keys of `src/query/order.rs` or neighbours — copied to `out` at the end: a
+/// candidate costs a short shift of one-integer compares, and the result needs no sort.
+fn search_sorted<T: Scalar, E: RowEntry<T> + Default>(
+    tree: &TreeView<'_, T>,
+    q: &[T],
+    exclude: Option<u32>,
+    k: usize,
+    sq_radius: T,
+    out: &mut Vec<Neighbor<T>>,
+) {
+    let mut buf = [E::default(); SORTED_MAX_K];
+    let mut len = 0;
+    let mut row = SortedRow {
+        row: &mut buf[..k],
+        len: &mut len,
+        sq_radius,
+    };
+    search::search(tree, q, exclude, &mut row);
+    out.clear();
+    out.extend(buf[..len].iter().map(|&e| {
+        let (sq_dist, index) = e.pair();
+        Neighbor { index, sq_dist }
+    }));
 }

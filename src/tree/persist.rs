@@ -660,9 +660,10 @@ impl<T: Scalar> KdTree<T> {
                 return Err(invalid("padding of a node is not zero"));
             }
         }
-        let tree = KdTree {
+        let mut tree = KdTree {
             dim: info.dim,
             coords,
+            min_id: Vec::new(),
             ids,
             nodes,
             depth: info.depth,
@@ -672,6 +673,8 @@ impl<T: Scalar> KdTree<T> {
         };
         tree.check_points(bitmap_bytes)?;
         tree.check_nodes()?;
+        // Derived, not saved: made once the nodes are known to be well formed.
+        tree.min_id = super::search::min_ids(&tree.nodes, &tree.ids);
         Ok(tree)
     }
 

@@ -1,10 +1,15 @@
 //! `nbhd bench speed`: nbhd's all-point tables side by side with the Rust peers in one run:
 //! kiddo's immutable tree (f32 and f64) and brute force, on generated sets and on
 //! point-cloud files, for the build, kNN (k = 10, 30), radius (about 20 neighbours) and ε-k
-//! (k = 16 within that radius), on each requested number of threads.
+//! (k = 16 within that radius), on each requested number of threads; and single queries
+//! (`single10`, `single30`: one `KdTree::knn` call per point in the caller's order, and the
+//! same loop through the C ABI's `nbhd_tree_knn`), as a caller looping over queries gets them.
 //!
 //! Every point queries the tree built on the same set, itself included (as the peers do), and
 //! both sides write the whole table (rows in caller order, indices and squared distances).
+//! The table rows also time the floor: a kernel given the exact neighbours of every point,
+//! which only reads them, computes their squared distances and writes the table in caller
+//! order (what any search must at least do).
 //! Each figure is the median of `--reps` runs; ratios are peer / nbhd, so > 1 means nbhd is
 //! faster. Neighbour counts are checked against kiddo's and any difference is reported.
 
@@ -12,14 +17,19 @@ use crate::error::{Context, Result};
 use crate::output::{num, Output};
 use crate::read;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use nbhd::ffi::{
+    nbhd_points, nbhd_scalar_type, nbhd_status, nbhd_tree, nbhd_tree_build, nbhd_tree_free,
+    nbhd_tree_knn,
+};
 use nbhd::shapes::datasets::Dataset;
 use nbhd::table::neighborhoods_of_all;
 use nbhd::{
-    BruteForce, BuildOptions, KdTree, Neighborhood, NonFinitePolicy, PointsView, Query, Scalar,
-    TableOptions,
+    BruteForce, BuildOptions, KdTree, NeighborTable, Neighborhood, NonFinitePolicy, PointsView,
+    Query, Scalar, TableOptions,
 };
 use rayon::prelude::*;
 use serde_json::json;
+use std::ffi::c_void;
 use std::fmt::Write as _;
 use std::num::NonZero;
 use std::path::Path;
@@ -59,7 +69,7 @@ pub struct SpeedArgs {
         long,
         value_enum,
         value_delimiter = ',',
-        default_value = "build,knn10,knn30,radius,epsk"
+        default_value = "build,knn10,knn30,radius,epsk,single10,single30"
     )]
     pub ops: Vec<Op>,
 
@@ -98,6 +108,11 @@ pub enum Op {
     Radius,
     /// The 16 nearest within that radius (ε-k)
     Epsk,
+    /// The 10 nearest of every point, one single query per point in the caller's order
+    /// (`KdTree::knn`, and `nbhd_tree_knn` through the C ABI)
+    Single10,
+    /// The 30 nearest, one single query per point as `single10`
+    Single30,
 }
 
 impl Op {
@@ -108,13 +123,28 @@ impl Op {
             Op::Knn30 => "knn30",
             Op::Radius => "radius",
             Op::Epsk => "epsk",
+            Op::Single10 => "single10",
+            Op::Single30 => "single30",
         }
+    }
+
+    /// k of the kNN operations.
+    fn k(self) -> Option<usize> {
+        match self {
+            Op::Knn10 | Op::Single10 => Some(10),
+            Op::Knn30 | Op::Single30 => Some(30),
+            _ => None,
+        }
+    }
+
+    fn is_single(self) -> bool {
+        matches!(self, Op::Single10 | Op::Single30)
     }
 
     /// Whether the neighbour counts must equal kiddo's exactly (kNN), or may differ by points
     /// exactly on the radius.
     fn counts_exact(self) -> bool {
-        matches!(self, Op::Knn10 | Op::Knn30)
+        self.k().is_some()
     }
 }
 
@@ -142,6 +172,10 @@ struct Row {
     nbhd_s: f64,
     kiddo_s: f64,
     brute_s: Option<f64>,
+    /// The floor kernel (tables): the exact neighbours read, measured and written.
+    floor_s: Option<f64>,
+    /// The same single queries through the C ABI (`nbhd_tree_knn`).
+    c_abi_s: Option<f64>,
     /// nbhd's 1-thread time over this one (when 1 thread was run).
     speedup: Option<f64>,
     /// Neighbour totals of nbhd and kiddo (tables only).
@@ -355,6 +389,8 @@ fn pool(threads: usize) -> Result<rayon::ThreadPool> {
 /// A coordinate type run by both nbhd and kiddo.
 trait Float: Scalar {
     const NAME: &'static str;
+    /// The C ABI's name of this type.
+    const C_TYPE: nbhd_scalar_type;
     /// kiddo's immutable tree over this type.
     type Peer: Sync;
     fn peer_build(points: &[[Self; 3]]) -> Self::Peer;
@@ -365,9 +401,10 @@ trait Float: Scalar {
 /// kiddo's all-point table: rows in caller order, written like nbhd's (row lengths, indices,
 /// squared distances), queries in chunks of 1,024 on the current rayon pool.
 macro_rules! kiddo_float {
-    ($t:ty, $name:literal) => {
+    ($t:ty, $name:literal, $c:ident) => {
         impl Float for $t {
             const NAME: &'static str = $name;
+            const C_TYPE: nbhd_scalar_type = nbhd_scalar_type::$c;
             type Peer = ImmutableKdTree<$t, 3>;
 
             fn peer_build(points: &[[$t; 3]]) -> Self::Peer {
@@ -384,10 +421,10 @@ macro_rules! kiddo_float {
                             let nearest =
                                 |k: usize| NonZero::new(k).expect("k of the benchmark is > 0");
                             let res = match op {
-                                Op::Knn10 | Op::Build => {
+                                Op::Knn10 | Op::Single10 | Op::Build => {
                                     q.nearest_n::<SquaredEuclidean<$t>>(nearest(10)).execute()
                                 }
-                                Op::Knn30 => {
+                                Op::Knn30 | Op::Single30 => {
                                     q.nearest_n::<SquaredEuclidean<$t>>(nearest(30)).execute()
                                 }
                                 Op::Radius => q.within::<SquaredEuclidean<$t>>(r2).execute(),
@@ -411,14 +448,148 @@ macro_rules! kiddo_float {
     };
 }
 
-kiddo_float!(f32, "f32");
-kiddo_float!(f64, "f64");
+kiddo_float!(f32, "f32", F32);
+kiddo_float!(f64, "f64", F64);
+
+/// Single queries: one `KdTree::knn` call per point, in the caller's order (in chunks of 1,024
+/// on the current pool, as kiddo's table), the rows written like the table's. Returns the
+/// neighbour total.
+fn single_table<T: Scalar>(tree: &KdTree<T>, points: &[[T; 3]], k: usize) -> usize {
+    let chunks: Vec<(Vec<usize>, Vec<u32>, Vec<T>)> = points
+        .par_chunks(1024)
+        .map(|chunk| {
+            let (mut lens, mut ids, mut dists) = (Vec::new(), Vec::new(), Vec::new());
+            let mut out = Vec::with_capacity(k);
+            for p in chunk {
+                tree.knn(Query::point(p), k, &mut out)
+                    .expect("finite queries of the tree's dimension");
+                lens.push(out.len());
+                for n in &out {
+                    ids.push(n.index);
+                    dists.push(n.sq_dist);
+                }
+            }
+            (lens, ids, dists)
+        })
+        .collect();
+    chunks.iter().map(|c| c.1.len()).sum()
+}
+
+/// A tree made and queried through the C ABI (`nbhd_tree_build`, `nbhd_tree_knn`), as a C
+/// caller holds it.
+struct CTree(*mut nbhd_tree);
+
+// SAFETY: an nbhd_tree is immutable once built and documented as queryable from any number of
+// threads at once (src/ffi/query.rs); the handle is freed only by `Drop`, with `&mut self`.
+unsafe impl Sync for CTree {}
+
+impl CTree {
+    fn build<T: Float>(points: &[[T; 3]]) -> Result<Self> {
+        let desc = nbhd_points {
+            data: points.as_ptr().cast::<c_void>(),
+            count: points.len(),
+            dim: 3,
+            stride: 0,
+            scalar_type: T::C_TYPE,
+        };
+        let mut tree = std::ptr::null_mut();
+        // SAFETY: `desc` describes `points`, packed and alive for the call; NULL options are
+        // the defaults; `tree` is writable.
+        let status = unsafe { nbhd_tree_build(&desc, std::ptr::null(), &mut tree) };
+        if status != nbhd_status::Ok {
+            return Err(format!("nbhd_tree_build: status {status:?}").into());
+        }
+        Ok(Self(tree))
+    }
+
+    /// The single-query loop of [`single_table`] through `nbhd_tree_knn`; returns the total.
+    fn table<T: Float>(&self, points: &[[T; 3]], k: usize) -> usize {
+        let chunks: Vec<(Vec<usize>, Vec<u32>, Vec<T>)> = points
+            .par_chunks(1024)
+            .map(|chunk| {
+                let mut lens = Vec::with_capacity(chunk.len());
+                let mut ids = vec![0u32; chunk.len() * k];
+                let mut dists = vec![T::ZERO; chunk.len() * k];
+                let mut total = 0;
+                for p in chunk {
+                    let mut count = 0usize;
+                    // SAFETY: a live handle of a tree of `T` and dimension 3; `p` holds 3 `T`;
+                    // the buffers have room for `k` results from `total` on (each row adds at
+                    // most k); `count` is writable.
+                    let status = unsafe {
+                        nbhd_tree_knn(
+                            self.0,
+                            p.as_ptr().cast::<c_void>(),
+                            k,
+                            ids.as_mut_ptr().add(total),
+                            dists.as_mut_ptr().add(total).cast::<c_void>(),
+                            k,
+                            &mut count,
+                        )
+                    };
+                    assert_eq!(status, nbhd_status::Ok, "nbhd_tree_knn on a finite query");
+                    lens.push(count);
+                    total += count;
+                }
+                ids.truncate(total);
+                dists.truncate(total);
+                (lens, ids, dists)
+            })
+            .collect();
+        chunks.iter().map(|c| c.1.len()).sum()
+    }
+}
+
+impl Drop for CTree {
+    fn drop(&mut self) {
+        // SAFETY: the handle came from nbhd_tree_build and is freed once, here.
+        unsafe { nbhd_tree_free(self.0) };
+    }
+}
+
+/// The floor of a table: given the exact neighbours (`exact`), read each neighbour's
+/// point, compute its squared distance and write index and distance into a new table in the
+/// caller's order, rows in chunks of 1,024 on the current pool. No search, no ordering: what
+/// every table must at least do.
+fn floor_kernel<T: Scalar>(points: &[[T; 3]], exact: &NeighborTable<T>) -> NeighborTable<T> {
+    let offsets = exact.offsets().to_vec();
+    let total = exact.total();
+    let (mut ids, mut dists) = (vec![0u32; total], vec![T::ZERO; total]);
+    let mut pieces = Vec::new();
+    let (mut rest_i, mut rest_d) = (&mut ids[..], &mut dists[..]);
+    for first in (0..points.len()).step_by(1024) {
+        let last = (first + 1024).min(points.len());
+        let len = offsets[last] - offsets[first];
+        let (a, b) = std::mem::take(&mut rest_i).split_at_mut(len);
+        let (c, d) = std::mem::take(&mut rest_d).split_at_mut(len);
+        pieces.push((first..last, a, c));
+        (rest_i, rest_d) = (b, d);
+    }
+    pieces.into_par_iter().for_each(|(rows, out_i, out_d)| {
+        let base = offsets[rows.start];
+        for i in rows {
+            let q = &points[i];
+            for at in offsets[i]..offsets[i + 1] {
+                let j = exact.indices()[at];
+                let p = &points[j as usize];
+                let mut s = T::ZERO;
+                for (&a, &b) in q.iter().zip(p) {
+                    let t = a - b;
+                    s = s + t * t;
+                }
+                out_i[at - base] = j;
+                out_d[at - base] = s;
+            }
+        }
+    });
+    NeighborTable::from_parts(offsets, ids, dists).expect("the exact table's shape")
+}
 
 /// nbhd's neighbourhood for an operation (tables only).
 fn neighborhood<T: Scalar>(op: Op, radius: T) -> Neighborhood<T> {
     match op {
-        Op::Build | Op::Knn10 => Neighborhood::Knn { k: 10 },
-        Op::Knn30 => Neighborhood::Knn { k: 30 },
+        Op::Build | Op::Knn10 | Op::Single10 => Neighborhood::Knn { k: 10 },
+        Op::Knn30 | Op::Single30 => Neighborhood::Knn { k: 30 },
         Op::Radius => Neighborhood::Radius {
             radius,
             sorted: true,
@@ -461,6 +632,8 @@ fn bench_set<T: Float>(
                 nbhd_s: 0.0,
                 kiddo_s: 0.0,
                 brute_s: None,
+                floor_s: None,
+                c_abi_s: None,
                 speedup: None,
                 totals: None,
             };
@@ -472,6 +645,27 @@ fn bench_set<T: Float>(
                 row.kiddo_s = median_secs(plan.reps, || {
                     T::peer_build(&pts);
                 });
+            } else if op.is_single() {
+                let k = op.k().expect("single ops are kNN");
+                let (mut ours, mut theirs, mut via_c) = (0, 0, 0);
+                row.nbhd_s = median_secs(plan.reps, || {
+                    ours = p.install(|| single_table(&tree, &pts, k));
+                });
+                let c_tree = CTree::build(&pts)?;
+                row.c_abi_s = Some(median_secs(plan.reps, || {
+                    via_c = p.install(|| c_tree.table(&pts, k));
+                }));
+                row.kiddo_s = median_secs(plan.reps, || {
+                    theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r));
+                });
+                if via_c != ours {
+                    return Err(format!(
+                        "{}: the C ABI found {via_c} neighbours, KdTree::knn {ours}",
+                        set.name
+                    )
+                    .into());
+                }
+                row.totals = Some((ours, theirs));
             } else {
                 let nbhd = neighborhood(op, r);
                 let opts = TableOptions {
@@ -489,6 +683,12 @@ fn bench_set<T: Float>(
                     theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r));
                 });
                 row.totals = Some((ours, theirs));
+                {
+                    let exact = tree.neighborhoods(nbhd, &opts).expect("valid options");
+                    row.floor_s = Some(median_secs(plan.reps, || {
+                        p.install(|| floor_kernel(&pts, &exact));
+                    }));
+                }
                 if let (Some(b), Op::Knn10) = (&brute, op) {
                     row.brute_s = Some(median_secs(1, || {
                         p.install(|| neighborhoods_of_all(b, nbhd, false))
@@ -548,13 +748,16 @@ fn markdown(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| set | scalar | operation | threads | nbhd [ms] | kiddo [ms] | kiddo / nbhd | brute [ms] | brute / nbhd | nbhd speed-up vs 1 thread | counts vs kiddo |"
+        "| set | scalar | operation | threads | nbhd [ms] | kiddo [ms] | kiddo / nbhd | brute [ms] | brute / nbhd | nbhd speed-up vs 1 thread | C ABI [ms] | kiddo / C ABI | floor [ms] | nbhd / floor | counts vs kiddo |"
     );
-    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|");
+    let _ = writeln!(
+        s,
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+    );
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             r.set,
             r.scalar,
             r.op.name(),
@@ -565,6 +768,11 @@ fn markdown(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> String {
             ms(r.brute_s),
             ratio(r.brute_s, r.nbhd_s),
             r.speedup.map_or("–".into(), |x| format!("{x:.2}")),
+            ms(r.c_abi_s),
+            r.c_abi_s.map_or("–".into(), |c| ratio(Some(r.kiddo_s), c)),
+            ms(r.floor_s),
+            r.floor_s
+                .map_or("–".into(), |f| format!("{:.1}", r.nbhd_s / f)),
             r.check(),
         );
     }
@@ -591,7 +799,10 @@ fn markdown(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> String {
         "\nMedian of {} run(s) per figure; ratios are peer / nbhd (> 1: nbhd is faster). Every \
          point queries its own set, itself included; both write the whole table. Brute force: \
          knn10 on sets of at most {} points only, one run (it is quadratic). kiddo's \
-         build is single-threaded. Count check: {}.",
+         build is single-threaded. single10/single30: one query per point in the caller's \
+         order (KdTree::knn; C ABI: nbhd_tree_knn), against kiddo called the same way. Floor: \
+         the exact rows read, their squared distances computed and the table written in \
+         caller order (no search); nbhd / floor is the table's time over it. Count check: {}.",
         plan.reps,
         plan.brute_max_points,
         if bad == 0 {
@@ -616,6 +827,9 @@ fn to_json(measured: &[Row], infos: &[SetInfo], plan: &Plan) -> serde_json::Valu
                 "kiddo_ms": num(r.kiddo_s * 1e3),
                 "kiddo_ratio": num(r.kiddo_s / r.nbhd_s),
                 "brute_ms": r.brute_s.map(|b| num(b * 1e3)),
+                "c_abi_ms": r.c_abi_s.map(|c| num(c * 1e3)),
+                "floor_ms": r.floor_s.map(|f| num(f * 1e3)),
+                "floor_ratio": r.floor_s.map(|f| num(r.nbhd_s / f)),
                 "brute_ratio": r.brute_s.map(|b| num(b / r.nbhd_s)),
                 "speedup_vs_1_thread": r.speedup.map(num),
                 "nbhd_total": r.totals.map(|t| t.0),
