@@ -39,6 +39,7 @@
 //! until the oldest live point moves past them), the trees' own copies, and two bits per index
 //! ever given.
 
+mod persist;
 mod search;
 
 use std::sync::Arc;
@@ -48,6 +49,8 @@ use crate::error::{NbhdError, Result};
 use crate::points::PointsView;
 use crate::scalar::Scalar;
 use crate::tree::{BuildOptions, KdTree};
+
+pub use persist::{SavedDynamicInfo, DYNAMIC_FORMAT_VERSION};
 
 /// The default growth factor: two neighbouring trees are merged when the older holds fewer than
 /// `GROWTH` times the live points of the newer, so sizes at least double from the newest tree
@@ -413,7 +416,7 @@ impl<T: Scalar> DynamicKdTree<T> {
             parts.retain(|p| p.live > 0);
             let merge = (0..parts.len().saturating_sub(1))
                 .rev()
-                .find(|&i| parts[i].live < self.growth * parts[i + 1].live);
+                .find(|&i| parts[i].live < self.growth.saturating_mul(parts[i + 1].live));
             if let Some(i) = merge {
                 let merged = self.build_part(parts[i].lo, parts[i + 1].hi)?;
                 parts.splice(i..i + 2, [merged]);

@@ -26,12 +26,19 @@ use crate::scalar::{Scalar, ScalarType};
 
 /// The first 8 bytes of a saved tree.
 pub const MAGIC: [u8; 8] = *b"NBHDTREE";
+/// The first 8 bytes of a saved dynamic tree (`src/dynamic/persist.rs`): known here so that
+/// loading one as a static tree names what it is.
+pub(crate) const FOREST_MAGIC: [u8; 8] = *b"NBHDFRST";
+/// What a file of each magic holds, for [`SavedTreeError::OtherKind`].
+pub(crate) const STATIC_KIND: &str = "a static tree (NBHDTREE)";
+/// See [`STATIC_KIND`].
+pub(crate) const DYNAMIC_KIND: &str = "a dynamic tree (NBHDFRST)";
 /// The format version this library writes and reads.
 pub const FORMAT_VERSION: u32 = 1;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 128;
 /// Written in the machine's byte order: its bytes tell the reader the file's byte order.
-const BYTE_ORDER_MARK: u32 = 0x0A0B_0C0D;
+pub(crate) const BYTE_ORDER_MARK: u32 = 0x0A0B_0C0D;
 /// Where the header checksum sits (it covers the bytes before it).
 const HEADER_CRC_AT: usize = 120;
 
@@ -70,11 +77,11 @@ pub struct LoadOptions {
     pub dim: Option<usize>,
 }
 
-fn invalid(what: impl Into<String>) -> NbhdError {
+pub(crate) fn invalid(what: impl Into<String>) -> NbhdError {
     SavedTreeError::Invalid(what.into()).into()
 }
 
-fn this_machine() -> &'static str {
+pub(crate) fn this_machine() -> &'static str {
     if cfg!(target_endian = "little") {
         "little-endian"
     } else {
@@ -82,7 +89,7 @@ fn this_machine() -> &'static str {
     }
 }
 
-fn other_order() -> &'static str {
+pub(crate) fn other_order() -> &'static str {
     if cfg!(target_endian = "little") {
         "big-endian"
     } else {
@@ -90,24 +97,24 @@ fn other_order() -> &'static str {
     }
 }
 
-fn u32_at(b: &[u8], at: usize) -> u32 {
+pub(crate) fn u32_at(b: &[u8], at: usize) -> u32 {
     u32::from_ne_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
 
-fn u64_at(b: &[u8], at: usize) -> u64 {
+pub(crate) fn u64_at(b: &[u8], at: usize) -> u64 {
     let mut w = [0u8; 8];
     w.copy_from_slice(&b[at..at + 8]);
     u64::from_ne_bytes(w)
 }
 
-fn library_version() -> u32 {
+pub(crate) fn library_version() -> u32 {
     let part = |s: &str| s.parse::<u32>().unwrap_or(0);
     part(env!("CARGO_PKG_VERSION_MAJOR")) * 1_000_000
         + part(env!("CARGO_PKG_VERSION_MINOR")) * 1_000
         + part(env!("CARGO_PKG_VERSION_PATCH"))
 }
 
-fn pivot_code(p: PivotPolicy) -> u8 {
+pub(crate) fn pivot_code(p: PivotPolicy) -> u8 {
     match p {
         PivotPolicy::CyclicMedian => 0,
         PivotPolicy::SpreadMedian => 1,
@@ -116,7 +123,7 @@ fn pivot_code(p: PivotPolicy) -> u8 {
     }
 }
 
-fn median_code(m: MedianAlgorithm) -> u8 {
+pub(crate) fn median_code(m: MedianAlgorithm) -> u8 {
     match m {
         MedianAlgorithm::Presorted => 0,
         MedianAlgorithm::Sort => 1,
@@ -126,14 +133,14 @@ fn median_code(m: MedianAlgorithm) -> u8 {
     }
 }
 
-fn non_finite_code(p: NonFinitePolicy) -> u8 {
+pub(crate) fn non_finite_code(p: NonFinitePolicy) -> u8 {
     match p {
         NonFinitePolicy::Reject => 0,
         NonFinitePolicy::Skip => 1,
     }
 }
 
-fn scalar_name(s: ScalarType) -> &'static str {
+pub(crate) fn scalar_name(s: ScalarType) -> &'static str {
     match s {
         ScalarType::F32 => "f32",
         ScalarType::F64 => "f64",
@@ -141,7 +148,7 @@ fn scalar_name(s: ScalarType) -> &'static str {
 }
 
 /// Rounds up to a multiple of 8 (the payload's sections start 8-byte aligned).
-fn pad8(n: u64) -> Option<u64> {
+pub(crate) fn pad8(n: u64) -> Option<u64> {
     n.checked_add(7).map(|v| v & !7)
 }
 
@@ -185,9 +192,17 @@ impl SavedTreeInfo {
     /// magic, byte order, format version, header checksum and every field's range.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         let head = &bytes[..bytes.len().min(MAGIC.len())];
+        if head == FOREST_MAGIC {
+            return Err(SavedTreeError::OtherKind {
+                file: DYNAMIC_KIND,
+                expected: STATIC_KIND,
+            }
+            .into());
+        }
         if head != &MAGIC[..head.len()] {
             return Err(SavedTreeError::NotATree {
                 found: head.to_vec(),
+                expected: "NBHDTREE",
             }
             .into());
         }
@@ -379,7 +394,7 @@ impl SavedTreeInfo {
 }
 
 /// Bytes of a scalar, in the machine's order.
-fn scalar_bytes<T: Scalar>(v: T, out: &mut Vec<u8>) {
+pub(crate) fn scalar_bytes<T: Scalar>(v: T, out: &mut Vec<u8>) {
     match T::TYPE {
         // `to_f64` is exact and an f32 converted to f64 converts back to itself.
         ScalarType::F32 => out.extend_from_slice(&(v.to_f64() as f32).to_ne_bytes()),
@@ -388,7 +403,7 @@ fn scalar_bytes<T: Scalar>(v: T, out: &mut Vec<u8>) {
 }
 
 /// Most bytes a load from a reader asks for at once (and reserves before they arrive).
-const READ_STEP: usize = 16 << 20;
+pub(crate) const READ_STEP: usize = 16 << 20;
 
 /// Bytes handed to the sink at a time when a tree is written.
 const CHUNK: usize = 1 << 16;
@@ -830,7 +845,7 @@ impl<T: Scalar> KdTree<T> {
 }
 
 /// Reads until `buf` is full or `r` ends; returns the bytes read.
-fn read_up_to<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<usize> {
+pub(crate) fn read_up_to<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<usize> {
     let mut got = 0;
     while got < buf.len() {
         match r.read(&mut buf[got..]) {
