@@ -24,9 +24,9 @@ use crate::parallel::MAX_THREADS;
 use crate::query::NeighborSearch;
 use crate::scalar::{Scalar, ScalarType};
 use crate::tree::persist::{
-    invalid, library_version, median_code, non_finite_code, other_order, pad8, pivot_code,
-    read_up_to, scalar_bytes, scalar_name, this_machine, u32_at, u64_at, BYTE_ORDER_MARK,
-    DYNAMIC_KIND, FOREST_MAGIC, READ_STEP, STATIC_KIND,
+    check_len, check_start, in_file, invalid, library_version, median_code, non_finite_code, pad8,
+    pivot_code, read_payload, read_up_to, scalar_bytes, scalar_name, u32_at, u64_at, written_by,
+    Kind, BYTE_ORDER_MARK, DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
 };
 use crate::tree::{
     BuildOptions, KdTree, LoadOptions, MedianAlgorithm, PivotPolicy, HEADER_LEN, MAGIC,
@@ -36,6 +36,14 @@ use crate::tree::{
 pub const DYNAMIC_FORMAT_VERSION: u32 = 1;
 /// Where the header checksum sits (it covers the bytes before it).
 const HEADER_CRC_AT: usize = 120;
+/// A saved dynamic tree.
+const DYNAMIC: Kind = Kind {
+    magic: FOREST_MAGIC,
+    name: DYNAMIC_KIND,
+    version: DYNAMIC_FORMAT_VERSION,
+    other_magic: MAGIC,
+    other_name: STATIC_KIND,
+};
 /// Bytes of one entry of the table of static trees: first index, saved length.
 const TABLE_ENTRY: u64 = 16;
 
@@ -77,71 +85,9 @@ impl SavedDynamicInfo {
     /// magic (a static tree is named as such), byte order, format version, header checksum
     /// and every field's range.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
-        let head = &bytes[..bytes.len().min(8)];
-        if head == MAGIC {
-            return Err(SavedTreeError::OtherKind {
-                file: STATIC_KIND,
-                expected: DYNAMIC_KIND,
-            }
-            .into());
-        }
-        if head != &FOREST_MAGIC[..head.len()] {
-            return Err(SavedTreeError::NotATree {
-                found: head.to_vec(),
-                expected: "NBHDFRST",
-            }
-            .into());
-        }
-        if bytes.len() < HEADER_LEN {
-            return Err(SavedTreeError::Truncated {
-                needed: HEADER_LEN as u64,
-                available: bytes.len() as u64,
-            }
-            .into());
-        }
-        let h = &bytes[..HEADER_LEN];
-        let bom = u32_at(h, 8);
-        if bom == BYTE_ORDER_MARK.swap_bytes() {
-            return Err(SavedTreeError::ByteOrder {
-                file: other_order(),
-                machine: this_machine(),
-            }
-            .into());
-        }
+        let h = check_start(bytes, &DYNAMIC)?;
         let version = u32_at(h, 12);
-        let written = u32_at(h, 20);
-        let written_by = (
-            written / 1_000_000,
-            written / 1_000 % 1_000,
-            written % 1_000,
-        );
-        if version != DYNAMIC_FORMAT_VERSION && bom == BYTE_ORDER_MARK {
-            return Err(SavedTreeError::FormatVersion {
-                file: version,
-                supported: DYNAMIC_FORMAT_VERSION,
-                written_by: format!("{}.{}.{}", written_by.0, written_by.1, written_by.2),
-            }
-            .into());
-        }
-        let stored_crc = u32_at(h, HEADER_CRC_AT);
-        let crc = crc32fast::hash(&h[..HEADER_CRC_AT]);
-        if crc != stored_crc {
-            return Err(SavedTreeError::Checksum {
-                part: "header",
-                stored: stored_crc,
-                computed: crc,
-            }
-            .into());
-        }
-        if bom != BYTE_ORDER_MARK {
-            return Err(invalid(format!("byte-order mark {bom:#010x}")));
-        }
-        let header_len = u32_at(h, 16);
-        if header_len as usize != HEADER_LEN {
-            return Err(invalid(format!(
-                "header length {header_len} (format {DYNAMIC_FORMAT_VERSION} has {HEADER_LEN})"
-            )));
-        }
+        let written_by = written_by(h);
         if u32_at(h, 28) != 0 || h[108..120].iter().any(|&b| b != 0) || u32_at(h, 124) != 0 {
             return Err(invalid("a reserved header field is not zero"));
         }
@@ -405,14 +351,7 @@ impl<T: Scalar> DynamicKdTree<T> {
         let context = || format!("writing the saved dynamic tree to {}", path.display());
         let file = std::fs::File::create(path).map_err(|e| NbhdError::io(context(), &e))?;
         self.save(std::io::BufWriter::with_capacity(1 << 20, file))
-            .map_err(|e| match e {
-                NbhdError::Io { kind, message, .. } => NbhdError::Io {
-                    context: context(),
-                    kind,
-                    message,
-                },
-                e => e,
-            })
+            .map_err(|e| in_file(e, context()))
     }
 
     /// Loads a dynamic tree saved by [`DynamicKdTree::save`] from exactly `bytes`.
@@ -429,20 +368,7 @@ impl<T: Scalar> DynamicKdTree<T> {
     pub fn from_bytes_with(bytes: &[u8], options: &LoadOptions) -> Result<Self> {
         let info = SavedDynamicInfo::from_bytes(bytes)?;
         info.expect::<T>(options)?;
-        let have = bytes.len() as u64;
-        if have < info.total_len {
-            return Err(SavedTreeError::Truncated {
-                needed: info.total_len,
-                available: have,
-            }
-            .into());
-        }
-        if have > info.total_len {
-            return Err(invalid(format!(
-                "{} bytes follow the end of the dynamic tree",
-                have - info.total_len
-            )));
-        }
+        check_len(bytes.len() as u64, info.total_len)?;
         Self::from_payload(&info, &bytes[HEADER_LEN..])
     }
 
@@ -459,30 +385,7 @@ impl<T: Scalar> DynamicKdTree<T> {
         let got = read_up_to(&mut r, &mut header).map_err(|e| NbhdError::io(context, &e))?;
         let info = SavedDynamicInfo::from_bytes(&header[..got])?;
         info.expect::<T>(options)?;
-        // Read as it arrives, never reserved from the declared length.
-        let declared = (info.total_len - HEADER_LEN as u64) as usize;
-        let mut payload = Vec::new();
-        loop {
-            let start = payload.len();
-            let step = (declared - start).min(READ_STEP);
-            if step == 0 {
-                break;
-            }
-            payload.resize(start + step, 0);
-            let got = read_up_to(&mut r, &mut payload[start..])
-                .map_err(|e| NbhdError::io(context, &e))?;
-            payload.truncate(start + got);
-            if got < step {
-                break;
-            }
-        }
-        if payload.len() < declared {
-            return Err(SavedTreeError::Truncated {
-                needed: info.total_len,
-                available: (HEADER_LEN + payload.len()) as u64,
-            }
-            .into());
-        }
+        let payload = read_payload(&mut r, info.total_len, context)?;
         Self::from_payload(&info, &payload)
     }
 

@@ -40,6 +40,67 @@ unsafe fn read_path(path: *const c_char) -> Result<PathBuf, FfiError> {
     }
 }
 
+/// Writes `*size = needed`, then (if `capacity` suffices and `buffer` is not NULL) lets `save`
+/// write exactly `needed` bytes into `buffer`: the body of the save-to-buffer exports.
+///
+/// # Safety
+/// `size` was checked by `init_out`; `buffer` is NULL or writable for `capacity` bytes.
+unsafe fn into_buffer(
+    size: *mut usize,
+    needed: usize,
+    buffer: *mut c_void,
+    capacity: usize,
+    save: impl FnOnce(&mut &mut [u8]) -> Result<(), NbhdError>,
+) -> Result<(), FfiError> {
+    // SAFETY: `size` was checked by `init_out` (caller).
+    unsafe { size.write(needed) };
+    if capacity < needed {
+        return Err(NbhdError::BufferTooSmall {
+            what: "buffer (bytes)",
+            len: capacity,
+            needed,
+        }
+        .into());
+    }
+    if buffer.is_null() {
+        return Err(FfiError::Null("buffer".into()));
+    }
+    // SAFETY: `buffer` is non-NULL and writable for `capacity` >= `needed` bytes (caller);
+    // u8 needs no alignment, and the slice is the only access to it during the call.
+    let out = unsafe { std::slice::from_raw_parts_mut(buffer.cast::<u8>(), needed) };
+    let mut dst: &mut [u8] = out;
+    save(&mut dst)?;
+    Ok(())
+}
+
+/// The `size` bytes at `data`, checked: the input of the load-from-buffer exports.
+///
+/// # Safety
+/// `data` is NULL or readable for `size` bytes, not written during the call.
+unsafe fn input_bytes<'a>(data: *const c_void, size: usize) -> Result<&'a [u8], FfiError> {
+    if data.is_null() {
+        return Err(FfiError::Null("data".into()));
+    }
+    if size > isize::MAX as usize {
+        return Err(FfiError::InvalidArgument(format!(
+            "size {size} exceeds the address space"
+        )));
+    }
+    // SAFETY: `data` is non-NULL, readable for `size` <= isize::MAX bytes and not written
+    // during the call (caller); u8 needs no alignment.
+    Ok(unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size) })
+}
+
+/// The bytes of the file `path`, an I/O error naming it and `what` was read.
+fn read_file(path: &std::path::Path, what: &str) -> Result<Vec<u8>, NbhdError> {
+    std::fs::read(path).map_err(|e| {
+        NbhdError::io(
+            format!("reading the saved {what} from {}", path.display()),
+            &e,
+        )
+    })
+}
+
 /// The tree saved in exactly `bytes`, of the scalar type its header names.
 fn load_any(bytes: &[u8]) -> Result<AnyTree, NbhdError> {
     Ok(match SavedTreeInfo::from_bytes(bytes)?.scalar {
@@ -110,25 +171,16 @@ pub unsafe extern "C" fn nbhd_tree_save_to_buffer(
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
         let needed = with_tree!(&tree.inner, t => t.saved_len());
-        // SAFETY: `size` was checked by `init_out`.
-        unsafe { size.write(needed) };
-        if capacity < needed {
-            return Err(NbhdError::BufferTooSmall {
-                what: "buffer (bytes)",
-                len: capacity,
+        // SAFETY: `size` was checked by `init_out`; `buffer` is as the caller describes.
+        unsafe {
+            into_buffer(
+                size,
                 needed,
-            }
-            .into());
+                buffer,
+                capacity,
+                |dst| with_tree!(&tree.inner, t => t.save(dst)),
+            )
         }
-        if buffer.is_null() {
-            return Err(FfiError::Null("buffer".into()));
-        }
-        // SAFETY: `buffer` is non-NULL and writable for `capacity` >= `needed` bytes (caller);
-        // u8 needs no alignment, and the slice is the only access to it during the call.
-        let out = unsafe { std::slice::from_raw_parts_mut(buffer.cast::<u8>(), needed) };
-        let mut dst: &mut [u8] = out;
-        with_tree!(&tree.inner, t => t.save(&mut dst))?;
-        Ok(())
     })
 }
 
@@ -163,12 +215,7 @@ pub unsafe extern "C" fn nbhd_tree_load(
         let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
         // SAFETY: `path` is NULL or NUL-terminated (caller).
         let path = unsafe { read_path(path) }?;
-        let bytes = std::fs::read(&path).map_err(|e| {
-            NbhdError::io(
-                format!("reading the saved tree from {}", path.display()),
-                &e,
-            )
-        })?;
+        let bytes = read_file(&path, "tree")?;
         let inner = load_any(&bytes)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out(out, inner) };
@@ -197,17 +244,8 @@ pub unsafe extern "C" fn nbhd_tree_load_from_buffer(
     guard("nbhd_tree_load_from_buffer", || {
         // SAFETY: `out_tree` is NULL or writable (caller).
         let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
-        if data.is_null() {
-            return Err(FfiError::Null("data".into()));
-        }
-        if size > isize::MAX as usize {
-            return Err(FfiError::InvalidArgument(format!(
-                "size {size} exceeds the address space"
-            )));
-        }
-        // SAFETY: `data` is non-NULL, readable for `size` <= isize::MAX bytes and not written
-        // during the call (caller); u8 needs no alignment.
-        let bytes = unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size) };
+        // SAFETY: `data` is NULL or readable for `size` bytes, not written (caller).
+        let bytes = unsafe { input_bytes(data, size) }?;
         let inner = load_any(bytes)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out(out, inner) };
@@ -287,25 +325,16 @@ pub unsafe extern "C" fn nbhd_dynamic_save_to_buffer(
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
         let needed = with_dynamic!(&tree.inner, t => t.saved_len());
-        // SAFETY: `size` was checked by `init_out`.
-        unsafe { size.write(needed) };
-        if capacity < needed {
-            return Err(NbhdError::BufferTooSmall {
-                what: "buffer (bytes)",
-                len: capacity,
+        // SAFETY: `size` was checked by `init_out`; `buffer` is as the caller describes.
+        unsafe {
+            into_buffer(
+                size,
                 needed,
-            }
-            .into());
+                buffer,
+                capacity,
+                |dst| with_dynamic!(&tree.inner, t => t.save(dst)),
+            )
         }
-        if buffer.is_null() {
-            return Err(FfiError::Null("buffer".into()));
-        }
-        // SAFETY: `buffer` is non-NULL and writable for `capacity` >= `needed` bytes (caller);
-        // u8 needs no alignment, and the slice is the only access to it during the call.
-        let out = unsafe { std::slice::from_raw_parts_mut(buffer.cast::<u8>(), needed) };
-        let mut dst: &mut [u8] = out;
-        with_dynamic!(&tree.inner, t => t.save(&mut dst))?;
-        Ok(())
     })
 }
 
@@ -339,12 +368,7 @@ pub unsafe extern "C" fn nbhd_dynamic_load(
         let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
         // SAFETY: `path` is NULL or NUL-terminated (caller).
         let path = unsafe { read_path(path) }?;
-        let bytes = std::fs::read(&path).map_err(|e| {
-            NbhdError::io(
-                format!("reading the saved dynamic tree from {}", path.display()),
-                &e,
-            )
-        })?;
+        let bytes = read_file(&path, "dynamic tree")?;
         let inner = load_any_dynamic(&bytes)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out_dynamic(out, inner) };
@@ -373,17 +397,8 @@ pub unsafe extern "C" fn nbhd_dynamic_load_from_buffer(
     guard("nbhd_dynamic_load_from_buffer", || {
         // SAFETY: `out_tree` is NULL or writable (caller).
         let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
-        if data.is_null() {
-            return Err(FfiError::Null("data".into()));
-        }
-        if size > isize::MAX as usize {
-            return Err(FfiError::InvalidArgument(format!(
-                "size {size} exceeds the address space"
-            )));
-        }
-        // SAFETY: `data` is non-NULL, readable for `size` <= isize::MAX bytes and not written
-        // during the call (caller); u8 needs no alignment.
-        let bytes = unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size) };
+        // SAFETY: `data` is NULL or readable for `size` bytes, not written (caller).
+        let bytes = unsafe { input_bytes(data, size) }?;
         let inner = load_any_dynamic(bytes)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out_dynamic(out, inner) };
