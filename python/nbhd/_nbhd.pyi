@@ -102,7 +102,7 @@ class DynamicKdTree:
         leaf_size: int = 12,
         non_finite: NonFinite = "reject",
         threads: int = 0,
-        growth: int = 2,
+        growth: int = 4,
     ) -> None: ...
     def insert(self, points: ArrayLike) -> int:
         """Inserts a batch; returns the index of its first point."""
