@@ -14,7 +14,8 @@
 //!
 //! Run: `cargo bench --bench dynamic` (defaults: 1M points, frames of 10k, window 200k, 100
 //! frames, threads 1 and 2). Environment: `NBHD_DYN_POINTS`, `NBHD_DYN_FRAME`,
-//! `NBHD_DYN_WINDOW`, `NBHD_DYN_FRAMES_B`, `NBHD_DYN_THREADS` (comma list). A benchmark, not a
+//! `NBHD_DYN_WINDOW`, `NBHD_DYN_FRAMES_B`, `NBHD_DYN_THREADS` (comma list), `NBHD_DYN_GROWTH_B`
+//! (the growth factor measured beside the default, 2). A benchmark, not a
 //! test: the machine's load shows in the times, so compare the ratios of one run.
 
 use std::num::NonZero;
@@ -104,9 +105,12 @@ fn accumulate(points: &[[f32; 3]], frame: usize, threads: usize) -> [Cost; 4] {
     };
     let knn = Neighborhood::Knn { k: 10 };
     let frames: Vec<&[[f32; 3]]> = points.chunks(frame).collect();
-    // nbhd's forest, growth factors 2 (the default) and 4
+    // nbhd's forest, the default growth factor and another
     let mut forest = [Cost::default(); 2];
-    for (g, dynamic) in [2, 4].into_iter().zip(&mut forest) {
+    for (g, dynamic) in [nbhd::dynamic::GROWTH, growth_b()]
+        .into_iter()
+        .zip(&mut forest)
+    {
         let mut tree = DynamicKdTree::<f32>::new(3, &options).unwrap();
         tree.set_growth(g).unwrap();
         for f in &frames {
@@ -163,7 +167,10 @@ fn sliding(points: &[[f32; 3]], frame: usize, window: usize, threads: usize) -> 
     let frames: Vec<&[[f32; 3]]> = points.chunks(frame).collect();
     let keep = window / frame;
     let mut forest = [Cost::default(); 2];
-    for (g, dynamic) in [2, 4].into_iter().zip(&mut forest) {
+    for (g, dynamic) in [nbhd::dynamic::GROWTH, growth_b()]
+        .into_iter()
+        .zip(&mut forest)
+    {
         let mut tree = DynamicKdTree::<f32>::new(3, &options).unwrap();
         tree.set_growth(g).unwrap();
         for (i, f) in frames.iter().enumerate() {
@@ -230,7 +237,7 @@ fn grown_vs_static(points: &[[f32; 3]], frame: usize, queries: &[[f32; 3]], thre
     };
     let knn = Neighborhood::Knn { k: 10 };
     let stat = KdTree::<f32>::build(&PointsView::from_rows(points).unwrap(), &options).unwrap();
-    for growth in [2, 4] {
+    for growth in [nbhd::dynamic::GROWTH, growth_b()] {
         let mut tree = DynamicKdTree::<f32>::new(3, &options).unwrap();
         tree.set_growth(growth).unwrap();
         for f in points.chunks(frame) {
@@ -259,10 +266,17 @@ fn grown_vs_static(points: &[[f32; 3]], frame: usize, queries: &[[f32; 3]], thre
     }
 }
 
+/// The second growth factor measured beside the default `nbhd::dynamic::GROWTH`
+/// (`NBHD_DYN_GROWTH_B`, 2 by default: the default before it was measured).
+fn growth_b() -> usize {
+    env("NBHD_DYN_GROWTH_B", 2).max(2)
+}
+
 fn report(name: &str, costs: [Cost; 4]) {
+    let second = format!("nbhd dynamic, growth {}", growth_b());
     let names = [
         "nbhd dynamic",
-        "nbhd dynamic, growth 4",
+        second.as_str(),
         "nbhd static rebuilt",
         "kiddo MutableKdTree",
     ];
@@ -283,7 +297,7 @@ fn report(name: &str, costs: [Cost; 4]) {
     }
     let rel = |c: &Cost| (c.check - costs[0].check).abs() / costs[0].check.max(1e-30);
     println!(
-        "    answers agree (sum of squared distances, relative difference): growth 4 {:.1e}, \
+        "    answers agree (sum of squared distances, relative difference): growth b {:.1e}, \
          rebuild {:.1e}, kiddo {:.1e}",
         rel(&costs[1]),
         rel(&costs[2]),

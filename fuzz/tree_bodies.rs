@@ -3,10 +3,13 @@
 //!
 //! The first byte chooses: bit 0 recomputes both checksums of the rest first (as a crafted file
 //! would, so that the fuzzer reaches the structural checks behind them), bit 1 loads as f64
-//! instead of f32. A load must be refused with a saved-tree error, or give a tree that
-//! re-saves to the same fields and payload and answers exactly what brute force answers over
-//! the points it holds. A panic, abort or hang is a crash.
+//! instead of f32, bit 2 loads a dynamic tree (src/dynamic/persist.rs) instead of a static one.
+//! A load must be refused with a saved-tree error, or give a tree that re-saves to the same
+//! fields and payload and answers exactly what brute force answers over the points it holds (a
+//! dynamic tree: over its live points, also after an insertion and a removal). A panic, abort
+//! or hang is a crash.
 
+use nbhd::dynamic::DynamicKdTree;
 use nbhd::tree::HEADER_LEN;
 use nbhd::{
     BruteForce, KdTree, NbhdError, NeighborSearch, Neighborhood, NonFinitePolicy, PointsView,
@@ -32,6 +35,17 @@ pub fn load_tree(data: &[u8]) {
         return;
     };
     let mut bytes = rest.to_vec();
+    if mode & 4 == 4 {
+        if mode & 1 == 1 {
+            reseal_dynamic(&mut bytes);
+        }
+        if mode & 2 == 0 {
+            check_dynamic::<f32>(&bytes);
+        } else {
+            check_dynamic::<f64>(&bytes);
+        }
+        return;
+    }
     if mode & 1 == 1 {
         reseal(&mut bytes);
     }
@@ -123,5 +137,115 @@ fn check<T: Scalar>(bytes: &[u8]) {
             tree.neighborhoods(nbhd, &opts),
             nbhd::table::neighborhoods_of_all(&brute, nbhd, true)
         );
+    }
+}
+
+/// Recomputes the payload and header CRC-32s of a saved dynamic tree (its static trees keep
+/// theirs).
+pub fn reseal_dynamic(bytes: &mut [u8]) {
+    if bytes.len() < HEADER_LEN {
+        return;
+    }
+    let payload = crc32fast::hash(&bytes[HEADER_LEN..]);
+    bytes[104..108].copy_from_slice(&payload.to_ne_bytes());
+    let header = crc32fast::hash(&bytes[..120]);
+    bytes[120..124].copy_from_slice(&header.to_ne_bytes());
+}
+
+/// Every query kind by every live index and at a few points equals brute force over the live
+/// points of `tree` (indices not live given as NaN and skipped).
+fn dynamic_exact<T: Scalar>(tree: &DynamicKdTree<T>) {
+    let d = tree.dim();
+    let n = tree.next_index() as usize;
+    let mut coords = vec![T::from_f64(f64::NAN); n * d];
+    let mut queries = vec![T::ZERO; d];
+    for i in 0..n as u32 {
+        if let Some(p) = tree.point(i) {
+            coords[i as usize * d..(i as usize + 1) * d].copy_from_slice(p);
+            if i % 7 == 0 {
+                queries.extend(p.iter().map(|&c| c + T::from_f64(0.01)));
+            }
+        }
+    }
+    let brute = BruteForce::new(
+        &PointsView::from_flat(&coords, d).unwrap(),
+        NonFinitePolicy::Skip,
+    );
+    let Ok(brute) = brute else {
+        // No live point: nothing to find.
+        let mut got = Vec::new();
+        let r = tree.search(
+            Query::point(&queries[..d]),
+            Neighborhood::Knn { k: 2 },
+            &mut got,
+        );
+        assert!(r.is_ok() && got.is_empty());
+        return;
+    };
+    let nbhds = [
+        Neighborhood::Knn { k: 3 },
+        Neighborhood::Radius {
+            radius: T::from_f64(0.5),
+            sorted: true,
+        },
+        Neighborhood::KnnRadius {
+            k: 2,
+            radius: T::from_f64(1.0),
+        },
+    ];
+    let (mut got, mut want) = (Vec::new(), Vec::new());
+    for nbhd in nbhds {
+        for q in queries.chunks_exact(d) {
+            let a = tree.search(Query::point(q), nbhd, &mut got);
+            let b = brute.search(Query::point(q), nbhd, &mut want);
+            assert_eq!(a, b);
+            assert_eq!(got, want);
+        }
+        for i in (0..n as u32).filter(|&i| tree.is_live(i)) {
+            tree.search(Query::stored_excluding_self(i), nbhd, &mut got)
+                .unwrap();
+            brute
+                .search(Query::stored_excluding_self(i), nbhd, &mut want)
+                .unwrap();
+            assert_eq!(got, want);
+        }
+    }
+}
+
+fn check_dynamic<T: Scalar>(bytes: &[u8]) {
+    let loaded = DynamicKdTree::<T>::from_bytes(bytes);
+    let streamed = DynamicKdTree::<T>::load(bytes);
+    let mut tree = match (loaded, streamed) {
+        (Err(e), r) => {
+            assert!(matches!(e, NbhdError::SavedTree(_)), "{e}");
+            assert!(!e.to_string().is_empty());
+            if let Ok(t) = r {
+                assert!(e.to_string().contains("follow the end"), "{e}");
+                drop(t);
+            }
+            return;
+        }
+        (Ok(t), Ok(s)) => {
+            assert_eq!(t.stats(), s.stats());
+            t
+        }
+        (Ok(_), Err(e)) => panic!("loaded from bytes but not from a reader: {e}"),
+    };
+    let again = tree.to_bytes();
+    assert_eq!(again.len(), bytes.len());
+    assert_eq!(again[24..104], bytes[24..104]);
+    if tree.next_index() > BRUTE_MAX as u32 || tree.dim() > 16 {
+        return;
+    }
+    dynamic_exact(&tree);
+    // It grows and shrinks: a batch near the first live point, then a removal.
+    let d = tree.dim();
+    let near: Vec<T> = (0..3 * d).map(|j| T::from_f64(0.1 * j as f64)).collect();
+    if tree.insert_flat(&near).is_ok() {
+        let first_live = (0..tree.next_index()).find(|&i| tree.is_live(i));
+        if let Some(i) = first_live {
+            tree.remove(&[i]).unwrap();
+        }
+        dynamic_exact(&tree);
     }
 }

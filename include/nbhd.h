@@ -1296,6 +1296,84 @@ nbhd_status nbhd_tree_load(const char *path, nbhd_tree **out_tree);
 nbhd_status nbhd_tree_load_from_buffer(const void *data, size_t size, nbhd_tree **out_tree);
 
 /**
+ * Writes the dynamic tree `tree` to the file `path` (created, or truncated if it exists) in
+ * the saved dynamic-tree format (docs/tree-file-format.md, "Dynamic trees"): a versioned
+ * header with checksums, the index bitmaps, the kept coordinates and every static tree of the
+ * forest as built. nbhd_dynamic_load reads it back into a dynamic tree that answers every
+ * query exactly as `tree` does and grows and shrinks the same way.
+ *
+ * Errors: NULL_POINTER (`tree`, `path`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
+ * `path`; off Unix, a `path` that is not UTF-8), IO_ERROR (the file cannot be created or
+ * written; the message names it and gives the system's reason).
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle not being changed by another thread; `path` NULL or a
+ * NUL-terminated string.
+ */
+nbhd_status nbhd_dynamic_save(const nbhd_dynamic_tree *tree, const char *path);
+
+/**
+ * Writes `tree` in the saved dynamic-tree format into the caller's `buffer` of `capacity`
+ * bytes, and the number of bytes it takes to `*size` — also when the buffer is too small, so
+ * a first call with `capacity` 0 (and `buffer` NULL) asks for the size. The bytes are those
+ * nbhd_dynamic_save writes; nbhd_dynamic_load_from_buffer reads them.
+ *
+ * Errors: NULL_POINTER (`tree`, `size`, or `buffer` when `capacity` is large enough),
+ * MISALIGNED_POINTER, BUFFER_TOO_SMALL (`capacity` < `*size`; nothing is written to
+ * `buffer`).
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle not being changed by another thread; `buffer` NULL or
+ * writable for `capacity` bytes; `size` NULL or writable.
+ */
+nbhd_status nbhd_dynamic_save_to_buffer(const nbhd_dynamic_tree *tree,
+                                        void *buffer,
+                                        size_t capacity,
+                                        size_t *size);
+
+/**
+ * Loads the dynamic tree saved in the file `path` (by nbhd_dynamic_save or
+ * nbhd_dynamic_save_to_buffer) and stores a new handle in `*out_tree`. The tree has the
+ * scalar type it was saved with (nbhd_dynamic_tree_stats tells it), answers every query
+ * exactly as the saved one did, and continues its indices where the saved one stopped.
+ *
+ * Nothing in the file is trusted: the header, every static tree and what spans them (index
+ * ranges, bitmaps, kept coordinates, live count) are checked before a tree is handed out. On
+ * any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
+ *
+ * Errors: NULL_POINTER (`path`, `out_tree`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
+ * `path`; off Unix, not UTF-8), IO_ERROR (the file cannot be read; the message names it),
+ * FORMAT_MISMATCH (not a saved nbhd tree, a saved *static* tree, or one of another format
+ * version or byte order: the message names the file's value and this library's),
+ * CORRUPT_DATA (truncated, followed by other bytes, a checksum that does not match, an
+ * inconsistent field, static tree or cross-tree fact: the message says which).
+ *
+ * Ownership: the caller owns `*out_tree` and frees it with nbhd_dynamic_free.
+ *
+ * # Safety
+ * `path` must be NULL or a NUL-terminated string; `out_tree` NULL or writable.
+ */
+nbhd_status nbhd_dynamic_load(const char *path, nbhd_dynamic_tree **out_tree);
+
+/**
+ * Loads the dynamic tree saved in the `size` bytes at `data` (as
+ * nbhd_dynamic_save_to_buffer wrote them) and stores a new handle in `*out_tree`. The bytes
+ * are copied: `data` may be freed as soon as this returns. Checks and errors as
+ * nbhd_dynamic_load, without IO_ERROR: NULL_POINTER (`data`, `out_tree`),
+ * MISALIGNED_POINTER, INVALID_ARGUMENT (`size` above PTRDIFF_MAX), FORMAT_MISMATCH,
+ * CORRUPT_DATA. On any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
+ *
+ * Ownership: the caller owns `*out_tree` and frees it with nbhd_dynamic_free.
+ *
+ * # Safety
+ * `data` must be NULL or readable for `size` bytes, not written during the call; `out_tree`
+ * NULL or writable.
+ */
+nbhd_status nbhd_dynamic_load_from_buffer(const void *data,
+                                          size_t size,
+                                          nbhd_dynamic_tree **out_tree);
+
+/**
  * The `k` points of the tree nearest to the point `query`.
  *
  * - `query`: `dim` coordinates in the tree's scalar type (`float` for a tree built from

@@ -166,6 +166,16 @@ pub enum SavedTreeError {
     NotATree {
         /// The first bytes found (at most 8).
         found: Vec<u8>,
+        /// The magic expected: "NBHDTREE" (a static tree) or "NBHDFRST" (a dynamic tree).
+        expected: &'static str,
+    },
+    /// The input is a saved nbhd tree of the other kind: a static tree where a dynamic one was
+    /// asked for, or the reverse.
+    OtherKind {
+        /// What the input holds ("a static tree (NBHDTREE)" or "a dynamic tree (NBHDFRST)").
+        file: &'static str,
+        /// What was asked for.
+        expected: &'static str,
     },
     /// The file was written on a machine of the other byte order.
     ByteOrder {
@@ -221,11 +231,14 @@ impl fmt::Display for SavedTreeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         use SavedTreeError::*;
         match self {
-            NotATree { found } => write!(
+            NotATree { found, expected } => write!(
                 f,
-                "not a saved nbhd tree: it starts with {:?}, not \"NBHDTREE\"",
+                "not a saved nbhd tree: it starts with {:?}, not \"{expected}\"",
                 String::from_utf8_lossy(found)
             ),
+            OtherKind { file, expected } => {
+                write!(f, "the input holds {file}, but {expected} was asked for")
+            }
             ByteOrder { file, machine } => write!(
                 f,
                 "the saved tree was written on a {file} machine and this one is {machine}"

@@ -339,17 +339,16 @@ fn c_program_is_clean_under_valgrind() {
 
 #[test]
 fn c_dynamic_tree_answers_as_the_static_tree() {
-    run(
-        Command::new(compiled("dynamic_test")),
-        "tests/c/dynamic_test",
-    );
+    let mut cmd = Command::new(compiled("dynamic_test"));
+    cmd.arg(scratch("dynamic"));
+    run(cmd, "tests/c/dynamic_test");
 }
 
 #[test]
 fn c_dynamic_tree_is_clean_under_valgrind() {
     let exe = compiled("dynamic_test");
     if let Some(mut cmd) = valgrind() {
-        cmd.arg(exe);
+        cmd.arg(exe).arg(scratch("dynamic-valgrind"));
         run(cmd, "valgrind tests/c/dynamic_test");
     }
 }

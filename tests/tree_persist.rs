@@ -503,7 +503,32 @@ fn seed_trees() -> Vec<(&'static str, u8, Vec<u8>)> {
             0,
             build(&[1.0f32, 2.0, 3.0], 3, BuildOptions::default()).to_bytes(),
         ),
+        // Dynamic trees (mode bit 2): batches, removals and a skipped point.
+        ("dynamic-f32-3d", 4, small_forest::<f32>(3).to_bytes()),
+        (
+            "dynamic-f64-2d-resealed",
+            7,
+            small_forest::<f64>(2).to_bytes(),
+        ),
     ]
+}
+
+/// A dynamic tree of a few batches with removals and a skipped NaN point.
+fn small_forest<T: Scalar>(d: usize) -> nbhd::DynamicKdTree<T> {
+    let options = BuildOptions {
+        non_finite: NonFinitePolicy::Skip,
+        leaf_size: 3,
+        ..BuildOptions::default()
+    };
+    let mut f = nbhd::DynamicKdTree::<T>::new(d, &options).unwrap();
+    for (batch, n) in [20usize, 9, 5, 12].into_iter().enumerate() {
+        let mut c = cloud(n, d, 40 + batch as u64);
+        c[0] = f64::NAN;
+        let c: Vec<T> = c.into_iter().map(T::from_f64).collect();
+        let first = f.insert_flat(&c).unwrap();
+        f.remove(&[first + 1, first + 3]).unwrap();
+    }
+    f
 }
 
 fn data_dir(sub: &str) -> std::path::PathBuf {
@@ -543,10 +568,11 @@ fn fuzz_seeds_and_regressions_through_the_loader() {
         let bytes = std::fs::read(path).unwrap();
         // Each seed is a valid tree of the type its mode byte names.
         let tree = &bytes[1..];
-        let ok = if bytes[0] & 2 == 0 {
-            KdTree::<f32>::from_bytes(tree).is_ok()
-        } else {
-            KdTree::<f64>::from_bytes(tree).is_ok()
+        let ok = match bytes[0] & 6 {
+            0 => KdTree::<f32>::from_bytes(tree).is_ok(),
+            2 => KdTree::<f64>::from_bytes(tree).is_ok(),
+            4 => nbhd::DynamicKdTree::<f32>::from_bytes(tree).is_ok(),
+            _ => nbhd::DynamicKdTree::<f64>::from_bytes(tree).is_ok(),
         };
         assert!(ok, "{}", path.display());
         tree_bodies::load_tree(&bytes);
@@ -558,7 +584,8 @@ fn fuzz_seeds_and_regressions_through_the_loader() {
     let mut rng = Rng::new(5);
     for round in 0..4000 {
         let mut b = std::fs::read(&files[round % files.len()]).unwrap();
-        b[0] = rng.below(4) as u8;
+        // The seed's kind (static or dynamic) kept, the scalar type and resealing drawn.
+        b[0] = (b[0] & 4) | rng.below(4) as u8;
         for _ in 0..1 + rng.below(4) {
             let at = 1 + rng.below(b.len() - 1);
             b[at] = match rng.below(3) {

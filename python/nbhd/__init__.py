@@ -20,6 +20,7 @@ from ._errors import (
 )
 from ._nbhd import (
     MAX_THREADS,
+    DynamicKdTree,
     KdTree,
     Table,
     __version__,
@@ -33,6 +34,7 @@ from ._nbhd import (
 
 __all__ = [
     "KdTree",
+    "DynamicKdTree",
     "Table",
     "normals",
     "curvatures",

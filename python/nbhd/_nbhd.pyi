@@ -84,6 +84,59 @@ class KdTree:
         sorted: bool = True,
         threads: int = 0,
     ) -> Table: ...
+    def to_bytes(self) -> bytes:
+        """The saved-tree format (docs/tree-file-format.md); what pickle stores."""
+    @classmethod
+    def from_bytes(cls, data: bytes) -> KdTree: ...
+
+class DynamicKdTree:
+    """A k-d tree accepting batch insertions and removals by index (nbhd::DynamicKdTree)."""
+
+    def __init__(
+        self,
+        dim: int,
+        *,
+        dtype: Literal["float32", "float64"] = "float32",
+        pivot: str = "sliding-midpoint",
+        median: str = "floyd-rivest",
+        leaf_size: int = 12,
+        non_finite: NonFinite = "reject",
+        threads: int = 0,
+        growth: int = 4,
+    ) -> None: ...
+    def insert(self, points: ArrayLike) -> int:
+        """Inserts a batch; returns the index of its first point."""
+    def remove(self, indices: Sequence[int]) -> None: ...
+    @property
+    def size(self) -> int:
+        """Live points."""
+    @property
+    def next_index(self) -> int: ...
+    @property
+    def m(self) -> int: ...
+    @property
+    def dtype_name(self) -> Literal["float32", "float64"]: ...
+    def is_live(self, index: int) -> bool: ...
+    def point(self, index: int) -> Floats: ...
+    def stats(self) -> dict[str, Any]: ...
+    def __len__(self) -> int: ...
+    def knn(self, x: ArrayLike, k: int, *, threads: int = 0) -> tuple[U32, Floats]: ...
+    def radius(
+        self, x: ArrayLike, radius: float, *, sorted: bool = True, threads: int = 0
+    ) -> Union[tuple[U32, Floats], Table]: ...
+    def knn_radius(self, x: ArrayLike, k: int, radius: float, *, threads: int = 0) -> Union[tuple[U32, Floats], Table]: ...
+    def neighborhoods(
+        self,
+        *,
+        k: Optional[int] = None,
+        radius: Optional[float] = None,
+        exclude_self: bool = True,
+        sorted: bool = True,
+        threads: int = 0,
+    ) -> Table: ...
+    def to_bytes(self) -> bytes: ...
+    @classmethod
+    def from_bytes(cls, data: bytes) -> DynamicKdTree: ...
 
 class Outputs(TypedDict):
     normals: F64

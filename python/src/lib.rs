@@ -4,6 +4,7 @@
 //! library's errors into Python exceptions with its messages.
 
 mod arrays;
+mod dynamic;
 mod errors;
 mod geometry;
 mod io;
@@ -27,6 +28,7 @@ fn _reads_in_place(points: &Bound<'_, PyAny>) -> PyResult<bool> {
 fn _nbhd(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<tree::PyKdTree>()?;
     m.add_class::<tree::PyTable>()?;
+    m.add_class::<dynamic::PyDynamicKdTree>()?;
     m.add_function(wrap_pyfunction!(geometry::normals, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::curvatures, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::smooth, m)?)?;

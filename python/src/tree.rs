@@ -1,13 +1,14 @@
 //! `nbhd.KdTree` and `nbhd.Table`: the k-d tree of `nbhd::tree` over an (n, d) numpy array of
 //! float32 or float64, its single and batch queries, and its all-point tables as compressed rows.
 
+use nbhd::tree::SavedTreeInfo;
 use nbhd::{
     BuildOptions, KdTree, NbhdError, Neighbor, NeighborSearch, NeighborTable, Neighborhood, Query,
     Scalar, ScalarType, TableOptions,
 };
 use numpy::{Element, PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyBytes, PyDict, PyTuple, PyType};
 
 use crate::arrays::{as_rows, float_array, ndim, vec1, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
@@ -48,7 +49,7 @@ pub struct PyKdTree {
 /// `r` in the tree's type: a radius finite in f64 but not in `T` is
 /// [`NbhdError::RadiusOutOfRange`], as in the C ABI; NaN and negative radii are left for the
 /// library's own check.
-fn radius_in<T: Scalar>(r: f64) -> Result<T, NbhdError> {
+pub(crate) fn radius_in<T: Scalar>(r: f64) -> Result<T, NbhdError> {
     let t = T::from_f64(r);
     if r.is_finite() && !t.is_finite() {
         let (scalar, max) = match T::TYPE {
@@ -65,7 +66,7 @@ fn radius_in<T: Scalar>(r: f64) -> Result<T, NbhdError> {
 }
 
 /// The neighbourhood named by `k` and/or `radius`.
-fn neighborhood<T: Scalar>(
+pub(crate) fn neighborhood<T: Scalar>(
     k: Option<usize>,
     radius: Option<f64>,
     sorted: bool,
@@ -85,7 +86,7 @@ fn neighborhood<T: Scalar>(
 }
 
 /// One query's neighbours as `(indices, sq_dists)` arrays.
-fn pair<'py, T: Scalar + Element>(
+pub(crate) fn pair<'py, T: Scalar + Element>(
     py: Python<'py>,
     found: Vec<Neighbor<T>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
@@ -95,7 +96,10 @@ fn pair<'py, T: Scalar + Element>(
 }
 
 /// `obj` as the tree's scalar type, (m, d) with whether it was a single 1-D point.
-fn queries<'py>(obj: &Bound<'py, PyAny>, dtype: Dtype) -> PyResult<(Bound<'py, PyAny>, bool)> {
+pub(crate) fn queries<'py>(
+    obj: &Bound<'py, PyAny>,
+    dtype: Dtype,
+) -> PyResult<(Bound<'py, PyAny>, bool)> {
     let (arr, _) = float_array(obj, Some(dtype))?;
     as_rows(&arr, "the query")
 }
@@ -150,13 +154,13 @@ impl PyKdTree {
 }
 
 /// What a query returns: one point's `(indices, sq_dists)` or a batch's table.
-enum Answer<'py> {
+pub(crate) enum Answer<'py> {
     One(Bound<'py, PyTuple>),
     Many(PyTable),
 }
 
 impl<'py> Answer<'py> {
-    fn into_py(self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    pub(crate) fn into_py(self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         match self {
             Answer::One(t) => Ok(t.into_any()),
             Answer::Many(t) => Ok(Bound::new(py, t)?.into_any()),
@@ -358,6 +362,40 @@ impl PyKdTree {
         })
     }
 
+    /// The tree in the saved-tree format (docs/tree-file-format.md) as `bytes`: a versioned
+    /// header with checksums, then the tree as built. `KdTree.from_bytes` reads it back; it is
+    /// what `pickle` stores.
+    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        let bytes = py.detach(|| with_tree!(&self.tree, t, _T => t.to_bytes()));
+        PyBytes::new(py, &bytes)
+    }
+
+    /// The tree saved in `data` (by `to_bytes`, `pickle`, or the Rust and C saves), of the
+    /// dtype it was saved with, answering every query exactly as the saved tree did. Damaged,
+    /// truncated or foreign bytes (another format version, byte order, or a saved
+    /// `DynamicKdTree`) raise `NbhdValueError` naming what differs.
+    #[classmethod]
+    fn from_bytes(cls: &Bound<'_, PyType>, data: &[u8]) -> PyResult<Self> {
+        let tree = cls
+            .py()
+            .detach(|| -> Result<Tree, NbhdError> {
+                Ok(match SavedTreeInfo::from_bytes(data)?.scalar {
+                    ScalarType::F32 => Tree::F32(KdTree::from_bytes(data)?),
+                    ScalarType::F64 => Tree::F64(KdTree::from_bytes(data)?),
+                })
+            })
+            .or_raise()?;
+        Ok(Self { tree })
+    }
+
+    /// Pickling: `KdTree.from_bytes(tree.to_bytes())`.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let from = slf.get_type().getattr("from_bytes")?;
+        Ok((from, (slf.get().to_bytes(slf.py()),)))
+    }
+
     fn __len__(&self) -> usize {
         self.source_len()
     }
@@ -395,7 +433,7 @@ pub struct PyTable {
 }
 
 impl PyTable {
-    fn new<T: Scalar + Element>(
+    pub(crate) fn new<T: Scalar + Element>(
         py: Python<'_>,
         table: NeighborTable<T>,
         n_points: usize,
@@ -415,7 +453,7 @@ impl PyTable {
 
     /// The rows as two (rows, width) arrays when every row has the same length (a k-nearest
     /// batch: min(k, size) each).
-    fn dense<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    pub(crate) fn dense<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let total = *self.starts.last().unwrap_or(&0);
         let width = total.checked_div(self.rows).unwrap_or(0);
         if self.starts.iter().enumerate().any(|(i, &o)| o != i * width) {

@@ -27,11 +27,11 @@ use crate::scalar::ScalarType;
 /// nbhd_dynamic_insert and nbhd_dynamic_remove must not run at the same time as any other
 /// call on the same tree.
 pub struct nbhd_dynamic_tree {
-    inner: AnyDynamic,
+    pub(crate) inner: AnyDynamic,
 }
 
 /// A dynamic tree of either scalar type.
-enum AnyDynamic {
+pub(crate) enum AnyDynamic {
     F32(DynamicKdTree<f32>),
     F64(DynamicKdTree<f64>),
 }
@@ -44,6 +44,7 @@ macro_rules! with_dynamic {
         }
     };
 }
+pub(crate) use with_dynamic;
 
 /// Size and shape of a dynamic tree.
 #[repr(C)]

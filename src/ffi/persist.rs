@@ -1,12 +1,15 @@
-//! Saving a tree and loading it back: to and from a file, and to a caller's buffer and from
-//! bytes (the format: docs/tree-file-format.md; the Rust side: src/tree/persist.rs).
+//! Saving a tree (static or dynamic) and loading it back: to and from a file, and to a
+//! caller's buffer and from bytes (the formats: docs/tree-file-format.md; the Rust side:
+//! src/tree/persist.rs and src/dynamic/persist.rs).
 
 use std::ffi::{c_char, c_void, CStr};
 use std::path::PathBuf;
 
 use super::args::{deref, init_out};
+use super::dynamic::{nbhd_dynamic_tree, with_dynamic, AnyDynamic};
 use super::status::{guard, nbhd_status, FfiError};
 use super::tree::{nbhd_tree, with_tree, AnyTree};
+use crate::dynamic::{DynamicKdTree, SavedDynamicInfo};
 use crate::error::NbhdError;
 use crate::scalar::ScalarType;
 use crate::tree::{KdTree, SavedTreeInfo};
@@ -35,6 +38,67 @@ unsafe fn read_path(path: *const c_char) -> Result<PathBuf, FfiError> {
             .map(PathBuf::from)
             .map_err(|_| FfiError::InvalidArgument("path is not UTF-8".into()))
     }
+}
+
+/// Writes `*size = needed`, then (if `capacity` suffices and `buffer` is not NULL) lets `save`
+/// write exactly `needed` bytes into `buffer`: the body of the save-to-buffer exports.
+///
+/// # Safety
+/// `size` was checked by `init_out`; `buffer` is NULL or writable for `capacity` bytes.
+unsafe fn into_buffer(
+    size: *mut usize,
+    needed: usize,
+    buffer: *mut c_void,
+    capacity: usize,
+    save: impl FnOnce(&mut &mut [u8]) -> Result<(), NbhdError>,
+) -> Result<(), FfiError> {
+    // SAFETY: `size` was checked by `init_out` (caller).
+    unsafe { size.write(needed) };
+    if capacity < needed {
+        return Err(NbhdError::BufferTooSmall {
+            what: "buffer (bytes)",
+            len: capacity,
+            needed,
+        }
+        .into());
+    }
+    if buffer.is_null() {
+        return Err(FfiError::Null("buffer".into()));
+    }
+    // SAFETY: `buffer` is non-NULL and writable for `capacity` >= `needed` bytes (caller);
+    // u8 needs no alignment, and the slice is the only access to it during the call.
+    let out = unsafe { std::slice::from_raw_parts_mut(buffer.cast::<u8>(), needed) };
+    let mut dst: &mut [u8] = out;
+    save(&mut dst)?;
+    Ok(())
+}
+
+/// The `size` bytes at `data`, checked: the input of the load-from-buffer exports.
+///
+/// # Safety
+/// `data` is NULL or readable for `size` bytes, not written during the call.
+unsafe fn input_bytes<'a>(data: *const c_void, size: usize) -> Result<&'a [u8], FfiError> {
+    if data.is_null() {
+        return Err(FfiError::Null("data".into()));
+    }
+    if size > isize::MAX as usize {
+        return Err(FfiError::InvalidArgument(format!(
+            "size {size} exceeds the address space"
+        )));
+    }
+    // SAFETY: `data` is non-NULL, readable for `size` <= isize::MAX bytes and not written
+    // during the call (caller); u8 needs no alignment.
+    Ok(unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size) })
+}
+
+/// The bytes of the file `path`, an I/O error naming it and `what` was read.
+fn read_file(path: &std::path::Path, what: &str) -> Result<Vec<u8>, NbhdError> {
+    std::fs::read(path).map_err(|e| {
+        NbhdError::io(
+            format!("reading the saved {what} from {}", path.display()),
+            &e,
+        )
+    })
 }
 
 /// The tree saved in exactly `bytes`, of the scalar type its header names.
@@ -107,25 +171,16 @@ pub unsafe extern "C" fn nbhd_tree_save_to_buffer(
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
         let needed = with_tree!(&tree.inner, t => t.saved_len());
-        // SAFETY: `size` was checked by `init_out`.
-        unsafe { size.write(needed) };
-        if capacity < needed {
-            return Err(NbhdError::BufferTooSmall {
-                what: "buffer (bytes)",
-                len: capacity,
+        // SAFETY: `size` was checked by `init_out`; `buffer` is as the caller describes.
+        unsafe {
+            into_buffer(
+                size,
                 needed,
-            }
-            .into());
+                buffer,
+                capacity,
+                |dst| with_tree!(&tree.inner, t => t.save(dst)),
+            )
         }
-        if buffer.is_null() {
-            return Err(FfiError::Null("buffer".into()));
-        }
-        // SAFETY: `buffer` is non-NULL and writable for `capacity` >= `needed` bytes (caller);
-        // u8 needs no alignment, and the slice is the only access to it during the call.
-        let out = unsafe { std::slice::from_raw_parts_mut(buffer.cast::<u8>(), needed) };
-        let mut dst: &mut [u8] = out;
-        with_tree!(&tree.inner, t => t.save(&mut dst))?;
-        Ok(())
     })
 }
 
@@ -160,12 +215,7 @@ pub unsafe extern "C" fn nbhd_tree_load(
         let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
         // SAFETY: `path` is NULL or NUL-terminated (caller).
         let path = unsafe { read_path(path) }?;
-        let bytes = std::fs::read(&path).map_err(|e| {
-            NbhdError::io(
-                format!("reading the saved tree from {}", path.display()),
-                &e,
-            )
-        })?;
+        let bytes = read_file(&path, "tree")?;
         let inner = load_any(&bytes)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out(out, inner) };
@@ -194,20 +244,164 @@ pub unsafe extern "C" fn nbhd_tree_load_from_buffer(
     guard("nbhd_tree_load_from_buffer", || {
         // SAFETY: `out_tree` is NULL or writable (caller).
         let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
-        if data.is_null() {
-            return Err(FfiError::Null("data".into()));
-        }
-        if size > isize::MAX as usize {
-            return Err(FfiError::InvalidArgument(format!(
-                "size {size} exceeds the address space"
-            )));
-        }
-        // SAFETY: `data` is non-NULL, readable for `size` <= isize::MAX bytes and not written
-        // during the call (caller); u8 needs no alignment.
-        let bytes = unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size) };
+        // SAFETY: `data` is NULL or readable for `size` bytes, not written (caller).
+        let bytes = unsafe { input_bytes(data, size) }?;
         let inner = load_any(bytes)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out(out, inner) };
+        Ok(())
+    })
+}
+
+/// The dynamic tree saved in exactly `bytes`, of the scalar type its header names.
+fn load_any_dynamic(bytes: &[u8]) -> Result<AnyDynamic, NbhdError> {
+    Ok(match SavedDynamicInfo::from_bytes(bytes)?.scalar {
+        ScalarType::F32 => AnyDynamic::F32(DynamicKdTree::from_bytes(bytes)?),
+        ScalarType::F64 => AnyDynamic::F64(DynamicKdTree::from_bytes(bytes)?),
+    })
+}
+
+/// Stores a new dynamic-tree handle for `inner` in `out`.
+///
+/// # Safety
+/// `out` was checked by `init_out`.
+unsafe fn hand_out_dynamic(out: *mut *mut nbhd_dynamic_tree, inner: AnyDynamic) {
+    let handle = Box::into_raw(Box::new(nbhd_dynamic_tree { inner }));
+    // SAFETY: `out` is non-NULL, aligned and writable (checked by the caller); the handle is a
+    // fresh Box the C caller now owns.
+    unsafe { out.write(handle) };
+}
+
+/// Writes the dynamic tree `tree` to the file `path` (created, or truncated if it exists) in
+/// the saved dynamic-tree format (docs/tree-file-format.md, "Dynamic trees"): a versioned
+/// header with checksums, the index bitmaps, the kept coordinates and every static tree of the
+/// forest as built. nbhd_dynamic_load reads it back into a dynamic tree that answers every
+/// query exactly as `tree` does and grows and shrinks the same way.
+///
+/// Errors: NULL_POINTER (`tree`, `path`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
+/// `path`; off Unix, a `path` that is not UTF-8), IO_ERROR (the file cannot be created or
+/// written; the message names it and gives the system's reason).
+///
+/// # Safety
+/// `tree` must be NULL or a live handle not being changed by another thread; `path` NULL or a
+/// NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_save(
+    tree: *const nbhd_dynamic_tree,
+    path: *const c_char,
+) -> nbhd_status {
+    guard("nbhd_dynamic_save", || {
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: `path` is NULL or NUL-terminated (caller).
+        let path = unsafe { read_path(path) }?;
+        with_dynamic!(&tree.inner, t => t.save_file(&path))?;
+        Ok(())
+    })
+}
+
+/// Writes `tree` in the saved dynamic-tree format into the caller's `buffer` of `capacity`
+/// bytes, and the number of bytes it takes to `*size` — also when the buffer is too small, so
+/// a first call with `capacity` 0 (and `buffer` NULL) asks for the size. The bytes are those
+/// nbhd_dynamic_save writes; nbhd_dynamic_load_from_buffer reads them.
+///
+/// Errors: NULL_POINTER (`tree`, `size`, or `buffer` when `capacity` is large enough),
+/// MISALIGNED_POINTER, BUFFER_TOO_SMALL (`capacity` < `*size`; nothing is written to
+/// `buffer`).
+///
+/// # Safety
+/// `tree` must be NULL or a live handle not being changed by another thread; `buffer` NULL or
+/// writable for `capacity` bytes; `size` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_save_to_buffer(
+    tree: *const nbhd_dynamic_tree,
+    buffer: *mut c_void,
+    capacity: usize,
+    size: *mut usize,
+) -> nbhd_status {
+    guard("nbhd_dynamic_save_to_buffer", || {
+        // SAFETY: `size` is NULL or writable (caller).
+        let size = unsafe { init_out(size, "size", 0) }?;
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        let needed = with_dynamic!(&tree.inner, t => t.saved_len());
+        // SAFETY: `size` was checked by `init_out`; `buffer` is as the caller describes.
+        unsafe {
+            into_buffer(
+                size,
+                needed,
+                buffer,
+                capacity,
+                |dst| with_dynamic!(&tree.inner, t => t.save(dst)),
+            )
+        }
+    })
+}
+
+/// Loads the dynamic tree saved in the file `path` (by nbhd_dynamic_save or
+/// nbhd_dynamic_save_to_buffer) and stores a new handle in `*out_tree`. The tree has the
+/// scalar type it was saved with (nbhd_dynamic_tree_stats tells it), answers every query
+/// exactly as the saved one did, and continues its indices where the saved one stopped.
+///
+/// Nothing in the file is trusted: the header, every static tree and what spans them (index
+/// ranges, bitmaps, kept coordinates, live count) are checked before a tree is handed out. On
+/// any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
+///
+/// Errors: NULL_POINTER (`path`, `out_tree`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
+/// `path`; off Unix, not UTF-8), IO_ERROR (the file cannot be read; the message names it),
+/// FORMAT_MISMATCH (not a saved nbhd tree, a saved *static* tree, or one of another format
+/// version or byte order: the message names the file's value and this library's),
+/// CORRUPT_DATA (truncated, followed by other bytes, a checksum that does not match, an
+/// inconsistent field, static tree or cross-tree fact: the message says which).
+///
+/// Ownership: the caller owns `*out_tree` and frees it with nbhd_dynamic_free.
+///
+/// # Safety
+/// `path` must be NULL or a NUL-terminated string; `out_tree` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_load(
+    path: *const c_char,
+    out_tree: *mut *mut nbhd_dynamic_tree,
+) -> nbhd_status {
+    guard("nbhd_dynamic_load", || {
+        // SAFETY: `out_tree` is NULL or writable (caller).
+        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
+        // SAFETY: `path` is NULL or NUL-terminated (caller).
+        let path = unsafe { read_path(path) }?;
+        let bytes = read_file(&path, "dynamic tree")?;
+        let inner = load_any_dynamic(&bytes)?;
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out_dynamic(out, inner) };
+        Ok(())
+    })
+}
+
+/// Loads the dynamic tree saved in the `size` bytes at `data` (as
+/// nbhd_dynamic_save_to_buffer wrote them) and stores a new handle in `*out_tree`. The bytes
+/// are copied: `data` may be freed as soon as this returns. Checks and errors as
+/// nbhd_dynamic_load, without IO_ERROR: NULL_POINTER (`data`, `out_tree`),
+/// MISALIGNED_POINTER, INVALID_ARGUMENT (`size` above PTRDIFF_MAX), FORMAT_MISMATCH,
+/// CORRUPT_DATA. On any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
+///
+/// Ownership: the caller owns `*out_tree` and frees it with nbhd_dynamic_free.
+///
+/// # Safety
+/// `data` must be NULL or readable for `size` bytes, not written during the call; `out_tree`
+/// NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_load_from_buffer(
+    data: *const c_void,
+    size: usize,
+    out_tree: *mut *mut nbhd_dynamic_tree,
+) -> nbhd_status {
+    guard("nbhd_dynamic_load_from_buffer", || {
+        // SAFETY: `out_tree` is NULL or writable (caller).
+        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
+        // SAFETY: `data` is NULL or readable for `size` bytes, not written (caller).
+        let bytes = unsafe { input_bytes(data, size) }?;
+        let inner = load_any_dynamic(bytes)?;
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out_dynamic(out, inner) };
         Ok(())
     })
 }

@@ -217,6 +217,7 @@ impl FfiError {
                 NbhdError::Io { .. } => S::IoError,
                 NbhdError::SavedTree(e) => match e {
                     SavedTreeError::NotATree { .. }
+                    | SavedTreeError::OtherKind { .. }
                     | SavedTreeError::ByteOrder { .. }
                     | SavedTreeError::FormatVersion { .. }
                     | SavedTreeError::ScalarType { .. } => S::FormatMismatch,

@@ -22,7 +22,7 @@ mod neighborhoods;
 mod node;
 pub mod options;
 mod part;
-mod persist;
+pub(crate) mod persist;
 mod presorted;
 mod range;
 mod search;

@@ -26,12 +26,19 @@ use crate::scalar::{Scalar, ScalarType};
 
 /// The first 8 bytes of a saved tree.
 pub const MAGIC: [u8; 8] = *b"NBHDTREE";
+/// The first 8 bytes of a saved dynamic tree (`src/dynamic/persist.rs`): known here so that
+/// loading one as a static tree names what it is.
+pub(crate) const FOREST_MAGIC: [u8; 8] = *b"NBHDFRST";
+/// What a file of each magic holds, for [`SavedTreeError::OtherKind`].
+pub(crate) const STATIC_KIND: &str = "a static tree (NBHDTREE)";
+/// See [`STATIC_KIND`].
+pub(crate) const DYNAMIC_KIND: &str = "a dynamic tree (NBHDFRST)";
 /// The format version this library writes and reads.
 pub const FORMAT_VERSION: u32 = 1;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 128;
 /// Written in the machine's byte order: its bytes tell the reader the file's byte order.
-const BYTE_ORDER_MARK: u32 = 0x0A0B_0C0D;
+pub(crate) const BYTE_ORDER_MARK: u32 = 0x0A0B_0C0D;
 /// Where the header checksum sits (it covers the bytes before it).
 const HEADER_CRC_AT: usize = 120;
 
@@ -70,11 +77,11 @@ pub struct LoadOptions {
     pub dim: Option<usize>,
 }
 
-fn invalid(what: impl Into<String>) -> NbhdError {
+pub(crate) fn invalid(what: impl Into<String>) -> NbhdError {
     SavedTreeError::Invalid(what.into()).into()
 }
 
-fn this_machine() -> &'static str {
+pub(crate) fn this_machine() -> &'static str {
     if cfg!(target_endian = "little") {
         "little-endian"
     } else {
@@ -82,7 +89,7 @@ fn this_machine() -> &'static str {
     }
 }
 
-fn other_order() -> &'static str {
+pub(crate) fn other_order() -> &'static str {
     if cfg!(target_endian = "little") {
         "big-endian"
     } else {
@@ -90,24 +97,24 @@ fn other_order() -> &'static str {
     }
 }
 
-fn u32_at(b: &[u8], at: usize) -> u32 {
+pub(crate) fn u32_at(b: &[u8], at: usize) -> u32 {
     u32::from_ne_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
 
-fn u64_at(b: &[u8], at: usize) -> u64 {
+pub(crate) fn u64_at(b: &[u8], at: usize) -> u64 {
     let mut w = [0u8; 8];
     w.copy_from_slice(&b[at..at + 8]);
     u64::from_ne_bytes(w)
 }
 
-fn library_version() -> u32 {
+pub(crate) fn library_version() -> u32 {
     let part = |s: &str| s.parse::<u32>().unwrap_or(0);
     part(env!("CARGO_PKG_VERSION_MAJOR")) * 1_000_000
         + part(env!("CARGO_PKG_VERSION_MINOR")) * 1_000
         + part(env!("CARGO_PKG_VERSION_PATCH"))
 }
 
-fn pivot_code(p: PivotPolicy) -> u8 {
+pub(crate) fn pivot_code(p: PivotPolicy) -> u8 {
     match p {
         PivotPolicy::CyclicMedian => 0,
         PivotPolicy::SpreadMedian => 1,
@@ -116,7 +123,7 @@ fn pivot_code(p: PivotPolicy) -> u8 {
     }
 }
 
-fn median_code(m: MedianAlgorithm) -> u8 {
+pub(crate) fn median_code(m: MedianAlgorithm) -> u8 {
     match m {
         MedianAlgorithm::Presorted => 0,
         MedianAlgorithm::Sort => 1,
@@ -126,14 +133,14 @@ fn median_code(m: MedianAlgorithm) -> u8 {
     }
 }
 
-fn non_finite_code(p: NonFinitePolicy) -> u8 {
+pub(crate) fn non_finite_code(p: NonFinitePolicy) -> u8 {
     match p {
         NonFinitePolicy::Reject => 0,
         NonFinitePolicy::Skip => 1,
     }
 }
 
-fn scalar_name(s: ScalarType) -> &'static str {
+pub(crate) fn scalar_name(s: ScalarType) -> &'static str {
     match s {
         ScalarType::F32 => "f32",
         ScalarType::F64 => "f64",
@@ -141,7 +148,7 @@ fn scalar_name(s: ScalarType) -> &'static str {
 }
 
 /// Rounds up to a multiple of 8 (the payload's sections start 8-byte aligned).
-fn pad8(n: u64) -> Option<u64> {
+pub(crate) fn pad8(n: u64) -> Option<u64> {
     n.checked_add(7).map(|v| v & !7)
 }
 
@@ -180,69 +187,165 @@ impl Sections {
     }
 }
 
+/// One kind of saved tree: its magic and format version, and the other kind's magic, so that
+/// each loader names what it was given.
+pub(crate) struct Kind {
+    pub magic: [u8; 8],
+    pub name: &'static str,
+    pub version: u32,
+    pub other_magic: [u8; 8],
+    pub other_name: &'static str,
+}
+
+/// A saved static tree.
+pub(crate) const STATIC: Kind = Kind {
+    magic: MAGIC,
+    name: STATIC_KIND,
+    version: FORMAT_VERSION,
+    other_magic: FOREST_MAGIC,
+    other_name: DYNAMIC_KIND,
+};
+
+/// The nbhd version that wrote a header, as `(major, minor, patch)`.
+pub(crate) fn written_by(h: &[u8]) -> (u32, u32, u32) {
+    let w = u32_at(h, 20);
+    (w / 1_000_000, w / 1_000 % 1_000, w % 1_000)
+}
+
+/// The checks every saved tree's header starts with, in order: magic (the other kind named as
+/// such), length, byte order, format version, header CRC-32 (at byte 120), byte-order mark,
+/// header length. Returns the header's bytes.
+pub(crate) fn check_start<'a>(bytes: &'a [u8], kind: &Kind) -> Result<&'a [u8]> {
+    let head = &bytes[..bytes.len().min(8)];
+    if head == kind.other_magic {
+        return Err(SavedTreeError::OtherKind {
+            file: kind.other_name,
+            expected: kind.name,
+        }
+        .into());
+    }
+    if head != &kind.magic[..head.len()] {
+        return Err(SavedTreeError::NotATree {
+            found: head.to_vec(),
+            expected: if kind.magic == MAGIC {
+                "NBHDTREE"
+            } else {
+                "NBHDFRST"
+            },
+        }
+        .into());
+    }
+    if bytes.len() < HEADER_LEN {
+        return Err(SavedTreeError::Truncated {
+            needed: HEADER_LEN as u64,
+            available: bytes.len() as u64,
+        }
+        .into());
+    }
+    let h = &bytes[..HEADER_LEN];
+    let bom = u32_at(h, 8);
+    if bom == BYTE_ORDER_MARK.swap_bytes() {
+        return Err(SavedTreeError::ByteOrder {
+            file: other_order(),
+            machine: this_machine(),
+        }
+        .into());
+    }
+    let version = u32_at(h, 12);
+    if version != kind.version && bom == BYTE_ORDER_MARK {
+        // Another version may lay its header out differently: its checksum cannot be
+        // checked here, and the version is what differs.
+        let (a, b, c) = written_by(h);
+        return Err(SavedTreeError::FormatVersion {
+            file: version,
+            supported: kind.version,
+            written_by: format!("{a}.{b}.{c}"),
+        }
+        .into());
+    }
+    let stored_crc = u32_at(h, HEADER_CRC_AT);
+    let crc = crc32fast::hash(&h[..HEADER_CRC_AT]);
+    if crc != stored_crc {
+        return Err(SavedTreeError::Checksum {
+            part: "header",
+            stored: stored_crc,
+            computed: crc,
+        }
+        .into());
+    }
+    if bom != BYTE_ORDER_MARK {
+        return Err(invalid(format!("byte-order mark {bom:#010x}")));
+    }
+    let header_len = u32_at(h, 16);
+    if header_len as usize != HEADER_LEN {
+        return Err(invalid(format!(
+            "header length {header_len} (format {} has {HEADER_LEN})",
+            kind.version
+        )));
+    }
+    Ok(h)
+}
+
+/// Refuses `have` bytes for a saved tree of `total` bytes: truncated, or followed by others.
+pub(crate) fn check_len(have: u64, total: u64) -> Result<()> {
+    if have < total {
+        return Err(SavedTreeError::Truncated {
+            needed: total,
+            available: have,
+        }
+        .into());
+    }
+    if have > total {
+        return Err(invalid(format!(
+            "{} bytes follow the end of the tree",
+            have - total
+        )));
+    }
+    Ok(())
+}
+
+/// Reads the payload of a saved tree of `total` bytes from `r` (the header read), as it
+/// arrives — never reserved from the declared length, so a header that lies about it costs
+/// what the input really holds.
+pub(crate) fn read_payload<R: Read>(r: &mut R, total: u64, context: &str) -> Result<Vec<u8>> {
+    let declared = (total - HEADER_LEN as u64) as usize;
+    let mut payload = Vec::new();
+    loop {
+        let start = payload.len();
+        let step = (declared - start).min(READ_STEP);
+        if step == 0 {
+            break;
+        }
+        payload.resize(start + step, 0);
+        let got = read_up_to(r, &mut payload[start..]).map_err(|e| NbhdError::io(context, &e))?;
+        payload.truncate(start + got);
+        if got < step {
+            break;
+        }
+    }
+    check_len((HEADER_LEN + payload.len()) as u64, total)?;
+    Ok(payload)
+}
+
+/// Gives an I/O error of a save the file's context.
+pub(crate) fn in_file(e: NbhdError, context: String) -> NbhdError {
+    match e {
+        NbhdError::Io { kind, message, .. } => NbhdError::Io {
+            context,
+            kind,
+            message,
+        },
+        e => e,
+    }
+}
+
 impl SavedTreeInfo {
     /// Reads and checks the header at the start of `bytes` (the payload need not follow):
     /// magic, byte order, format version, header checksum and every field's range.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
-        let head = &bytes[..bytes.len().min(MAGIC.len())];
-        if head != &MAGIC[..head.len()] {
-            return Err(SavedTreeError::NotATree {
-                found: head.to_vec(),
-            }
-            .into());
-        }
-        if bytes.len() < HEADER_LEN {
-            return Err(SavedTreeError::Truncated {
-                needed: HEADER_LEN as u64,
-                available: bytes.len() as u64,
-            }
-            .into());
-        }
-        let h = &bytes[..HEADER_LEN];
-        let bom = u32_at(h, 8);
-        if bom == BYTE_ORDER_MARK.swap_bytes() {
-            return Err(SavedTreeError::ByteOrder {
-                file: other_order(),
-                machine: this_machine(),
-            }
-            .into());
-        }
+        let h = check_start(bytes, &STATIC)?;
         let version = u32_at(h, 12);
-        let written = u32_at(h, 20);
-        let written_by = (
-            written / 1_000_000,
-            written / 1_000 % 1_000,
-            written % 1_000,
-        );
-        let stored_crc = u32_at(h, HEADER_CRC_AT);
-        let crc = crc32fast::hash(&h[..HEADER_CRC_AT]);
-        if version != FORMAT_VERSION && bom == BYTE_ORDER_MARK {
-            // Another version may lay its header out differently: its checksum cannot be
-            // checked here, and the version is what differs.
-            return Err(SavedTreeError::FormatVersion {
-                file: version,
-                supported: FORMAT_VERSION,
-                written_by: format!("{}.{}.{}", written_by.0, written_by.1, written_by.2),
-            }
-            .into());
-        }
-        if crc != stored_crc {
-            return Err(SavedTreeError::Checksum {
-                part: "header",
-                stored: stored_crc,
-                computed: crc,
-            }
-            .into());
-        }
-        if bom != BYTE_ORDER_MARK {
-            return Err(invalid(format!("byte-order mark {bom:#010x}")));
-        }
-        let header_len = u32_at(h, 16);
-        if header_len as usize != HEADER_LEN {
-            return Err(invalid(format!(
-                "header length {header_len} (format {FORMAT_VERSION} has {HEADER_LEN})"
-            )));
-        }
+        let written_by = written_by(h);
         if u32_at(h, 28) != 0 || u32_at(h, 100) != 0 || u32_at(h, 124) != 0 {
             return Err(invalid("a reserved header field is not zero"));
         }
@@ -379,7 +482,7 @@ impl SavedTreeInfo {
 }
 
 /// Bytes of a scalar, in the machine's order.
-fn scalar_bytes<T: Scalar>(v: T, out: &mut Vec<u8>) {
+pub(crate) fn scalar_bytes<T: Scalar>(v: T, out: &mut Vec<u8>) {
     match T::TYPE {
         // `to_f64` is exact and an f32 converted to f64 converts back to itself.
         ScalarType::F32 => out.extend_from_slice(&(v.to_f64() as f32).to_ne_bytes()),
@@ -388,7 +491,7 @@ fn scalar_bytes<T: Scalar>(v: T, out: &mut Vec<u8>) {
 }
 
 /// Most bytes a load from a reader asks for at once (and reserves before they arrive).
-const READ_STEP: usize = 16 << 20;
+pub(crate) const READ_STEP: usize = 16 << 20;
 
 /// Bytes handed to the sink at a time when a tree is written.
 const CHUNK: usize = 1 << 16;
@@ -525,14 +628,7 @@ impl<T: Scalar> KdTree<T> {
         let context = || format!("writing the saved tree to {}", path.display());
         let file = std::fs::File::create(path).map_err(|e| NbhdError::io(context(), &e))?;
         self.save(std::io::BufWriter::with_capacity(1 << 20, file))
-            .map_err(|e| match e {
-                NbhdError::Io { kind, message, .. } => NbhdError::Io {
-                    context: context(),
-                    kind,
-                    message,
-                },
-                e => e,
-            })
+            .map_err(|e| in_file(e, context()))
     }
 
     /// Loads a tree saved by [`KdTree::save`] from exactly `bytes`.
@@ -549,20 +645,7 @@ impl<T: Scalar> KdTree<T> {
     pub fn from_bytes_with(bytes: &[u8], options: &LoadOptions) -> Result<Self> {
         let info = SavedTreeInfo::from_bytes(bytes)?;
         info.expect::<T>(options)?;
-        let have = bytes.len() as u64;
-        if have < info.total_len {
-            return Err(SavedTreeError::Truncated {
-                needed: info.total_len,
-                available: have,
-            }
-            .into());
-        }
-        if have > info.total_len {
-            return Err(invalid(format!(
-                "{} bytes follow the end of the tree",
-                have - info.total_len
-            )));
-        }
+        check_len(bytes.len() as u64, info.total_len)?;
         Self::from_payload(&info, &bytes[HEADER_LEN..])
     }
 
@@ -580,31 +663,7 @@ impl<T: Scalar> KdTree<T> {
         let got = read_up_to(&mut r, &mut header).map_err(|e| NbhdError::io(context, &e))?;
         let info = SavedTreeInfo::from_bytes(&header[..got])?;
         info.expect::<T>(options)?;
-        // The payload is read as it arrives, never reserved from the declared length: a
-        // header that lies about it costs what the input really holds.
-        let declared = (info.total_len - HEADER_LEN as u64) as usize;
-        let mut payload = Vec::new();
-        loop {
-            let start = payload.len();
-            let step = (declared - start).min(READ_STEP);
-            if step == 0 {
-                break;
-            }
-            payload.resize(start + step, 0);
-            let got = read_up_to(&mut r, &mut payload[start..])
-                .map_err(|e| NbhdError::io(context, &e))?;
-            payload.truncate(start + got);
-            if got < step {
-                break;
-            }
-        }
-        if payload.len() < declared {
-            return Err(SavedTreeError::Truncated {
-                needed: info.total_len,
-                available: (HEADER_LEN + payload.len()) as u64,
-            }
-            .into());
-        }
+        let payload = read_payload(&mut r, info.total_len, context)?;
         Self::from_payload(&info, &payload)
     }
 
@@ -833,7 +892,7 @@ impl<T: Scalar> KdTree<T> {
 }
 
 /// Reads until `buf` is full or `r` ends; returns the bytes read.
-fn read_up_to<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<usize> {
+pub(crate) fn read_up_to<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<usize> {
     let mut got = 0;
     while got < buf.len() {
         match r.read(&mut buf[got..]) {

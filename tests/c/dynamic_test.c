@@ -3,11 +3,18 @@
  * table compared after each step with a static tree (nbhd_tree_build) over the live points
  * (removed points given as NaN and skipped), which must answer identically; and every status
  * of bad input (unknown, removed, skipped and repeated indices, NaN points, zero points,
- * absurd sizes, NULL and misaligned pointers), each leaving the tree unchanged.
+ * absurd sizes, NULL and misaligned pointers), each leaving the tree unchanged. Saving and
+ * loading: after every step the tree saved to a buffer loads back into one that answers as the
+ * static tree too (and from time to time the loaded tree carries on in its place); a file
+ * round trip in the scratch directory argv[1]; and every refusal: NULL arguments, a small
+ * buffer, a saved static tree (FORMAT_MISMATCH naming it), truncation and a flipped byte
+ * (CORRUPT_DATA), a missing file (IO_ERROR).
  */
 #include <math.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "check.h"
 
@@ -256,7 +263,127 @@ static void test_interleaved(int f32) {
             while (n > 0) live[victims[--n]] = 0;
         }
         compare(dyn, f32);
+        {
+            /* saved and loaded back: the same answers; sometimes it carries on instead */
+            size_t size = 0;
+            unsigned char *buf;
+            nbhd_dynamic_tree *back = NULL;
+            CHECK_STATUS(nbhd_dynamic_save_to_buffer(dyn, NULL, 0, &size),
+                         NBHD_STATUS_BUFFER_TOO_SMALL);
+            buf = (unsigned char *)malloc(size);
+            CHECK(buf != NULL);
+            if (buf == NULL) continue;
+            CHECK_STATUS(nbhd_dynamic_save_to_buffer(dyn, buf, size, &size), NBHD_STATUS_OK);
+            CHECK_STATUS(nbhd_dynamic_load_from_buffer(buf, size, &back), NBHD_STATUS_OK);
+            free(buf);
+            if (back == NULL) continue;
+            compare(back, f32);
+            if (step % 5 == 4) {
+                nbhd_dynamic_free(dyn);
+                dyn = back;
+            } else {
+                nbhd_dynamic_free(back);
+            }
+        }
     }
+    nbhd_dynamic_free(dyn);
+}
+
+/* Saving and loading: a file round trip and every refusal. */
+static void test_saved(const char *dir) {
+    char path[4096];
+    double two[2 * DIM] = {0, 0, 0, 1, 1, 1};
+    nbhd_points p = {two, 2, DIM, 0, NBHD_SCALAR_TYPE_F64};
+    nbhd_dynamic_tree *dyn = NULL, *back = (nbhd_dynamic_tree *)two;
+    nbhd_dynamic_stats sa, sb;
+    nbhd_tree *st = NULL;
+    unsigned char *buf, *sbuf;
+    size_t size = 0, ssize = 0, count = 0;
+    uint32_t ids[4];
+    double q[DIM] = {0.9, 0.9, 0.9};
+    CHECK_STATUS(nbhd_dynamic_create(DIM, NBHD_SCALAR_TYPE_F64, NULL, &dyn), NBHD_STATUS_OK);
+    if (dyn == NULL) return;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, NULL), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, NULL), NBHD_STATUS_OK);
+    ids[0] = 1;
+    CHECK_STATUS(nbhd_dynamic_remove(dyn, ids, 1), NBHD_STATUS_OK);
+
+    /* a file round trip */
+    snprintf(path, sizeof path, "%s/map.nbhdfrst", dir);
+    CHECK_STATUS(nbhd_dynamic_save(dyn, path), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_dynamic_load(path, &back), NBHD_STATUS_OK);
+    CHECK(back != NULL);
+    if (back != NULL) {
+        CHECK_STATUS(nbhd_dynamic_tree_stats(dyn, &sa), NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_dynamic_tree_stats(back, &sb), NBHD_STATUS_OK);
+        CHECK(sa.live == sb.live && sa.next_index == sb.next_index && sa.trees == sb.trees &&
+              sa.removed_held == sb.removed_held && sb.scalar_type == NBHD_SCALAR_TYPE_F64);
+        CHECK_STATUS(nbhd_dynamic_knn(back, q, 2, ids, NULL, 4, &count), NBHD_STATUS_OK);
+        /* (1,1,1) is held by indices 1 (removed) and 3 */
+        CHECK(count == 2 && ids[0] == 3 && ids[1] == 0);
+        CHECK_STATUS(nbhd_dynamic_knn_index(back, 1, false, 1, ids, NULL, 4, &count),
+                     NBHD_STATUS_REMOVED_POINT);
+        CHECK_STATUS(nbhd_dynamic_insert(back, &p, ids), NBHD_STATUS_OK);
+        CHECK(ids[0] == 4);
+        nbhd_dynamic_free(back);
+    }
+
+    /* NULL arguments, a small buffer, paths */
+    CHECK_STATUS(nbhd_dynamic_save(NULL, path), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_save(dyn, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_save(dyn, ""), NBHD_STATUS_INVALID_ARGUMENT);
+    snprintf(path, sizeof path, "%s/no/such/dir/map.nbhdfrst", dir);
+    CHECK_STATUS(nbhd_dynamic_save(dyn, path), NBHD_STATUS_IO_ERROR);
+    back = (nbhd_dynamic_tree *)two;
+    CHECK_STATUS(nbhd_dynamic_load(path, &back), NBHD_STATUS_IO_ERROR);
+    CHECK(back == NULL);
+    CHECK_MESSAGE("no/such/dir");
+    CHECK_STATUS(nbhd_dynamic_load(NULL, &back), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_save_to_buffer(dyn, NULL, 0, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_save_to_buffer(NULL, NULL, 0, &size), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_save_to_buffer(dyn, NULL, 0, &size), NBHD_STATUS_BUFFER_TOO_SMALL);
+    CHECK(size > 128);
+    buf = (unsigned char *)malloc(size);
+    CHECK(buf != NULL);
+    if (buf == NULL) return;
+    CHECK_STATUS(nbhd_dynamic_save_to_buffer(dyn, buf, size - 1, &size),
+                 NBHD_STATUS_BUFFER_TOO_SMALL);
+    CHECK_STATUS(nbhd_dynamic_save_to_buffer(dyn, NULL, size, &size), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_save_to_buffer(dyn, buf, size, &size), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_dynamic_load_from_buffer(NULL, size, &back), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_load_from_buffer(buf, size, NULL), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_dynamic_load_from_buffer(buf, SIZE_MAX, &back),
+                 NBHD_STATUS_INVALID_ARGUMENT);
+
+    /* truncated, a flipped byte, a static tree where a dynamic one is asked (and back) */
+    back = (nbhd_dynamic_tree *)two;
+    CHECK_STATUS(nbhd_dynamic_load_from_buffer(buf, size - 8, &back), NBHD_STATUS_CORRUPT_DATA);
+    CHECK(back == NULL);
+    CHECK_MESSAGE("truncated");
+    buf[size - 20] ^= 0x10;
+    CHECK_STATUS(nbhd_dynamic_load_from_buffer(buf, size, &back), NBHD_STATUS_CORRUPT_DATA);
+    CHECK_MESSAGE("CRC-32");
+    buf[size - 20] ^= 0x10;
+    CHECK_STATUS(nbhd_tree_load_from_buffer(buf, size, &st), NBHD_STATUS_FORMAT_MISMATCH);
+    CHECK_MESSAGE("a dynamic tree");
+    CHECK(st == NULL);
+    p.count = 2;
+    CHECK_STATUS(nbhd_tree_build(&p, NULL, &st), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_tree_save_to_buffer(st, NULL, 0, &ssize), NBHD_STATUS_BUFFER_TOO_SMALL);
+    sbuf = (unsigned char *)malloc(ssize);
+    CHECK(sbuf != NULL);
+    if (sbuf != NULL) {
+        CHECK_STATUS(nbhd_tree_save_to_buffer(st, sbuf, ssize, &ssize), NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_dynamic_load_from_buffer(sbuf, ssize, &back),
+                     NBHD_STATUS_FORMAT_MISMATCH);
+        CHECK_MESSAGE("a static tree");
+        CHECK(back == NULL);
+        free(sbuf);
+    }
+    nbhd_tree_free(st);
+    CHECK_STATUS(nbhd_dynamic_load_from_buffer(buf, size, &back), NBHD_STATUS_OK);
+    nbhd_dynamic_free(back);
+    free(buf);
     nbhd_dynamic_free(dyn);
 }
 
@@ -374,9 +501,10 @@ static void test_errors(void) {
     nbhd_dynamic_free(dyn);
 }
 
-int main(void) {
+int main(int argc, char **argv) {
     make_pool();
     test_errors();
+    test_saved(argc > 1 ? argv[1] : ".");
     test_interleaved(1);
     test_interleaved(0);
     printf("dynamic_test: %d checks, %d failures\n", checks, failures);
