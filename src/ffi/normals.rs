@@ -15,7 +15,7 @@ use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::nbhd_points;
 use crate::error::NbhdError;
 use crate::scalar::ScalarType;
-use crate::smooth::{self, Curvature, NormalEstimate, Neighbors, SmoothOptions};
+use crate::smooth::{self, Curvature, Neighbors, NormalEstimate, SmoothOptions};
 
 /// Options of nbhd_estimate_normals. Start from nbhd_normal_options_default() and change
 /// what you need.
