@@ -501,7 +501,7 @@ pub(crate) fn check_not_degenerate(
     relative: bool,
 ) -> Result<()> {
     let largest = table.max_row_len() + 1;
-    let all_flagged = flagged.is_some_and(|f| table.len() > 0 && f == table.len());
+    let all_flagged = flagged.is_some_and(|f| !table.is_empty() && f == table.len());
     let flagged = flagged.unwrap_or(0);
     if largest < 3 || all_flagged {
         return Err(NbhdError::Degenerate {
