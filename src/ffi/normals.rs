@@ -2,8 +2,8 @@
 //! non-finite policy — nothing of smoothing) and an output description with strides, so that
 //! the normals (and PCL's curvature, the surface variation) are written straight into a
 //! caller's point type such as `pcl::Normal` or `pcl::PointNormal`. The export converts its
-//! arguments and calls [`crate::smooth::smooth_with_progress`] with no step; nothing is
-//! computed here.
+//! arguments and calls [`crate::smooth::estimate_normals_from`] (normals, surface variation and
+//! flags, nothing else); nothing is computed here.
 
 use std::ffi::c_void;
 
@@ -15,7 +15,7 @@ use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::nbhd_points;
 use crate::error::NbhdError;
 use crate::scalar::ScalarType;
-use crate::smooth::{self, Curvature, PointOutput, SmoothOptions};
+use crate::smooth::{self, Curvature, Neighbors, NormalEstimate, SmoothOptions};
 
 /// Options of nbhd_estimate_normals. Start from nbhd_normal_options_default() and change
 /// what you need.
@@ -261,18 +261,18 @@ impl NormalsOut {
     /// # Safety
     /// The arrays must be writable for `outputs.len()` points in the layouts checked by
     /// [`NormalsOut::read`], and no Rust borrow of them may be live.
-    unsafe fn write(&self, outputs: &[PointOutput]) {
+    unsafe fn write(&self, outputs: &[NormalEstimate]) {
         for (i, o) in outputs.iter().enumerate() {
             // SAFETY: forwarded from the caller.
             unsafe {
                 self.normals.write(i, &o.normal.to_array());
                 if let Some(c) = &self.curvature {
-                    c.write(i, &[o.covariance_quotient]);
+                    c.write(i, &[o.surface_variation]);
                 }
             }
         }
         if !self.flags.is_null() {
-            let f: Vec<u8> = outputs.iter().map(|o| o.normal_flags).collect();
+            let f: Vec<u8> = outputs.iter().map(|o| o.flags).collect();
             // SAFETY: `flags` is non-NULL and writable for the points' bytes (caller); it
             // cannot overlap `f`, nbhd's own memory.
             unsafe { std::ptr::copy_nonoverlapping(f.as_ptr(), self.flags, f.len()) };
@@ -317,10 +317,13 @@ pub unsafe extern "C" fn nbhd_estimate_normals(
         let out = unsafe { NormalsOut::read(out, pts.len()) }?;
         // SAFETY: forwarded from the caller.
         let (opts, mut progress) = unsafe { read_options(options) }?;
-        let result = smooth::smooth_with_progress(&pts, &opts, &mut |f, s| progress.report(f, s))?;
+        let result =
+            smooth::estimate_normals_from(&pts, Neighbors::default(), &opts, &mut |f, s| {
+                progress.report(f, s)
+            })?;
         // SAFETY: the arrays are writable for the points in the checked layouts (caller); the
         // input view was dropped in `read_points`, so nothing borrowed overlaps.
-        unsafe { out.write(&result.outputs) };
+        unsafe { out.write(&result.normals) };
         Ok(())
     })
 }

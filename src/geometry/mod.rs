@@ -14,4 +14,4 @@ pub use curvature::{
     directional_curvature, principal_curvatures, DensityForm, PrincipalCurvatures, PrincipalFormula,
 };
 pub use normals::{local_frame, local_frames, LocalFrame};
-pub use orientation::{orient, orient_with_progress, Orientation};
+pub use orientation::{orient, orient_normals_with_progress, orient_with_progress, Orientation};

@@ -84,19 +84,52 @@ pub(crate) fn unit_scale(offsets: impl Iterator<Item = DVec3>) -> f64 {
 }
 
 fn frame_of(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> LocalFrame {
-    let f = unit_scale(offsets.clone());
-    let m = covariance(offsets.map(|d| d * f), count);
+    let (m, f) = scaled_covariance(offsets, count);
     let (values, vectors) = super::eigen::sym_eigen3_fast(m);
+    // the normal and the eigenvalues of the closed form where it is exact, so that a frame and
+    // [`normal_of`] agree bit for bit; the tangent vectors from the Jacobi iteration, the
+    // major one made orthogonal to that normal
+    let closed = super::eigen::sym_eigen3_smallest(m).and_then(|(values, normal)| {
+        let major = (vectors[2] - normal * vectors[2].dot(normal)).try_normalize()?;
+        Some((values, normal, major, normal.cross(major)))
+    });
+    let (values, normal, major, minor) =
+        closed.unwrap_or((values, vectors[0], vectors[2], vectors[1]));
     let (values, flags) = checked_eigenvalues(values, count);
     let values = values / (f * f);
     LocalFrame {
-        normal: vectors[0],
-        minor: vectors[1],
-        major: vectors[2],
+        normal,
+        minor,
+        major,
         eigenvalues: values,
         count: count as u32,
         flags,
     }
+}
+
+/// The covariance of eq. 2.8 of the offsets scaled by [`unit_scale`], and that scale.
+#[inline]
+fn scaled_covariance(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> (DMat3, f64) {
+    let f = unit_scale(offsets.clone());
+    (covariance(offsets.map(|d| d * f), count), f)
+}
+
+/// The normal, the eigenvalues and the `FLAG_*` bits of [`local_frame`] — the same values bit
+/// for bit — without the tangent vectors: the smallest eigenvector in closed form, the Jacobi
+/// iteration only where the closed form declines (close eigenvalues, which include every
+/// flagged case). What normal estimation needs.
+#[inline]
+pub(crate) fn normal_of(
+    offsets: impl Iterator<Item = DVec3> + Clone,
+    count: usize,
+) -> (DVec3, DVec3, u8) {
+    let (m, f) = scaled_covariance(offsets, count);
+    let (values, normal) = super::eigen::sym_eigen3_smallest(m).unwrap_or_else(|| {
+        let (values, vectors) = super::eigen::sym_eigen3_fast(m);
+        (values, vectors[0])
+    });
+    let (values, flags) = checked_eigenvalues(values, count);
+    (normal, values / (f * f), flags)
 }
 
 /// The normal (eq. 2.10), the eigenvalues and the `FLAG_*` bits of the covariance of

@@ -39,7 +39,7 @@ pub fn orient(
 
 /// [`orient`] with a progress callback, called on the calling thread with the fraction of the
 /// orientation done (0 to 1); returning `false` stops with [`NbhdError::Cancelled`] (the
-/// frames are then partly flipped). Only [`Orientation::Propagate`] takes long enough to
+/// frames are then left as they were). Only [`Orientation::Propagate`] takes long enough to
 /// report in between.
 pub fn orient_with_progress(
     points: &[DVec3],
@@ -48,11 +48,35 @@ pub fn orient_with_progress(
     orientation: Orientation,
     progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<()> {
-    check_table(points, table)?;
     if frames.len() != points.len() {
         return Err(NbhdError::InvalidOption {
             name: "frames",
             reason: "one frame per point is needed".into(),
+        });
+    }
+    let mut normals: Vec<DVec3> = frames.par_iter().map(|f| f.normal).collect();
+    orient_normals_with_progress(points, table, &mut normals, orientation, progress)?;
+    frames.par_iter_mut().zip(&normals).for_each(|(f, &n)| {
+        f.normal = n;
+        f.minor = f.normal.cross(f.major);
+    });
+    Ok(())
+}
+
+/// [`orient_with_progress`] of bare unit normals (what normal estimation computes, see
+/// `src/smooth/normals.rs`): only their signs change, exactly as the frames' normals would.
+pub fn orient_normals_with_progress(
+    points: &[DVec3],
+    table: &NeighborTable<f64>,
+    normals: &mut [DVec3],
+    orientation: Orientation,
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Result<()> {
+    check_table(points, table)?;
+    if normals.len() != points.len() {
+        return Err(NbhdError::InvalidOption {
+            name: "normals",
+            reason: "one normal per point is needed".into(),
         });
     }
     let mut report = |f: f64| {
@@ -66,28 +90,32 @@ pub fn orient_with_progress(
     match orientation {
         Orientation::Unoriented => {}
         Orientation::TowardViewpoint(v) => {
-            frames.par_iter_mut().zip(points).for_each(|(f, &p)| {
-                flip(f, f.normal.dot(v - p) >= 0.0);
+            normals.par_iter_mut().zip(points).for_each(|(n, &p)| {
+                flip(n, n.dot(v - p) >= 0.0);
             });
         }
         Orientation::AwayFrom(c) => {
-            frames.par_iter_mut().zip(points).for_each(|(f, &p)| {
-                flip(f, f.normal.dot(p - c) >= 0.0);
+            normals.par_iter_mut().zip(points).for_each(|(n, &p)| {
+                flip(n, n.dot(p - c) >= 0.0);
             });
         }
-        Orientation::Propagate => propagate(points, table, frames, &mut report)?,
+        Orientation::Propagate => {
+            let keep = propagate(points, table, normals, &mut report)?;
+            normals
+                .par_iter_mut()
+                .zip(&keep)
+                .for_each(|(n, &k)| flip(n, k));
+        }
     }
     report(1.0)
 }
 
-/// Keeps the normal's sign if `want_positive`, flips it otherwise, and keeps the tangent frame
-/// right-handed.
+/// Keeps the normal's sign if `want_positive`, flips it otherwise.
 #[inline]
-fn flip(f: &mut LocalFrame, want_positive: bool) {
+fn flip(n: &mut DVec3, want_positive: bool) {
     if !want_positive {
-        f.normal = -f.normal;
+        *n = -*n;
     }
-    f.minor = f.normal.cross(f.major);
 }
 
 /// Bits of an edge's place in the neighbour table inside a [`propagate`] key.
@@ -211,7 +239,7 @@ fn edge_rows(
     table: &NeighborTable<f64>,
     order: &[u32],
     rank: &[u32],
-    frames: &[LocalFrame],
+    normals: &[DVec3],
 ) -> EdgeRows {
     let n = order.len();
     let lens: Vec<u32> = order
@@ -224,10 +252,10 @@ fn edge_rows(
         off.push(off.last().copied().unwrap_or(0) + l as usize);
     }
     // each point's normal and rank side by side: one read per entry
-    let ends: Vec<(glam::Vec3, u32)> = frames
+    let ends: Vec<(glam::Vec3, u32)> = normals
         .par_iter()
         .zip(rank)
-        .map(|(f, &r)| (f.normal.as_vec3(), r))
+        .map(|(n, &r)| (n.as_vec3(), r))
         .collect();
     let m = off[n];
     let to: Vec<AtomicU32> = (0..m).into_par_iter().map(|_| AtomicU32::new(0)).collect();
@@ -323,12 +351,12 @@ fn sweep(
 fn propagate(
     points: &[DVec3],
     table: &NeighborTable<f64>,
-    frames: &mut [LocalFrame],
+    normals: &[DVec3],
     report: &mut dyn FnMut(f64) -> Result<()>,
-) -> Result<()> {
+) -> Result<Vec<bool>> {
     let n = points.len();
     if n == 0 {
-        return Ok(());
+        return Ok(Vec::new());
     }
     if table.total() as u64 > PLACE_MASK {
         return Err(NbhdError::InvalidOption {
@@ -338,7 +366,7 @@ fn propagate(
     }
     let (order, rank) = locality_order(points);
     report(0.05)?;
-    let mut rows = edge_rows(table, &order, &rank, frames);
+    let mut rows = edge_rows(table, &order, &rank, normals);
     report(0.1)?;
     // the ends of the edge a key names, in the locality order: the row of a place is its
     // quotient by k when every row has k entries
@@ -440,10 +468,7 @@ fn propagate(
     // A breadth-first walk from each top decides which normals keep their sign: a normal
     // agrees with its parent's, `⟨±n_parent, n⟩ ≥ 0` (the sign only negates the dot product,
     // exactly).
-    let normal: Vec<DVec3> = order
-        .par_iter()
-        .map(|&i| frames[i as usize].normal)
-        .collect();
+    let normal: Vec<DVec3> = order.par_iter().map(|&i| normals[i as usize]).collect();
     let mut keep = vec![false; n];
     let mut done = vec![false; n];
     let mut queue: Vec<u32> = Vec::with_capacity(n);
@@ -467,11 +492,7 @@ fn propagate(
             }
         }
     }
-    frames
-        .par_iter_mut()
-        .zip(&rank)
-        .for_each(|(f, &r)| flip(f, keep[r as usize]));
-    Ok(())
+    Ok(rank.par_iter().map(|&r| keep[r as usize]).collect())
 }
 
 #[cfg(test)]
@@ -556,6 +577,12 @@ mod tests {
         }
     }
 
+    /// What orienting does to a frame: the normal's sign, then the right-handed tangent frame.
+    fn flip_frame(f: &mut LocalFrame, want_positive: bool) {
+        flip(&mut f.normal, want_positive);
+        f.minor = f.normal.cross(f.major);
+    }
+
     /// The forest of a plain Kruskal over every table entry sorted by key (the definition the
     /// Borůvka rounds must meet), then the same walk from each tree's top point.
     fn kruskal_orientation(
@@ -595,14 +622,14 @@ mod tests {
         let mut done = vec![false; n];
         for seed in top.into_iter().flatten() {
             let up = frames[seed].normal.z >= 0.0;
-            flip(&mut frames[seed], up);
+            flip_frame(&mut frames[seed], up);
             done[seed] = true;
             let mut stack = vec![seed];
             while let Some(i) = stack.pop() {
                 for &j in &adj[i] {
                     if !done[j] {
                         let agree = frames[i].normal.dot(frames[j].normal) >= 0.0;
-                        flip(&mut frames[j], agree);
+                        flip_frame(&mut frames[j], agree);
                         done[j] = true;
                         stack.push(j);
                     }

@@ -33,8 +33,10 @@ use rayon::prelude::*;
 use source::knn_rows;
 pub use source::{Neighbors, SearchMethod};
 
+mod normals;
 pub mod robust;
 pub mod source;
+pub use normals::{estimate_normals, estimate_normals_from, NormalEstimate, NormalsResult};
 pub use robust::{
     smooth_robust, smooth_robust_report, smooth_robust_with_progress, RobustOptions, RobustReport,
 };
@@ -489,18 +491,18 @@ pub(crate) fn scatter_result(
 
 /// Refuses results in which every neighbourhood is degenerate ([`NbhdError::Degenerate`]):
 /// when no row of `table` reaches 3 points with the point itself, or (`flagged`, for
-/// estimates of the geometry alone) when every one of the `outputs` carries a degeneracy
-/// flag. `epsilon` (resolved) and `h` go into the message, with whether ε was relative.
+/// estimates of the geometry alone: how many of the rows' points carry a degeneracy flag) when
+/// every point is flagged. `epsilon` (resolved) and `h` go into the message, with whether ε was relative.
 pub(crate) fn check_not_degenerate(
     table: &NeighborTable<f64>,
-    outputs: Option<&[PointOutput]>,
+    flagged: Option<usize>,
     epsilon: f64,
     h: f64,
     relative: bool,
 ) -> Result<()> {
     let largest = table.max_row_len() + 1;
-    let flagged = outputs.map_or(0, |o| o.iter().filter(|o| o.normal_flags != 0).count());
-    let all_flagged = outputs.is_some_and(|o| !o.is_empty() && flagged == o.len());
+    let all_flagged = flagged.is_some_and(|f| !table.is_empty() && f == table.len());
+    let flagged = flagged.unwrap_or(0);
     if largest < 3 || all_flagged {
         return Err(NbhdError::Degenerate {
             points: table.len(),
@@ -677,7 +679,8 @@ fn smooth_finite(
             report(base + 0.7 * f, Stage::Outputs).is_ok()
         })?;
         if options.steps == 0 {
-            check_not_degenerate(&table, Some(&outputs), eps, h, relative_eps)?;
+            let flagged = outputs.iter().filter(|o| o.normal_flags != 0).count();
+            check_not_degenerate(&table, Some(flagged), eps, h, relative_eps)?;
         }
         outputs
     } else {

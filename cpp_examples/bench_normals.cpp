@@ -1,0 +1,214 @@
+// bench_normals: nbhd_estimate_normals against PCL's NormalEstimation and NormalEstimationOMP,
+// in one process, on the same cloud, in the same run (a benchmark, not a test).
+//
+//   bench_normals [--reps N] [--generated N] [--threads T] [--write FILE] [FILE...]
+//
+// Clouds: a torus (R = 1, tube r = 0.35) of N points, 1,000,000 by default (0 for none), from
+// the generator of bench_neighbors (std::mt19937(1) bits turned into floats by hand); then every
+// FILE, loaded with pcl::io::loadPCDFile<pcl::PointXYZ>, its NaN points dropped.
+//
+// Every method computes, for every point, the normal and PCL's curvature (the surface variation
+// λ0/(λ0+λ1+λ2)) of the covariance of the point and its 15 nearest other points — PCL's
+// setKSearch(16), whose 16 include the point itself — unoriented (nbhd) / toward PCL's default
+// viewpoint at the origin (PCL: a sign flip per point), into a pcl::PointCloud<pcl::Normal>:
+//   nbhd 1T / nbhd T-T    nbhd_estimate_normals, k = 15, epsilon = 1e30 ABSOLUTE (no radius cut),
+//                         threads = 1 / T, writing straight into the pcl::Normal records; the call
+//                         includes nbhd's tree build and search
+//   PCL NE                pcl::NormalEstimation with a pcl::search::KdTree (its build included)
+//   PCL OMP 1T / T-T      pcl::NormalEstimationOMP with setNumberOfThreads(1 / T)
+// Prints the median of N repetitions (default 3) in milliseconds, wall and process CPU time (the
+// CPU time of a one-thread row is the steadier measure on a loaded machine), and for every row
+// the time of the fastest one-thread PCL row over it (> 1: faster than that PCL row), and checks that nbhd's
+// normals agree with PCL's (|cos| > 0.999 for 99% of the points; exit 1 otherwise). T defaults
+// to 2. --write FILE saves the torus as raw little-endian float32 x y z records, so that
+// scripts/bench_normals_open3d.py times Open3D's estimate_normals on the very same points
+// (scripts/bench-normals.sh runs both).
+#include <nbhd.h>
+
+#include <pcl/features/normal_3d.h>
+#include <pcl/features/normal_3d_omp.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+float unit(std::mt19937& rng) { return static_cast<float>(rng() >> 8) * (1.0f / 16777216.0f); }
+
+Cloud::Ptr torus(std::size_t n) {
+    std::mt19937 rng(1);
+    Cloud::Ptr c(new Cloud);
+    c->resize(n);
+    const float R = 1.0f, r = 0.35f, tau = 6.28318530718f;
+    for (std::size_t i = 0; i < n; ++i) {
+        float u = tau * unit(rng), v = tau * unit(rng);
+        (*c)[i].x = (R + r * std::cos(v)) * std::cos(u);
+        (*c)[i].y = (R + r * std::cos(v)) * std::sin(u);
+        (*c)[i].z = r * std::sin(v);
+    }
+    return c;
+}
+
+// Median wall time and median CPU time of the process (all threads) over `reps` runs, in ms. On a
+// shared, loaded machine the CPU time of a one-thread run is the steadier of the two.
+struct Times {
+    double wall, cpu;
+};
+
+Times median_ms(int reps, const std::function<void()>& f) {
+    std::vector<double> w, c;
+    for (int r = 0; r < reps; ++r) {
+        auto a = std::chrono::steady_clock::now();
+        std::clock_t ca = std::clock();
+        f();
+        c.push_back(1000.0 * double(std::clock() - ca) / CLOCKS_PER_SEC);
+        w.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a)
+                        .count());
+    }
+    std::sort(w.begin(), w.end());
+    std::sort(c.begin(), c.end());
+    return {w[w.size() / 2], c[c.size() / 2]};
+}
+
+bool nbhd_normals(const Cloud& c, std::size_t threads, pcl::PointCloud<pcl::Normal>& out) {
+    out.resize(c.size());
+    nbhd_points pts = {c.points.data(), c.size(), 3, sizeof(pcl::PointXYZ), NBHD_SCALAR_TYPE_F32};
+    nbhd_normal_options o = nbhd_normal_options_default();
+    o.k = 15;
+    o.epsilon = 1e30;
+    o.epsilon_units = NBHD_UNITS_ABSOLUTE;
+    o.threads = threads;
+    nbhd_normals_output w = {&out[0].normal_x, sizeof(pcl::Normal), NBHD_SCALAR_TYPE_F32,
+                             &out[0].curvature, sizeof(pcl::Normal), nullptr};
+    if (nbhd_estimate_normals(&pts, &o, &w) != NBHD_STATUS_OK) {
+        std::fprintf(stderr, "nbhd: %s\n", nbhd_last_error_message());
+        return false;
+    }
+    return true;
+}
+
+template <class NE>
+void pcl_normals(const Cloud::Ptr& c, NE& ne, pcl::PointCloud<pcl::Normal>& out) {
+    ne.setInputCloud(c);
+    ne.setSearchMethod(pcl::search::KdTree<pcl::PointXYZ>::Ptr(new pcl::search::KdTree<pcl::PointXYZ>));
+    ne.setKSearch(16);
+    ne.compute(out);
+}
+
+bool bench(const std::string& name, const Cloud::Ptr& c, int reps, int threads) {
+    std::printf("\n%s: %zu points, 16-point neighbourhoods, median of %d\n", name.c_str(), c->size(),
+                reps);
+    pcl::PointCloud<pcl::Normal> ours, ours_t, ref, omp1, ompt;
+    bool ok = true;
+    struct Row {
+        std::string name;
+        Times t;
+        bool pcl_one_thread;
+    };
+    std::vector<Row> rows;
+    rows.push_back({"nbhd 1 thread", median_ms(reps, [&] { ok = nbhd_normals(*c, 1, ours) && ok; }), false});
+    rows.push_back({"nbhd " + std::to_string(threads) + " threads",
+                    median_ms(reps, [&] { ok = nbhd_normals(*c, threads, ours_t) && ok; }), false});
+    rows.push_back({"PCL NormalEstimation", median_ms(reps, [&] {
+                        pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
+                        pcl_normals(c, ne, ref);
+                    }),
+                    true});
+    rows.push_back({"PCL NormalEstimationOMP 1 thread", median_ms(reps, [&] {
+                        pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(1);
+                        pcl_normals(c, ne, omp1);
+                    }),
+                    true});
+    rows.push_back({"PCL NormalEstimationOMP " + std::to_string(threads) + " threads",
+                    median_ms(reps, [&] {
+                        pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(threads);
+                        pcl_normals(c, ne, ompt);
+                    }),
+                    false});
+    double best_wall = 1e300, best_cpu = 1e300;
+    for (const auto& r : rows)
+        if (r.pcl_one_thread) best_wall = std::min(best_wall, r.t.wall), best_cpu = std::min(best_cpu, r.t.cpu);
+    std::printf("| method | wall ms | fastest 1-thread PCL / this (wall) | CPU ms | fastest 1-thread PCL / this (CPU) |\n"
+                "|---|---:|---:|---:|---:|\n");
+    for (const auto& r : rows)
+        std::printf("| %s | %.0f | %.2f | %.0f | %.2f |\n", r.name.c_str(), r.t.wall, best_wall / r.t.wall,
+                    r.t.cpu, best_cpu / r.t.cpu);
+    std::printf("nbhd scaling 1 -> %d threads (wall): %.2fx\n", threads, rows[0].t.wall / rows[1].t.wall);
+
+    std::size_t agree = 0, same = 0, compared = 0;
+    for (std::size_t i = 0; ok && i < c->size(); ++i) {
+        const auto &a = ours[i], &b = ref[i], &t = ours_t[i];
+        same += std::memcmp(&a, &t, 4 * sizeof(float)) == 0 && a.curvature == t.curvature;
+        if (!std::isfinite(b.normal_x)) continue;
+        compared++;
+        double dot = double(a.normal_x) * b.normal_x + double(a.normal_y) * b.normal_y +
+                     double(a.normal_z) * b.normal_z;
+        agree += std::fabs(dot) > 0.999;
+    }
+    std::printf("normals within 2.6 deg of PCL's (up to sign): %zu of %zu; 1- and %d-thread results "
+                "identical: %zu of %zu\n",
+                agree, compared, threads, same, c->size());
+    if (!ok || compared == 0 || agree < compared * 99 / 100 || same != c->size()) {
+        std::fprintf(stderr, "bench_normals: nbhd failed or disagrees with PCL\n");
+        return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    int reps = 3, threads = 2;
+    std::size_t generated = 1000000;
+    std::vector<std::string> files;
+    std::string write;
+    for (int i = 1; i < argc; ++i) {
+        std::string a = argv[i];
+        if ((a == "--reps" || a == "--generated" || a == "--threads" || a == "--write") && i + 1 < argc) {
+            const char* v = argv[++i];
+            if (a == "--write") write = v;
+            else if (a == "--reps") reps = std::max(1, std::atoi(v));
+            else if (a == "--threads") threads = std::max(1, std::atoi(v));
+            else generated = std::strtoull(v, nullptr, 10);
+        } else if (!a.empty() && a[0] == '-') {
+            std::fprintf(stderr, "usage: bench_normals [--reps N] [--generated N] [--threads T] [--write FILE] [FILE...]\n");
+            return 2;
+        } else {
+            files.push_back(a);
+        }
+    }
+    bool ok = true;
+    if (generated > 0) {
+        Cloud::Ptr t = torus(generated);
+        if (!write.empty()) {
+            std::FILE* f = std::fopen(write.c_str(), "wb");
+            if (!f) return 2;
+            for (const auto& p : t->points) std::fwrite(&p.x, sizeof(float), 3, f);
+            if (std::fclose(f) != 0) return 2;
+        }
+        ok = bench("torus " + std::to_string(generated), t, reps, threads) && ok;
+    }
+    for (const auto& f : files) {
+        Cloud::Ptr raw(new Cloud), c(new Cloud);
+        if (pcl::io::loadPCDFile<pcl::PointXYZ>(f, *raw) != 0) return 2;
+        for (const auto& p : raw->points)
+            if (pcl::isFinite(p)) c->push_back(p);
+        ok = bench(f, c, reps, threads) && ok;
+    }
+    return ok ? 0 : 1;
+}

@@ -1,0 +1,258 @@
+//! Normals alone (thesis eq. 2.8–2.10), what `nbhd_estimate_normals` and PCL's
+//! `NormalEstimation` compute: per point the unit eigenvector of the smallest eigenvalue of the
+//! covariance of the point and its ε-k-neighbourhood, the surface variation
+//! `λ0/(λ0 + λ1 + λ2)` (PCL's `curvature`) and the degeneracy flags — nothing of the principal
+//! curvatures, the feature criteria or the tangent frame that [`super::analyze`] adds.
+//!
+//! The normal and eigenvalues are those of [`crate::geometry::local_frame`] bit for bit (the
+//! smallest eigenvector in closed form, the Jacobi iteration where the closed form declines),
+//! so a normal from here equals the one [`super::analyze`] reports. Every point's arithmetic
+//! depends on its row only, so the result is identical for any number of threads.
+
+use super::source::{knn_rows, Neighbors};
+use super::{
+    check_points, check_spacing, cut_to, finite_subset, progress_in_units, quotient_of, Length,
+    SmoothOptions, Stage,
+};
+use crate::error::{NbhdError, Result};
+use crate::geometry::normals::{normal_of, FLAG_SKIPPED};
+use crate::geometry::orientation::orient_normals_with_progress;
+use crate::geometry::orientation::Orientation;
+use crate::table::NeighborTable;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// One point's estimate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalEstimate {
+    /// Unit normal (eq. 2.10), oriented as the options ask; NaN for a skipped point.
+    pub normal: DVec3,
+    /// The surface variation `λ0/(λ0 + λ1 + λ2)` of the covariance eigenvalues (0 on a plane,
+    /// at most 1/3): PCL's `curvature`, the `covariance_quotient` of [`super::PointOutput`].
+    pub surface_variation: f64,
+    /// `geometry::normals::FLAG_*` bits, 0 for a well-defined normal.
+    pub flags: u8,
+}
+
+impl NormalEstimate {
+    /// The estimate of a point skipped for a non-finite coordinate.
+    fn skipped() -> Self {
+        Self {
+            normal: DVec3::splat(f64::NAN),
+            surface_variation: f64::NAN,
+            flags: FLAG_SKIPPED,
+        }
+    }
+}
+
+/// What [`estimate_normals`] returns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalsResult {
+    /// One estimate per input point, in input order.
+    pub normals: Vec<NormalEstimate>,
+    /// Mean nearest-neighbour spacing `h` of the (finite) input.
+    pub spacing: f64,
+    /// Absolute ε used.
+    pub epsilon: f64,
+}
+
+/// The normals of `points` over the ε-k-neighbourhoods of `options` (its `k`, `epsilon`,
+/// `orientation`, `non_finite` and `threads`; the smoothing settings are not read but must be
+/// valid). Errors as [`super::analyze`]'s.
+pub fn estimate_normals(points: &[DVec3], options: &SmoothOptions) -> Result<NormalsResult> {
+    estimate_normals_from(points, Neighbors::default(), options, &mut |_, _| true)
+}
+
+/// [`estimate_normals`] from the neighbourhoods `neighbors` (see [`super::smooth_from`]) with a
+/// progress callback (as [`super::smooth_with_progress`]'s).
+pub fn estimate_normals_from(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &SmoothOptions,
+    progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
+) -> Result<NormalsResult> {
+    crate::parallel::with_threads(options.threads, || {
+        options.validate()?;
+        match finite_subset(points, options.non_finite)? {
+            None => normals_finite(points, neighbors, options, progress),
+            Some((index, finite)) => {
+                let mut holder = None;
+                let neighbors =
+                    super::source::for_finite_subset(neighbors, &index, points.len(), &mut holder)?;
+                let mut result = normals_finite(&finite, neighbors, options, progress)?;
+                let mut all = vec![NormalEstimate::skipped(); points.len()];
+                for (&i, e) in index.iter().zip(&result.normals) {
+                    all[i] = *e;
+                }
+                result.normals = all;
+                Ok(result)
+            }
+        }
+    })?
+}
+
+/// [`estimate_normals_from`] on finite points.
+fn normals_finite(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &SmoothOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+) -> Result<NormalsResult> {
+    check_points(points)?;
+    let mut report = progress_in_units(1.0, progress);
+    report(0.0, Stage::Neighbors)?;
+    let (knn, _) = knn_rows(points, neighbors, options.k)?;
+    let h = mean_nearest(&knn);
+    let relative = matches!(options.epsilon, Length::Relative(_));
+    check_spacing(h, relative)?;
+    let eps = options.epsilon.resolve(h);
+    // each row's within-ε prefix (rows are nearest first): the ε-k-neighbourhood, read in
+    // place rather than copied into a cut table
+    let e2 = eps * eps;
+    let within = |i: usize| {
+        let d = knn.sq_dists_of(i);
+        if d.last().is_none_or(|&x| x <= e2) {
+            d.len()
+        } else {
+            d.partition_point(|&x| x <= e2)
+        }
+    };
+    let largest = (0..knn.len())
+        .into_par_iter()
+        .map(within)
+        .max()
+        .unwrap_or(0);
+    let degenerate = |flagged| NbhdError::Degenerate {
+        points: knn.len(),
+        largest: largest + 1,
+        flagged,
+        epsilon: eps,
+        spacing: h,
+        relative,
+    };
+    // what `super::check_not_degenerate` refuses, with the same message
+    if largest + 1 < 3 {
+        return Err(degenerate(0));
+    }
+    report(0.5, Stage::Outputs)?;
+    // in the caller's order: the rows are read in the order the table stores them, and the
+    // neighbours' reads, independent of one another, overlap (measured faster than the tree's
+    // order, which reads nearby points from cache but each row from afar, on random-order
+    // clouds); each offset is read once into the worker's buffer
+    let mut normals = vec![DVec3::ZERO; points.len()];
+    let mut estimates: Vec<NormalEstimate> = normals
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(1024)
+        .map_init(Vec::new, |buf: &mut Vec<DVec3>, (i, normal)| {
+            let p = points[i];
+            let row = &knn.indices_of(i)[..within(i)];
+            buf.clear();
+            buf.extend(row.iter().map(|&j| points[j as usize] - p));
+            let (n, values, flags) = normal_of(buf.iter().copied(), buf.len() + 1);
+            *normal = n;
+            NormalEstimate {
+                normal: n,
+                surface_variation: quotient_of(values),
+                flags,
+            }
+        })
+        .collect();
+    let flagged = estimates.iter().filter(|e| e.flags != 0).count();
+    if flagged == estimates.len() {
+        return Err(degenerate(flagged));
+    }
+    report(0.6, Stage::Outputs)?;
+    if options.orientation == Orientation::Unoriented {
+        report(1.0, Stage::Done)?;
+        return Ok(NormalsResult {
+            normals: estimates,
+            spacing: h,
+            epsilon: eps,
+        });
+    }
+    // the orientation's graph is the ε-k-neighbourhoods themselves
+    let table = cut_to(knn, eps);
+    orient_normals_with_progress(
+        points,
+        &table,
+        &mut normals,
+        options.orientation,
+        &mut |f| report(0.6 + 0.4 * f, Stage::Outputs).is_ok(),
+    )?;
+    for (e, &n) in estimates.iter_mut().zip(&normals) {
+        e.normal = n;
+    }
+    report(1.0, Stage::Done)?;
+    Ok(NormalsResult {
+        normals: estimates,
+        spacing: h,
+        epsilon: eps,
+    })
+}
+
+/// The mean distance of a point to its nearest other point, `geometry::neighbors::mean_spacing_of`'s value bit
+/// for bit (the same sum in index order) without its median.
+fn mean_nearest(knn: &NeighborTable<f64>) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for i in 0..knn.len() {
+        if let Some(&d) = knn.sq_dists_of(i).first() {
+            sum += d.sqrt();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        sum / n as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::neighbors::{mean_spacing_of, neighbor_table};
+    use crate::query::Neighborhood;
+    use crate::shapes::{sample, Shape, Torus};
+    use crate::smooth::analyze;
+
+    #[test]
+    fn equals_the_full_analysis_bit_for_bit_for_any_threads() {
+        let torus = Torus::new(1.0, 0.4);
+        let s = sample(&torus, 3000, 7);
+        let table = neighbor_table(&s.points, Neighborhood::Knn { k: 15 }, true).unwrap();
+        assert_eq!(mean_nearest(&table), mean_spacing_of(&table));
+        for (orientation, eps) in [
+            (Orientation::Unoriented, Length::Relative(6.0)),
+            (Orientation::Propagate, Length::Relative(6.0)),
+            // rows cut by ε
+            (Orientation::AwayFrom(DVec3::ZERO), Length::Relative(2.5)),
+        ] {
+            let opts = SmoothOptions {
+                orientation,
+                epsilon: eps,
+                ..SmoothOptions::default()
+            };
+            let full = analyze(&s.points, &opts).unwrap();
+            for threads in [1, 2, 3] {
+                let got = estimate_normals(&s.points, &SmoothOptions { threads, ..opts }).unwrap();
+                assert_eq!((got.spacing, got.epsilon), (full.spacing, full.epsilon));
+                for (g, f) in got.normals.iter().zip(&full.outputs) {
+                    assert_eq!(g.normal, f.normal);
+                    assert_eq!(g.surface_variation, f.covariance_quotient);
+                    assert_eq!(g.flags, f.normal_flags);
+                }
+            }
+            if orientation == Orientation::Propagate {
+                // consistent on the closed torus: every normal outward
+                let outward = full
+                    .outputs
+                    .iter()
+                    .zip(&s.points)
+                    .filter(|(o, &p)| o.normal.dot(torus.closest(p).normal) > 0.0)
+                    .count();
+                assert_eq!(outward, s.points.len());
+            }
+        }
+    }
+}
