@@ -27,8 +27,9 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 export PATH="$venv/bin:$PATH"
 missing=()
-for pkg in maturin numpy scipy pytest; do
-    python -c "import $pkg" >/dev/null 2>&1 || missing+=("$pkg")
+# import name=pip requirement (dask and distributed: the tests of nbhd.dask on a LocalCluster)
+for pkg in maturin numpy scipy pytest "dask.array=dask[array]" distributed; do
+    python -c "import ${pkg%%=*}" >/dev/null 2>&1 || missing+=("${pkg#*=}")
 done
 if [ "${#missing[@]}" -gt 0 ]; then
     echo "== installing into $venv: ${missing[*]} (pip)"

@@ -1,0 +1,245 @@
+"""The work of one tile (python/DASK.md): gather the tile's points and its halo from the tile
+store, run nbhd on them, keep the rows of the owned points. Plain numpy and nbhd, no Dask: every
+function here runs inside one Dask task (nbhd/dask.py builds the task graph).
+
+The tile store is a directory of ``.npy`` pieces. A piece holds points of one tile in ascending
+caller (global) index: ``pts`` (m, 3) float32/float64 and either ``idx`` (m,) int64 or a ``start``
+(the piece is the caller's rows ``start .. start+m``). A tile is a list of pieces plus the tight
+box ``(lo, hi)`` of its points; it *owns* them. Everything a task needs travels as plain lists
+and dicts (:class:`Spec`), so tasks run on any worker that sees the store's directory.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._nbhd import KdTree
+
+
+@dataclass
+class Piece:
+    pts: str
+    idx: str | None = None
+    start: int = 0
+    count: int = 0
+
+    def load(self, mmap: bool = True):
+        pts = np.load(self.pts, mmap_mode="r" if mmap else None)
+        if self.idx is None:
+            idx = np.arange(self.start, self.start + len(pts), dtype=np.int64)
+        else:
+            idx = np.load(self.idx, mmap_mode="r" if mmap else None)
+        return idx, pts
+
+
+@dataclass
+class Tile:
+    lo: list
+    hi: list
+    count: int
+    pieces: list = field(default_factory=list)
+
+
+@dataclass
+class Spec:
+    """What every task reads: the cloud's size and type, and every tile's box and pieces."""
+
+    n: int
+    dtype: str
+    tiles: list
+    scale: float  # the largest |coordinate|: the rounding margins are relative to it
+
+    @property
+    def eps(self) -> float:
+        return float(np.finfo(self.dtype).eps)
+
+
+def margin(width: float, spec: Spec, dtype=None) -> float:
+    """``width`` widened by far more than the rounding of a distance in ``dtype``: a halo only
+    ever needs to be a superset, so the margin costs a few points and keeps exactness."""
+    eps = float(np.finfo(dtype or spec.dtype).eps)
+    return width * (1 + 64 * eps) + 64 * eps * spec.scale
+
+
+def owned(spec: Spec, t: int) -> np.ndarray:
+    """The caller indices the tile owns, ascending."""
+    parts = [p.load()[0] for p in spec.tiles[t].pieces]
+    return np.concatenate(parts).astype(np.int64) if parts else np.empty(0, np.int64)
+
+
+def gather(spec: Spec, t: int, width: float, dtype=None):
+    """The points within ``width`` of tile ``t``'s box (closed), its own included: ``(idx,
+    pts)`` in ascending caller index (so ties by index order as on one machine), ``pts`` in
+    ``dtype`` (default: the cloud's)."""
+    tile = spec.tiles[t]
+    a = np.asarray(tile.lo, np.float64) - width
+    b = np.asarray(tile.hi, np.float64) + width
+    idx_parts, pts_parts = [], []
+    for u in spec.tiles:
+        if u.count == 0 or np.any(np.asarray(u.hi) < a) or np.any(np.asarray(u.lo) > b):
+            continue
+        for p in u.pieces:
+            idx, pts = p.load()
+            inside = np.all((pts >= a) & (pts <= b), axis=1)
+            sel = np.flatnonzero(inside)
+            idx_parts.append(np.asarray(idx[sel], np.int64))
+            pts_parts.append(np.asarray(pts[sel]))
+    idx = np.concatenate(idx_parts)
+    pts = np.concatenate(pts_parts)
+    order = np.argsort(idx, kind="stable")
+    pts = pts[order]
+    if dtype is not None:
+        pts = pts.astype(dtype)
+    return idx[order], np.ascontiguousarray(pts)
+
+
+def _drop_self(glob, lens, own):
+    """CSR rows (``glob`` caller indices, ``lens`` row lengths) of the queries ``own``: each
+    query's own entry removed, or, when it is not in its row (more than the row's length of
+    exact copies with smaller indices), the row's last entry. Returns the kept mask."""
+    m = len(lens)
+    row_of = np.repeat(np.arange(m), lens)
+    is_own = glob == own[row_of]
+    has_own = np.zeros(m, bool)
+    has_own[row_of[is_own]] = True
+    drop = is_own.copy()
+    ends = np.cumsum(lens) - 1
+    last = np.flatnonzero(~has_own & (lens > 0))
+    drop[ends[last]] = True
+    return ~drop
+
+
+def _write(path, **arrays):
+    tmp = path + ".tmp.npz"
+    np.savez(tmp, **arrays)
+    os.replace(tmp, path)
+
+
+def knn_rows(spec: Spec, t: int, k: int, width: float, dtype=None, tree_options=None, threads=0):
+    """The ``k`` nearest *other* points of tile ``t``'s points, exact: the halo starts at
+    ``width`` and doubles until every owned point's k-th distance is strictly below its
+    distance to the halo's outer border (every point as near as the k-th, ties included, was
+    searched). Returns ``(owned idx, indices (m, k'), sq_dists (m, k'), halo)``."""
+    tree_options = tree_options or {}
+    own = owned(spec, t)
+    n = spec.n
+    width_k = min(k, n - 1)
+    dt = np.dtype(dtype or spec.dtype)
+    feps = float(np.finfo(dt).eps)
+    lo = np.asarray(spec.tiles[t].lo, np.float64)
+    hi = np.asarray(spec.tiles[t].hi, np.float64)
+    while True:
+        idx, pts = gather(spec, t, width, dt)
+        at = np.searchsorted(idx, own)
+        q = pts[at]
+        kk = min(k + 1, len(idx))
+        tree = KdTree(pts, threads=threads, **tree_options)
+        local, d2 = tree.knn(q, kk, threads=threads)
+        glob = idx[local.astype(np.int64)]
+        keep = _drop_self(glob.reshape(-1), np.full(len(own), kk), own).reshape(len(own), kk)
+        glob = glob[keep].reshape(len(own), kk - 1)[:, :width_k]
+        d2 = d2[keep].reshape(len(own), kk - 1)[:, :width_k]
+        if len(idx) == n:
+            return own, glob.astype(np.uint32), d2, width
+        if kk - 1 >= width_k:
+            qd = q.astype(np.float64)
+            border = np.minimum(qd - (lo - width), (hi + width) - qd).min(axis=1)
+            kth = np.sqrt(d2[:, -1].astype(np.float64)) if width_k else np.zeros(len(own))
+            # strictly inside, with a margin far above the rounding of d2 and of the border
+            if np.all(kth * (1 + 64 * feps) + 64 * feps * spec.scale < border):
+                return own, glob.astype(np.uint32), d2, width
+        width *= 2.0
+
+
+def knn_tile(spec: Spec, t: int, k: int, width: float, out: str, tree_options=None, threads=0):
+    """Task: the tile's rows of ``KdTree(points).neighborhoods(k=k)`` written to ``out``."""
+    own, glob, d2, used = knn_rows(spec, t, k, width, tree_options=tree_options, threads=threads)
+    m, w = glob.shape
+    offsets = np.arange(m + 1, dtype=np.uint64) * np.uint64(w)
+    _write(out, idx=own, offsets=offsets, indices=glob.reshape(-1), sq_dists=d2.reshape(-1))
+    return {"tile": t, "path": out, "rows": m, "halo": used}
+
+
+def radius_tile(spec: Spec, t: int, k, radius: float, out: str, tree_options=None, threads=0):
+    """Task: the tile's rows of ``KdTree(points).neighborhoods(radius=radius)`` (``k`` None)
+    or ``(k=k, radius=radius)`` (the ε-k-neighbourhood), written to ``out``. Halo: ε, known in
+    advance (the radius is inclusive, the halo box closed, widened by a rounding margin)."""
+    tree_options = tree_options or {}
+    own = owned(spec, t)
+    halo = margin(radius, spec)
+    idx, pts = gather(spec, t, halo)
+    q = pts[np.searchsorted(idx, own)]
+    tree = KdTree(pts, threads=threads, **tree_options)
+    if k is None:
+        table = tree.radius(q, radius, threads=threads)
+    else:
+        table = tree.knn_radius(q, k + 1, radius, threads=threads)
+    lens = np.diff(table.offsets).astype(np.int64)
+    glob = idx[table.indices.astype(np.int64)]
+    # rows of k + 1 lose their own entry or their last: at most k remain, as on one machine
+    keep = _drop_self(glob, lens, own)
+    row_of = np.repeat(np.arange(len(own)), lens)
+    new_lens = np.bincount(row_of[keep], minlength=len(own)).astype(np.uint64)
+    offsets = np.concatenate([[0], np.cumsum(new_lens)]).astype(np.uint64)
+    _write(
+        out,
+        idx=own,
+        offsets=offsets,
+        indices=glob[keep].astype(np.uint32),
+        sq_dists=table.sq_dists[keep],
+    )
+    return {"tile": t, "path": out, "rows": len(own), "halo": halo}
+
+
+def nearest_tile(spec: Spec, t: int, width: float, out: str, threads=0):
+    """Task: every owned point's squared distance to its nearest other point, computed in f64
+    as the smoothing's spacing estimate does (the library converts to f64 first)."""
+    own, _, d2, used = knn_rows(spec, t, 1, width, dtype=np.float64, threads=threads)
+    _write(out, idx=own, nearest=d2[:, 0] if d2.shape[1] else np.zeros(len(own)))
+    return {"tile": t, "path": out, "rows": len(own), "halo": used}
+
+
+def geometry_tile(spec: Spec, t: int, what: str, halo: float, out: str, kwargs: dict):
+    """Task: ``nbhd.normals``/``curvatures``/``smooth`` on the tile plus a halo of ``halo``
+    (lengths already absolute), the owned points' results written to ``out``."""
+    import nbhd
+
+    own = owned(spec, t)
+    idx, pts = gather(spec, t, margin(halo, spec, np.float64), np.float64)
+    at = np.searchsorted(idx, own)
+    arrays = {"idx": own}
+    if what == "normals":
+        normals, curvature, flags = nbhd.normals(pts, **kwargs)
+        arrays.update(normals=normals[at], surface_variation=curvature[at], flags=flags[at])
+    elif what == "curvatures":
+        r = nbhd.curvatures(pts, **kwargs)
+        for key, v in r.items():
+            if isinstance(v, np.ndarray):
+                arrays[key] = v[at]
+    elif what == "smooth":
+        r = nbhd.smooth(pts, **kwargs)
+        arrays["points"] = r["points"][at]
+        for key, v in (r["outputs"] or {}).items():
+            arrays["outputs." + key] = v[at]
+    else:  # pragma: no cover - the callers name one of the three
+        raise ValueError(what)
+    _write(out, **arrays)
+    return {"tile": t, "path": out, "rows": len(own), "halo": halo, "points": len(idx)}
+
+
+def partial_sum(parts, a: int, b: int, carry: float) -> float:
+    """The sum ``carry + x_a + ... + x_{b-1}`` of the square roots of the nearest squared
+    distances, added one by one in caller order as the library's spacing estimate adds them
+    (``np.add.accumulate`` is a sequential loop: the same roundings)."""
+    x = np.empty(b - a, np.float64)
+    for p in parts:
+        with np.load(p["path"]) as z:
+            idx = z["idx"]
+            i, j = np.searchsorted(idx, [a, b])
+            x[idx[i:j] - a] = z["nearest"][i:j]
+    x = np.sqrt(x)
+    acc = np.add.accumulate(np.concatenate([[carry], x]))
+    return float(acc[-1])
