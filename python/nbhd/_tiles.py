@@ -57,6 +57,9 @@ class Spec:
         return float(np.finfo(self.dtype).eps)
 
 
+BATCH = 32_768  # queries answered at a time in a tile (memory, not results, depends on it)
+
+
 def margin(width: float, spec: Spec, dtype=None) -> float:
     """``width`` widened by far more than the rounding of a distance in ``dtype``: a halo only
     ever needs to be a superset, so the margin costs a few points and keeps exactness."""
@@ -118,7 +121,10 @@ def _write(path, **arrays):
     os.replace(tmp, path)
 
 
-def knn_rows(spec: Spec, t: int, k: int, width: float, dtype=None, tree_options=None, threads=0):
+def knn_rows(
+    spec: Spec, t: int, k: int, width: float, dtype=None, tree_options=None, threads=0,
+    batch=BATCH,
+):
     """The ``k`` nearest *other* points of tile ``t``'s points, exact: the halo starts at
     ``width`` and doubles until every owned point's k-th distance is strictly below its
     distance to the halo's outer border (every point as near as the k-th, ties included, was
@@ -131,39 +137,63 @@ def knn_rows(spec: Spec, t: int, k: int, width: float, dtype=None, tree_options=
     feps = float(np.finfo(dt).eps)
     lo = np.asarray(spec.tiles[t].lo, np.float64)
     hi = np.asarray(spec.tiles[t].hi, np.float64)
+    m = len(own)
     while True:
         idx, pts = gather(spec, t, width, dt)
         at = np.searchsorted(idx, own)
-        q = pts[at]
         kk = min(k + 1, len(idx))
+        full = len(idx) == n
+        if kk - 1 < width_k and not full:  # fewer than k other points in reach: grow
+            width *= 2.0
+            continue
         tree = KdTree(pts, threads=threads, **tree_options)
-        local, d2 = tree.knn(q, kk, threads=threads)
-        glob = idx[local.astype(np.int64)]
-        keep = _drop_self(glob.reshape(-1), np.full(len(own), kk), own).reshape(len(own), kk)
-        glob = glob[keep].reshape(len(own), kk - 1)[:, :width_k]
-        d2 = d2[keep].reshape(len(own), kk - 1)[:, :width_k]
-        if len(idx) == n:
-            return own, glob.astype(np.uint32), d2, width
-        if kk - 1 >= width_k:
+        out_i = np.empty((m, width_k), np.uint32)
+        out_d = None
+        exact = True
+        # queries in batches: the temporaries stay small beside the tile's own arrays
+        for s in range(0, m, batch):
+            e = min(s + batch, m)
+            q = pts[at[s:e]]
+            local, d2 = tree.knn(q, kk, threads=threads)
+            glob = idx[local.astype(np.int64)]
+            keep = _drop_self(glob.reshape(-1), np.full(e - s, kk), own[s:e]).reshape(e - s, kk)
+            glob = glob[keep].reshape(e - s, kk - 1)[:, :width_k]
+            d2 = d2[keep].reshape(e - s, kk - 1)[:, :width_k]
+            if out_d is None:
+                out_d = np.empty((m, width_k), d2.dtype)
+            out_i[s:e] = glob
+            out_d[s:e] = d2
+            if full:
+                continue
             qd = q.astype(np.float64)
             border = np.minimum(qd - (lo - width), (hi + width) - qd).min(axis=1)
-            kth = np.sqrt(d2[:, -1].astype(np.float64)) if width_k else np.zeros(len(own))
+            kth = np.sqrt(d2[:, -1].astype(np.float64)) if width_k else np.zeros(e - s)
             # strictly inside, with a margin far above the rounding of d2 and of the border
-            if np.all(kth * (1 + 64 * feps) + 64 * feps * spec.scale < border):
-                return own, glob.astype(np.uint32), d2, width
+            if not np.all(kth * (1 + 64 * feps) + 64 * feps * spec.scale < border):
+                exact = False
+                break
+        if exact:
+            if out_d is None:
+                out_d = np.empty((0, width_k), dt)
+            return own, out_i, out_d, width
         width *= 2.0
 
 
-def knn_tile(spec: Spec, t: int, k: int, width: float, out: str, tree_options=None, threads=0):
+def knn_tile(
+    spec: Spec, t: int, k: int, width: float, out: str, tree_options=None, threads=0, batch=BATCH
+):
     """Task: the tile's rows of ``KdTree(points).neighborhoods(k=k)`` written to ``out``."""
-    own, glob, d2, used = knn_rows(spec, t, k, width, tree_options=tree_options, threads=threads)
+    own, glob, d2, used = knn_rows(spec, t, k, width, None, tree_options, threads, batch)
     m, w = glob.shape
     offsets = np.arange(m + 1, dtype=np.uint64) * np.uint64(w)
     _write(out, idx=own, offsets=offsets, indices=glob.reshape(-1), sq_dists=d2.reshape(-1))
+    del glob, d2
     return {"tile": t, "path": out, "rows": m, "halo": used}
 
 
-def radius_tile(spec: Spec, t: int, k, radius: float, out: str, tree_options=None, threads=0):
+def radius_tile(
+    spec: Spec, t: int, k, radius: float, out: str, tree_options=None, threads=0, batch=BATCH
+):
     """Task: the tile's rows of ``KdTree(points).neighborhoods(radius=radius)`` (``k`` None)
     or ``(k=k, radius=radius)`` (the ε-k-neighbourhood), written to ``out``. Halo: ε, known in
     advance (the radius is inclusive, the halo box closed, widened by a rounding margin)."""
@@ -171,25 +201,31 @@ def radius_tile(spec: Spec, t: int, k, radius: float, out: str, tree_options=Non
     own = owned(spec, t)
     halo = margin(radius, spec)
     idx, pts = gather(spec, t, halo)
-    q = pts[np.searchsorted(idx, own)]
+    at = np.searchsorted(idx, own)
     tree = KdTree(pts, threads=threads, **tree_options)
-    if k is None:
-        table = tree.radius(q, radius, threads=threads)
-    else:
-        table = tree.knn_radius(q, k + 1, radius, threads=threads)
-    lens = np.diff(table.offsets).astype(np.int64)
-    glob = idx[table.indices.astype(np.int64)]
-    # rows of k + 1 lose their own entry or their last: at most k remain, as on one machine
-    keep = _drop_self(glob, lens, own)
-    row_of = np.repeat(np.arange(len(own)), lens)
-    new_lens = np.bincount(row_of[keep], minlength=len(own)).astype(np.uint64)
-    offsets = np.concatenate([[0], np.cumsum(new_lens)]).astype(np.uint64)
+    lens_all, ind_parts, sq_parts = [], [], []
+    for s in range(0, len(own), batch):
+        e = min(s + batch, len(own))
+        q = pts[at[s:e]]
+        if k is None:
+            table = tree.radius(q, radius, threads=threads)
+        else:
+            table = tree.knn_radius(q, k + 1, radius, threads=threads)
+        lens = np.diff(table.offsets).astype(np.int64)
+        glob = idx[table.indices.astype(np.int64)]
+        # rows of k + 1 lose their own entry or their last: at most k remain, as on one machine
+        keep = _drop_self(glob, lens, own[s:e])
+        row_of = np.repeat(np.arange(e - s), lens)
+        lens_all.append(np.bincount(row_of[keep], minlength=e - s).astype(np.uint64))
+        ind_parts.append(glob[keep].astype(np.uint32))
+        sq_parts.append(table.sq_dists[keep])
+    offsets = np.concatenate([[0], np.cumsum(np.concatenate(lens_all))]).astype(np.uint64)
     _write(
         out,
         idx=own,
         offsets=offsets,
-        indices=glob[keep].astype(np.uint32),
-        sq_dists=table.sq_dists[keep],
+        indices=np.concatenate(ind_parts),
+        sq_dists=np.concatenate(sq_parts),
     )
     return {"tile": t, "path": out, "rows": len(own), "halo": halo}
 

@@ -41,14 +41,19 @@ AssembledTable.__doc__ = """A table in caller order as compressed rows (the arra
 
 def _grid(n, lo, hi, points_per_tile):
     """Tiles per axis: about ``n / points_per_tile`` tiles of roughly cubic shape over the
-    extent (a flat cloud gets one tile across its thin axis)."""
+    extent; an axis thinner than a tile's side gets one tile (a terrain is cut in x and y)."""
     ext = np.maximum(np.asarray(hi, np.float64) - np.asarray(lo, np.float64), 0.0)
     want = max(1, math.ceil(n / max(1, points_per_tile)))
     live = ext > 0
+    while live.any():
+        side = (np.prod(ext[live]) / want) ** (1.0 / live.sum())
+        thin = live & (ext < side)
+        if not thin.any():
+            break
+        live &= ~thin
     if not live.any() or want == 1:
         return [1] * len(ext)
-    side = (np.prod(ext[live]) / want) ** (1.0 / live.sum())
-    return [max(1, int(round(e / side))) if e > 0 else 1 for e in ext]
+    return [max(1, int(round(e / side))) if on else 1 for e, on in zip(ext, live)]
 
 
 def _bucket(chunk, start, lo, hi, grid, store, c):
@@ -230,21 +235,24 @@ class TiledCloud:
 
     # --- neighbourhood tables -------------------------------------------------------------
 
-    def knn(self, k, *, threads=0, out=None, **tree_options):
+    def knn(self, k, *, threads=0, batch=_tiles.BATCH, out=None, **tree_options):
         """Every point's ``k`` nearest other points: ``KdTree(points).neighborhoods(k=k)``,
-        byte for byte (halos grow until exact). ``tree_options`` go to each tile's KdTree."""
+        byte for byte (halos grow until exact). ``tree_options`` go to each tile's KdTree;
+        ``threads`` is each task's nbhd threads (0: all cores), ``batch`` the queries a task
+        answers at a time (its memory; the result is the same)."""
         if k < 1:
             raise ValueError("k must be >= 1")
         out = self._out(out, "knn")
         tasks = [
             dask.delayed(_tiles.knn_tile, pure=False)(
                 self.spec, t, k, _first_halo(self.spec, t, k),
-                os.path.join(out, f"tile_{t:06d}.npz"), tree_options, threads)
+                os.path.join(out, f"tile_{t:06d}.npz"), tree_options, threads, batch)
             for t in range(self.tiles)
         ]
         return TileResult("table", self.n, list(dask.compute(*tasks)))
 
-    def radius(self, radius, *, k=None, threads=0, out=None, **tree_options):
+    def radius(self, radius, *, k=None, threads=0, batch=_tiles.BATCH, out=None,
+               **tree_options):
         """Every point's other points within ``radius`` (inclusive; absolute units), or with
         ``k`` the ε-k-neighbourhood (the ``k`` nearest of them):
         ``KdTree(points).neighborhoods(radius=radius[, k=k])``, byte for byte (halo: the
@@ -257,14 +265,14 @@ class TiledCloud:
         tasks = [
             dask.delayed(_tiles.radius_tile, pure=False)(
                 self.spec, t, k, float(radius), os.path.join(out, f"tile_{t:06d}.npz"),
-                tree_options, threads)
+                tree_options, threads, batch)
             for t in range(self.tiles)
         ]
         return TileResult("table", self.n, list(dask.compute(*tasks)))
 
-    def knn_radius(self, k, radius, *, threads=0, out=None, **tree_options):
+    def knn_radius(self, k, radius, *, threads=0, batch=_tiles.BATCH, out=None, **tree_options):
         """The ε-k-neighbourhood table (see :meth:`radius`)."""
-        return self.radius(radius, k=k, threads=threads, out=out, **tree_options)
+        return self.radius(radius, k=k, threads=threads, batch=batch, out=out, **tree_options)
 
     # --- spacing, geometry, smoothing ------------------------------------------------------
 

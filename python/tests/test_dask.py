@@ -61,12 +61,13 @@ def test_tables_from_a_dask_array(client, tmp_path, dtype):
     assert cloud.tiles == 8 and cloud.n == N
     tree = nbhd.KdTree(pts)
 
-    knn = cloud.knn(10)
+    # batch: each task answers its ~12,500 queries 5,000 at a time (memory only)
+    knn = cloud.knn(10, batch=5000)
     assert same_table(knn.assemble(), tree.neighborhoods(k=10))
     assert len(knn.parts) == 8
 
     r = 0.02
-    assert same_table(cloud.radius(r).assemble(), tree.neighborhoods(radius=r))
+    assert same_table(cloud.radius(r, batch=5000).assemble(), tree.neighborhoods(radius=r))
     assert same_table(cloud.knn_radius(12, r).assemble(), tree.neighborhoods(k=12, radius=r))
 
 
