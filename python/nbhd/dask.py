@@ -224,6 +224,12 @@ class TiledCloud:
         with open(os.path.join(self.store, "cloud.json"), "w") as f:
             json.dump(d, f)
 
+    def _spec_node(self):
+        """The tile list as one node of the graph, which every tile task depends on: shipped
+        to a worker once, not copied into every task (a task holding its own copy of a list of
+        thousands of pieces, with hundreds of tasks queued on a worker, fills its memory)."""
+        return dask.delayed(self.spec, pure=False, traverse=False)
+
     def _out(self, out, name):
         if out is None:
             i = 0
@@ -243,9 +249,10 @@ class TiledCloud:
         if k < 1:
             raise ValueError("k must be >= 1")
         out = self._out(out, "knn")
+        spec = self._spec_node()
         tasks = [
             dask.delayed(_tiles.knn_tile, pure=False)(
-                self.spec, t, k, _first_halo(self.spec, t, k),
+                spec, t, k, _first_halo(self.spec, t, k),
                 os.path.join(out, f"tile_{t:06d}.npz"), tree_options, threads, batch)
             for t in range(self.tiles)
         ]
@@ -262,9 +269,10 @@ class TiledCloud:
         if k is not None and k < 1:
             raise ValueError("k must be >= 1")
         out = self._out(out, "radius")
+        spec = self._spec_node()
         tasks = [
             dask.delayed(_tiles.radius_tile, pure=False)(
-                self.spec, t, k, float(radius), os.path.join(out, f"tile_{t:06d}.npz"),
+                spec, t, k, float(radius), os.path.join(out, f"tile_{t:06d}.npz"),
                 tree_options, threads, batch)
             for t in range(self.tiles)
         ]
@@ -282,9 +290,10 @@ class TiledCloud:
         per-tile nearest distances (kNN halos), then a chain of tasks adding them in order."""
         if self._h is None:
             out = self._out(None, "nearest")
+            spec = self._spec_node()
             parts = dask.compute(*[
                 dask.delayed(_tiles.nearest_tile, pure=False)(
-                    self.spec, t, _first_halo(self.spec, t, 1),
+                    spec, t, _first_halo(self.spec, t, 1),
                     os.path.join(out, f"tile_{t:06d}.npz"))
                 for t in range(self.tiles)])
             block = max(1, min(self.n, 4_000_000))
@@ -311,9 +320,10 @@ class TiledCloud:
 
     def _geometry(self, what, halo, kwargs, out):
         out = self._out(out, what)
+        spec = self._spec_node()
         tasks = [
             dask.delayed(_tiles.geometry_tile, pure=False)(
-                self.spec, t, what, halo, os.path.join(out, f"tile_{t:06d}.npz"), kwargs)
+                spec, t, what, halo, os.path.join(out, f"tile_{t:06d}.npz"), kwargs)
             for t in range(self.tiles)
         ]
         return TileResult("arrays", self.n, list(dask.compute(*tasks)))
