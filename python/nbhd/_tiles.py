@@ -232,9 +232,12 @@ def radius_tile(
 
 def nearest_tile(spec: Spec, t: int, width: float, out: str, threads=0):
     """Task: every owned point's squared distance to its nearest other point, computed in f64
-    as the smoothing's spacing estimate does (the library converts to f64 first)."""
+    as the smoothing's spacing estimate does (the library converts to f64 first). Written as
+    two ``.npy`` files (``out`` + ``.idx.npy`` / ``.nearest.npy``) that the summing tasks map
+    and slice without reading them whole."""
     own, _, d2, used = knn_rows(spec, t, 1, width, dtype=np.float64, threads=threads)
-    _write(out, idx=own, nearest=d2[:, 0] if d2.shape[1] else np.zeros(len(own)))
+    np.save(out + ".idx.npy", own)
+    np.save(out + ".nearest.npy", d2[:, 0] if d2.shape[1] else np.zeros(len(own)))
     return {"tile": t, "path": out, "rows": len(own), "halo": used}
 
 
@@ -272,10 +275,11 @@ def partial_sum(parts, a: int, b: int, carry: float) -> float:
     (``np.add.accumulate`` is a sequential loop: the same roundings)."""
     x = np.empty(b - a, np.float64)
     for p in parts:
-        with np.load(p["path"]) as z:
-            idx = z["idx"]
-            i, j = np.searchsorted(idx, [a, b])
-            x[idx[i:j] - a] = z["nearest"][i:j]
+        idx = np.load(p["path"] + ".idx.npy", mmap_mode="r")
+        i, j = np.searchsorted(idx, [a, b])
+        if j > i:
+            near = np.load(p["path"] + ".nearest.npy", mmap_mode="r")
+            x[np.asarray(idx[i:j]) - a] = near[i:j]
     x = np.sqrt(x)
     acc = np.add.accumulate(np.concatenate([[carry], x]))
     return float(acc[-1])

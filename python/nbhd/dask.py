@@ -284,19 +284,20 @@ class TiledCloud:
 
     # --- spacing, geometry, smoothing ------------------------------------------------------
 
-    def spacing(self) -> float:
+    def spacing(self, block: int = 4_000_000) -> float:
         """The mean nearest-neighbour spacing h exactly as nbhd.smooth/normals/curvatures
         compute it (f64, the square roots summed one by one in caller order, divided by n):
-        per-tile nearest distances (kNN halos), then a chain of tasks adding them in order."""
+        per-tile nearest distances (kNN halos), then a chain of tasks adding them in order,
+        ``block`` points each (the running sum passes from one to the next)."""
         if self._h is None:
             out = self._out(None, "nearest")
             spec = self._spec_node()
             parts = dask.compute(*[
                 dask.delayed(_tiles.nearest_tile, pure=False)(
                     spec, t, _first_halo(self.spec, t, 1),
-                    os.path.join(out, f"tile_{t:06d}.npz"))
+                    os.path.join(out, f"tile_{t:06d}"))
                 for t in range(self.tiles)])
-            block = max(1, min(self.n, 4_000_000))
+            block = max(1, min(self.n, int(block)))
             carry = 0.0
             for a in range(0, self.n, block):
                 b = min(a + block, self.n)

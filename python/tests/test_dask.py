@@ -23,7 +23,7 @@ def client():
         threads_per_worker=1,
         processes=True,
         memory_limit="1GiB",
-        dashboard_address=None,
+        dashboard_address=":0",
     )
     c = distributed.Client(cluster)
     yield c
@@ -77,8 +77,9 @@ def test_geometry_and_smoothing_from_a_dask_array(client, tmp_path, dtype):
     cloud = ndask.tile_array(da.from_array(pts, chunks=(30_000, 3)), str(tmp_path), grid=(2, 2, 2))
 
     ref = nbhd.curvatures(pts, k=15, epsilon=6.0)
-    # h: the library's mean spacing, summed in caller order by a chain of tasks
-    assert cloud.spacing() == ref["spacing"]
+    # h: the library's mean spacing, summed in caller order by a chain of tasks of 7,919
+    # points each (the running sum crosses 13 task boundaries)
+    assert cloud.spacing(block=7919) == ref["spacing"]
 
     got = cloud.curvatures(k=15, epsilon=6.0).assemble()
     assert got.keys() == {k for k, v in ref.items() if isinstance(v, np.ndarray)}
