@@ -3,7 +3,7 @@ times larger than one worker's memory limit is tiled, then its k-nearest table a
 are computed tile by tile; reported per worker count: times, peak memory of every worker
 process (its largest resident set), and the speed-up over one worker.
 
-    python python/benchmarks/dask_scaling.py --points 12000000 --memory-limit 300MB --workers 1,2
+    python python/benchmarks/dask_scaling.py --points 25000000 --memory-limit 200MB --workers 1,2
 
 The cloud is an aerial-scan-like terrain (x, y uniform over a square, z a smooth relief plus
 noise), generated chunk by chunk on the workers (never whole in one process). Results go to a
@@ -51,7 +51,7 @@ def run(workers, args):
                      "distributed.worker.memory.terminate": 0.95})
     cluster = distributed.LocalCluster(
         n_workers=workers, threads_per_worker=1, processes=True,
-        memory_limit=args.memory_limit, dashboard_address=None,
+        memory_limit=args.memory_limit, dashboard_address=":0",
     )
     client = distributed.Client(cluster)
     store = tempfile.mkdtemp(prefix="nbhd-dask-bench-", dir=args.dir)
@@ -71,6 +71,8 @@ def run(workers, args):
             "workers": workers, "tiles": cloud.tiles, "tile_s": t1 - t0, "knn_s": t2 - t1,
             "normals_s": t3 - t2, "total_s": t3 - t0,
             "peak_mb": sorted(peak.values()), "idle_mb": sorted(base.values()),
+            # a worker killed above its limit comes back under a new address
+            "restarted": len(set(peak) - set(base)),
         }
     finally:
         client.close()
@@ -80,13 +82,13 @@ def run(workers, args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--points", type=int, default=12_000_000)
+    ap.add_argument("--points", type=int, default=25_000_000)
     ap.add_argument("--dtype", default="float64", choices=["float32", "float64"])
-    ap.add_argument("--chunk", type=int, default=500_000)
-    ap.add_argument("--points-per-tile", type=int, default=100_000)
+    ap.add_argument("--chunk", type=int, default=250_000)
+    ap.add_argument("--points-per-tile", type=int, default=80_000)
     ap.add_argument("--k", type=int, default=10)
     ap.add_argument("--epsilon", type=float, default=3.0, help="absolute ε of the normals")
-    ap.add_argument("--memory-limit", default="160MB")
+    ap.add_argument("--memory-limit", default="200MB")
     ap.add_argument("--workers", default="1,2")
     ap.add_argument("--dir", default=None, help="where the store goes (default: the temp dir)")
     args = ap.parse_args()
@@ -94,16 +96,19 @@ def main():
     print(f"cloud: {args.points} points {args.dtype} = {size_mb:.0f} MB; "
           f"worker memory_limit {args.memory_limit}; k = {args.k}; "
           f"normals k = 15, ε = {args.epsilon}; cpus {os.cpu_count()}")
-    rows = [run(int(w), args) for w in args.workers.split(",")]
+    rows = []
+    for w in args.workers.split(","):
+        rows.append(run(int(w), args))
+        print("done:", rows[-1], flush=True)
     one = rows[0]["total_s"]
     print("| workers | tiles | tiling (s) | kNN table (s) | normals (s) | total (s) | speed-up | "
-          "peak RSS per worker (MB) | idle RSS (MB) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "peak RSS per worker (MB) | idle RSS (MB) | workers killed |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['workers']} | {r['tiles']} | {r['tile_s']:.1f} | {r['knn_s']:.1f} | "
               f"{r['normals_s']:.1f} | {r['total_s']:.1f} | {one / r['total_s']:.2f} | "
               f"{', '.join(f'{m:.0f}' for m in r['peak_mb'])} | "
-              f"{', '.join(f'{m:.0f}' for m in r['idle_mb'])} |")
+              f"{', '.join(f'{m:.0f}' for m in r['idle_mb'])} | {r['restarted']} |")
 
 
 if __name__ == "__main__":

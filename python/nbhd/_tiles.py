@@ -3,9 +3,10 @@ store, run nbhd on them, keep the rows of the owned points. Plain numpy and nbhd
 function here runs inside one Dask task (nbhd/dask.py builds the task graph).
 
 The tile store is a directory of ``.npy`` pieces. A piece holds points of one tile in ascending
-caller (global) index: ``pts`` (m, 3) float32/float64 and either ``idx`` (m,) int64 or a ``start``
-(the piece is the caller's rows ``start .. start+m``). A tile is a list of pieces plus the tight
-box ``(lo, hi)`` of its points; it *owns* them. Everything a task needs travels as plain lists
+caller (global) index: ``pts`` (m, 3) float32/float64 and either ``idx`` (m,) int64 (a Dask
+array's chunk sorted into grid tiles) or a ``start`` (a file: the caller's rows
+``start .. start+m``). A tile is its pieces plus the tight box ``(lo, hi)`` of its points; it
+*owns* them. Everything a task needs travels as plain lists
 and dicts (:class:`Spec`), so tasks run on any worker that sees the store's directory.
 """
 
@@ -19,42 +20,46 @@ import numpy as np
 from ._nbhd import KdTree
 
 
-@dataclass
-class Piece:
-    pts: str
-    idx: str | None = None
-    start: int = 0
-    count: int = 0
-
-    def load(self, mmap: bool = True):
-        pts = np.load(self.pts, mmap_mode="r" if mmap else None)
-        if self.idx is None:
-            idx = np.arange(self.start, self.start + len(pts), dtype=np.int64)
-        else:
-            idx = np.load(self.idx, mmap_mode="r" if mmap else None)
-        return idx, pts
+def piece_path(store: str, c: int, t: int) -> str:
+    """The files of input chunk ``c``'s points in grid tile ``t`` (``.pts.npy``, ``.idx.npy``)."""
+    return os.path.join(store, f"piece_c{c:06d}_t{t:06d}")
 
 
 @dataclass
 class Tile:
+    """One tile: the tight box of its points, their count, and where they are — the input
+    chunks that have points in it (grid tile ``grid_id`` of a Dask array), or one file's points
+    (``file``, the caller's rows ``start .. start+count``). Kept small: every task reads the
+    list of all tiles."""
+
     lo: list
     hi: list
     count: int
-    pieces: list = field(default_factory=list)
+    grid_id: int = -1
+    chunks: list = field(default_factory=list)
+    file: str | None = None
+    start: int = 0
+
+    def pieces(self, store: str):
+        """``(idx, pts)`` of each piece, memory-mapped, in ascending caller index."""
+        if self.file is not None:
+            pts = np.load(self.file, mmap_mode="r")
+            yield np.arange(self.start, self.start + len(pts), dtype=np.int64), pts
+            return
+        for c in self.chunks:
+            base = piece_path(store, int(c), self.grid_id)
+            yield np.load(base + ".idx.npy", mmap_mode="r"), np.load(base + ".pts.npy", mmap_mode="r")
 
 
 @dataclass
 class Spec:
-    """What every task reads: the cloud's size and type, and every tile's box and pieces."""
+    """What every task reads: the cloud's size and type, the store, every tile's box."""
 
     n: int
     dtype: str
     tiles: list
     scale: float  # the largest |coordinate|: the rounding margins are relative to it
-
-    @property
-    def eps(self) -> float:
-        return float(np.finfo(self.dtype).eps)
+    store: str = ""
 
 
 BATCH = 32_768  # queries answered at a time in a tile (memory, not results, depends on it)
@@ -69,7 +74,7 @@ def margin(width: float, spec: Spec, dtype=None) -> float:
 
 def owned(spec: Spec, t: int) -> np.ndarray:
     """The caller indices the tile owns, ascending."""
-    parts = [p.load()[0] for p in spec.tiles[t].pieces]
+    parts = [np.asarray(idx) for idx, _ in spec.tiles[t].pieces(spec.store)]
     return np.concatenate(parts).astype(np.int64) if parts else np.empty(0, np.int64)
 
 
@@ -84,8 +89,7 @@ def gather(spec: Spec, t: int, width: float, dtype=None):
     for u in spec.tiles:
         if u.count == 0 or np.any(np.asarray(u.hi) < a) or np.any(np.asarray(u.lo) > b):
             continue
-        for p in u.pieces:
-            idx, pts = p.load()
+        for idx, pts in u.pieces(spec.store):
             inside = np.all((pts >= a) & (pts <= b), axis=1)
             sel = np.flatnonzero(inside)
             idx_parts.append(np.asarray(idx[sel], np.int64))

@@ -30,7 +30,7 @@ import dask
 import numpy as np
 
 from . import _tiles
-from ._tiles import Piece, Spec, Tile
+from ._tiles import Spec, Tile, piece_path
 
 __all__ = ["TiledCloud", "TileResult", "AssembledTable", "tile_array", "tile_files", "open_store"]
 
@@ -79,11 +79,11 @@ def _bucket(chunk, start, lo, hi, grid, store, c):
         if len(sel) == 0:
             continue
         t = int(tile[sel[0]])
-        base = os.path.join(store, f"piece_c{c:06d}_t{t:06d}")
+        base = piece_path(store, c, t)
         p = pts[sel]
         np.save(base + ".pts.npy", p)
         np.save(base + ".idx.npy", sel.astype(np.int64) + start)
-        out.append((t, len(sel), p.min(axis=0).tolist(), p.max(axis=0).tolist(), base))
+        out.append((t, len(sel), p.min(axis=0).tolist(), p.max(axis=0).tolist(), c))
     return out
 
 
@@ -128,9 +128,9 @@ def tile_array(points, store, *, points_per_tile=250_000, grid=None):
         for c, b in enumerate(blocks)
     ]
     pieces = dask.compute(*tasks)
-    tiles = [Tile([0.0] * 3, [0.0] * 3, 0, []) for _ in range(int(np.prod(grid)))]
+    tiles = [Tile([0.0] * 3, [0.0] * 3, 0, t) for t in range(int(np.prod(grid)))]
     for chunk in pieces:  # chunks in order: a tile's pieces ascend in caller index
-        for t, count, plo, phi, base in chunk:
+        for t, count, plo, phi, c in chunk:
             tile = tiles[t]
             if tile.count == 0:
                 tile.lo, tile.hi = plo, phi
@@ -138,8 +138,8 @@ def tile_array(points, store, *, points_per_tile=250_000, grid=None):
                 tile.lo = np.minimum(tile.lo, plo).tolist()
                 tile.hi = np.maximum(tile.hi, phi).tolist()
             tile.count += count
-            tile.pieces.append(Piece(base + ".pts.npy", base + ".idx.npy", 0, count))
-    spec = Spec(n, np.dtype(points.dtype).name, [t for t in tiles if t.count], float(big))
+            tile.chunks.append(c)
+    spec = Spec(n, np.dtype(points.dtype).name, [t for t in tiles if t.count], float(big), store)
     return TiledCloud(spec, store)
 
 
@@ -159,22 +159,20 @@ def tile_files(paths, store, *, dtype=np.float64):
     tiles, start, big = [], 0, 0.0
     for count, lo, hi, out in done:
         if count:
-            tiles.append(Tile(lo, hi, count, [Piece(out, None, start, count)]))
+            tiles.append(Tile(lo, hi, count, file=out, start=start))
             big = max(big, max(abs(v) for v in lo + hi))
         start += count
     if start < 2:
         raise ValueError("a tiled cloud needs at least two points")
-    return TiledCloud(Spec(start, dtype.name, tiles, big), store)
+    return TiledCloud(Spec(start, dtype.name, tiles, big, store), store)
 
 
 def open_store(store):
     """The :class:`TiledCloud` saved in ``store`` by :meth:`TiledCloud.save`."""
     with open(os.path.join(store, "cloud.json")) as f:
         d = json.load(f)
-    tiles = [
-        Tile(t["lo"], t["hi"], t["count"], [Piece(**p) for p in t["pieces"]]) for t in d["tiles"]
-    ]
-    return TiledCloud(Spec(d["n"], d["dtype"], tiles, d["scale"]), store)
+    tiles = [Tile(**t) for t in d["tiles"]]
+    return TiledCloud(Spec(d["n"], d["dtype"], tiles, d["scale"], store), store)
 
 
 def _first_halo(spec, t, k):
@@ -227,7 +225,7 @@ class TiledCloud:
     def _spec_node(self):
         """The tile list as one node of the graph, which every tile task depends on: shipped
         to a worker once, not copied into every task (a task holding its own copy of a list of
-        thousands of pieces, with hundreds of tasks queued on a worker, fills its memory)."""
+        thousands of tiles, with hundreds of tasks queued on a worker, fills its memory)."""
         return dask.delayed(self.spec, pure=False, traverse=False)
 
     def _out(self, out, name):
