@@ -3,7 +3,8 @@
 # target directory (created once), maturin, numpy, scipy and pytest installed into it only when
 # missing, the binding crate formatted and linted (it is a workspace of its own, see
 # python/Cargo.toml), the package built in release mode and installed with pip exactly as a user
-# does (`pip install ./python`), then the pytest suite — with the command-line tool built, so
+# does (`pip install .` at the repository root: pyproject.toml builds python/), then the pytest
+# suite (with nbhd.dask's tests on a LocalCluster) — with the command-line tool built, so
 # that the geometry is compared with the Rust results the CLI writes.
 #
 # Idempotent: a second run reuses the environment and cargo's incremental build.
@@ -27,8 +28,9 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 export PATH="$venv/bin:$PATH"
 missing=()
-for pkg in maturin numpy scipy pytest; do
-    python -c "import $pkg" >/dev/null 2>&1 || missing+=("$pkg")
+# import name=pip requirement (dask and distributed: the tests of nbhd.dask on a LocalCluster)
+for pkg in maturin numpy scipy pytest "dask.array=dask[array]" distributed; do
+    python -c "import ${pkg%%=*}" >/dev/null 2>&1 || missing+=("${pkg#*=}")
 done
 if [ "${#missing[@]}" -gt 0 ]; then
     echo "== installing into $venv: ${missing[*]} (pip)"
@@ -39,9 +41,9 @@ echo "== python/: cargo fmt --check, clippy"
 cargo fmt --manifest-path python/Cargo.toml -- --check
 cargo clippy --manifest-path python/Cargo.toml --all-targets -- -D warnings
 
-echo "== pip install ./python (maturin, release build)"
+echo "== pip install . (maturin, release build of python/)"
 python -m pip install --quiet --disable-pip-version-check --no-build-isolation \
-    --force-reinstall --no-deps ./python
+    --force-reinstall --no-deps .
 
 echo "== the command-line tool, for the comparisons with the Rust results"
 cargo build --quiet -p nbhd-cli

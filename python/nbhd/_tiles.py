@@ -1,0 +1,289 @@
+"""The work of one tile (python/DASK.md): gather the tile's points and its halo from the tile
+store, run nbhd on them, keep the rows of the owned points. Plain numpy and nbhd, no Dask: every
+function here runs inside one Dask task (nbhd/dask.py builds the task graph).
+
+The tile store is a directory of ``.npy`` pieces. A piece holds points of one tile in ascending
+caller (global) index: ``pts`` (m, 3) float32/float64 and either ``idx`` (m,) int64 (a Dask
+array's chunk sorted into grid tiles) or a ``start`` (a file: the caller's rows
+``start .. start+m``). A tile is its pieces plus the tight box ``(lo, hi)`` of its points; it
+*owns* them. Everything a task needs travels as plain lists
+and dicts (:class:`Spec`), so tasks run on any worker that sees the store's directory.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._nbhd import KdTree
+
+
+def piece_path(store: str, c: int, t: int) -> str:
+    """The files of input chunk ``c``'s points in grid tile ``t`` (``.pts.npy``, ``.idx.npy``)."""
+    return os.path.join(store, f"piece_c{c:06d}_t{t:06d}")
+
+
+@dataclass
+class Tile:
+    """One tile: the tight box of its points, their count, and where they are — the input
+    chunks that have points in it (grid tile ``grid_id`` of a Dask array), or one file's points
+    (``file``, the caller's rows ``start .. start+count``). Kept small: every task reads the
+    list of all tiles."""
+
+    lo: list
+    hi: list
+    count: int
+    grid_id: int = -1
+    chunks: list = field(default_factory=list)
+    file: str | None = None
+    start: int = 0
+
+    def pieces(self, store: str):
+        """``(idx, pts)`` of each piece, memory-mapped, in ascending caller index."""
+        if self.file is not None:
+            pts = np.load(self.file, mmap_mode="r")
+            yield np.arange(self.start, self.start + len(pts), dtype=np.int64), pts
+            return
+        for c in self.chunks:
+            base = piece_path(store, int(c), self.grid_id)
+            yield np.load(base + ".idx.npy", mmap_mode="r"), np.load(base + ".pts.npy", mmap_mode="r")
+
+
+@dataclass
+class Spec:
+    """What every task reads: the cloud's size and type, the store, every tile's box."""
+
+    n: int
+    dtype: str
+    tiles: list
+    scale: float  # the largest |coordinate|: the rounding margins are relative to it
+    store: str = ""
+
+
+BATCH = 32_768  # queries answered at a time in a tile (memory, not results, depends on it)
+
+
+def margin(width: float, spec: Spec, dtype=None) -> float:
+    """``width`` widened by far more than the rounding of a distance in ``dtype``: a halo only
+    ever needs to be a superset, so the margin costs a few points and keeps exactness."""
+    eps = float(np.finfo(dtype or spec.dtype).eps)
+    return width * (1 + 64 * eps) + 64 * eps * spec.scale
+
+
+def owned(spec: Spec, t: int) -> np.ndarray:
+    """The caller indices the tile owns, ascending."""
+    parts = [np.asarray(idx) for idx, _ in spec.tiles[t].pieces(spec.store)]
+    return np.concatenate(parts).astype(np.int64) if parts else np.empty(0, np.int64)
+
+
+def gather(spec: Spec, t: int, width: float, dtype=None):
+    """The points within ``width`` of tile ``t``'s box (closed), its own included: ``(idx,
+    pts)`` in ascending caller index (so ties by index order as on one machine), ``pts`` in
+    ``dtype`` (default: the cloud's)."""
+    tile = spec.tiles[t]
+    a = np.asarray(tile.lo, np.float64) - width
+    b = np.asarray(tile.hi, np.float64) + width
+    idx_parts, pts_parts = [], []
+    for u in spec.tiles:
+        if u.count == 0 or np.any(np.asarray(u.hi) < a) or np.any(np.asarray(u.lo) > b):
+            continue
+        for idx, pts in u.pieces(spec.store):
+            inside = np.all((pts >= a) & (pts <= b), axis=1)
+            sel = np.flatnonzero(inside)
+            idx_parts.append(np.asarray(idx[sel], np.int64))
+            pts_parts.append(np.asarray(pts[sel]))
+    idx = np.concatenate(idx_parts)
+    pts = np.concatenate(pts_parts)
+    order = np.argsort(idx, kind="stable")
+    pts = pts[order]
+    if dtype is not None:
+        pts = pts.astype(dtype)
+    return idx[order], np.ascontiguousarray(pts)
+
+
+def _drop_self(glob, lens, own):
+    """CSR rows (``glob`` caller indices, ``lens`` row lengths) of the queries ``own``: each
+    query's own entry removed, or, when it is not in its row (more than the row's length of
+    exact copies with smaller indices), the row's last entry. Returns the kept mask."""
+    m = len(lens)
+    row_of = np.repeat(np.arange(m), lens)
+    is_own = glob == own[row_of]
+    has_own = np.zeros(m, bool)
+    has_own[row_of[is_own]] = True
+    drop = is_own.copy()
+    ends = np.cumsum(lens) - 1
+    last = np.flatnonzero(~has_own & (lens > 0))
+    drop[ends[last]] = True
+    return ~drop
+
+
+def _write(path, **arrays):
+    tmp = path + ".tmp.npz"
+    np.savez(tmp, **arrays)
+    os.replace(tmp, path)
+
+
+def knn_rows(
+    spec: Spec, t: int, k: int, width: float, dtype=None, tree_options=None, threads=0,
+    batch=BATCH,
+):
+    """The ``k`` nearest *other* points of tile ``t``'s points, exact: the halo starts at
+    ``width`` and doubles until every owned point's k-th distance is strictly below its
+    distance to the halo's outer border (every point as near as the k-th, ties included, was
+    searched). Returns ``(owned idx, indices (m, k'), sq_dists (m, k'), halo)``."""
+    tree_options = tree_options or {}
+    own = owned(spec, t)
+    n = spec.n
+    width_k = min(k, n - 1)
+    dt = np.dtype(dtype or spec.dtype)
+    feps = float(np.finfo(dt).eps)
+    lo = np.asarray(spec.tiles[t].lo, np.float64)
+    hi = np.asarray(spec.tiles[t].hi, np.float64)
+    m = len(own)
+    while True:
+        idx, pts = gather(spec, t, width, dt)
+        at = np.searchsorted(idx, own)
+        kk = min(k + 1, len(idx))
+        full = len(idx) == n
+        if kk - 1 < width_k and not full:  # fewer than k other points in reach: grow
+            width *= 2.0
+            continue
+        tree = KdTree(pts, threads=threads, **tree_options)
+        out_i = np.empty((m, width_k), np.uint32)
+        out_d = None
+        exact = True
+        # queries in batches: the temporaries stay small beside the tile's own arrays
+        for s in range(0, m, batch):
+            e = min(s + batch, m)
+            q = pts[at[s:e]]
+            local, d2 = tree.knn(q, kk, threads=threads)
+            glob = idx[local.astype(np.int64)]
+            keep = _drop_self(glob.reshape(-1), np.full(e - s, kk), own[s:e]).reshape(e - s, kk)
+            glob = glob[keep].reshape(e - s, kk - 1)[:, :width_k]
+            d2 = d2[keep].reshape(e - s, kk - 1)[:, :width_k]
+            if out_d is None:
+                out_d = np.empty((m, width_k), d2.dtype)
+            out_i[s:e] = glob
+            out_d[s:e] = d2
+            if full:
+                continue
+            qd = q.astype(np.float64)
+            border = np.minimum(qd - (lo - width), (hi + width) - qd).min(axis=1)
+            kth = np.sqrt(d2[:, -1].astype(np.float64)) if width_k else np.zeros(e - s)
+            # strictly inside, with a margin far above the rounding of d2 and of the border
+            if not np.all(kth * (1 + 64 * feps) + 64 * feps * spec.scale < border):
+                exact = False
+                break
+        if exact:
+            if out_d is None:
+                out_d = np.empty((0, width_k), dt)
+            return own, out_i, out_d, width
+        width *= 2.0
+
+
+def knn_tile(
+    spec: Spec, t: int, k: int, width: float, out: str, tree_options=None, threads=0, batch=BATCH
+):
+    """Task: the tile's rows of ``KdTree(points).neighborhoods(k=k)`` written to ``out``."""
+    own, glob, d2, used = knn_rows(spec, t, k, width, None, tree_options, threads, batch)
+    m, w = glob.shape
+    offsets = np.arange(m + 1, dtype=np.uint64) * np.uint64(w)
+    _write(out, idx=own, offsets=offsets, indices=glob.reshape(-1), sq_dists=d2.reshape(-1))
+    del glob, d2
+    return {"tile": t, "path": out, "rows": m, "halo": used}
+
+
+def radius_tile(
+    spec: Spec, t: int, k, radius: float, out: str, tree_options=None, threads=0, batch=BATCH
+):
+    """Task: the tile's rows of ``KdTree(points).neighborhoods(radius=radius)`` (``k`` None)
+    or ``(k=k, radius=radius)`` (the ε-k-neighbourhood), written to ``out``. Halo: ε, known in
+    advance (the radius is inclusive, the halo box closed, widened by a rounding margin)."""
+    tree_options = tree_options or {}
+    own = owned(spec, t)
+    halo = margin(radius, spec)
+    idx, pts = gather(spec, t, halo)
+    at = np.searchsorted(idx, own)
+    tree = KdTree(pts, threads=threads, **tree_options)
+    lens_all, ind_parts, sq_parts = [], [], []
+    for s in range(0, len(own), batch):
+        e = min(s + batch, len(own))
+        q = pts[at[s:e]]
+        if k is None:
+            table = tree.radius(q, radius, threads=threads)
+        else:
+            table = tree.knn_radius(q, k + 1, radius, threads=threads)
+        lens = np.diff(table.offsets).astype(np.int64)
+        glob = idx[table.indices.astype(np.int64)]
+        # rows of k + 1 lose their own entry or their last: at most k remain, as on one machine
+        keep = _drop_self(glob, lens, own[s:e])
+        row_of = np.repeat(np.arange(e - s), lens)
+        lens_all.append(np.bincount(row_of[keep], minlength=e - s).astype(np.uint64))
+        ind_parts.append(glob[keep].astype(np.uint32))
+        sq_parts.append(table.sq_dists[keep])
+    offsets = np.concatenate([[0], np.cumsum(np.concatenate(lens_all))]).astype(np.uint64)
+    _write(
+        out,
+        idx=own,
+        offsets=offsets,
+        indices=np.concatenate(ind_parts),
+        sq_dists=np.concatenate(sq_parts),
+    )
+    return {"tile": t, "path": out, "rows": len(own), "halo": halo}
+
+
+def nearest_tile(spec: Spec, t: int, width: float, out: str, threads=0):
+    """Task: every owned point's squared distance to its nearest other point, computed in f64
+    as the smoothing's spacing estimate does (the library converts to f64 first). Written as
+    two ``.npy`` files (``out`` + ``.idx.npy`` / ``.nearest.npy``) that the summing tasks map
+    and slice without reading them whole."""
+    own, _, d2, used = knn_rows(spec, t, 1, width, dtype=np.float64, threads=threads)
+    np.save(out + ".idx.npy", own)
+    np.save(out + ".nearest.npy", d2[:, 0] if d2.shape[1] else np.zeros(len(own)))
+    return {"tile": t, "path": out, "rows": len(own), "halo": used}
+
+
+def geometry_tile(spec: Spec, t: int, what: str, halo: float, out: str, kwargs: dict):
+    """Task: ``nbhd.normals``/``curvatures``/``smooth`` on the tile plus a halo of ``halo``
+    (lengths already absolute), the owned points' results written to ``out``."""
+    import nbhd
+
+    own = owned(spec, t)
+    idx, pts = gather(spec, t, margin(halo, spec, np.float64), np.float64)
+    at = np.searchsorted(idx, own)
+    arrays = {"idx": own}
+    if what == "normals":
+        normals, curvature, flags = nbhd.normals(pts, **kwargs)
+        arrays.update(normals=normals[at], surface_variation=curvature[at], flags=flags[at])
+    elif what == "curvatures":
+        r = nbhd.curvatures(pts, **kwargs)
+        for key, v in r.items():
+            if isinstance(v, np.ndarray):
+                arrays[key] = v[at]
+    elif what == "smooth":
+        r = nbhd.smooth(pts, **kwargs)
+        arrays["points"] = r["points"][at]
+        for key, v in (r["outputs"] or {}).items():
+            arrays["outputs." + key] = v[at]
+    else:  # pragma: no cover - the callers name one of the three
+        raise ValueError(what)
+    _write(out, **arrays)
+    return {"tile": t, "path": out, "rows": len(own), "halo": halo, "points": len(idx)}
+
+
+def partial_sum(parts, a: int, b: int, carry: float) -> float:
+    """The sum ``carry + x_a + ... + x_{b-1}`` of the square roots of the nearest squared
+    distances, added one by one in caller order as the library's spacing estimate adds them
+    (``np.add.accumulate`` is a sequential loop: the same roundings)."""
+    x = np.empty(b - a, np.float64)
+    for p in parts:
+        idx = np.load(p["path"] + ".idx.npy", mmap_mode="r")
+        i, j = np.searchsorted(idx, [a, b])
+        if j > i:
+            near = np.load(p["path"] + ".nearest.npy", mmap_mode="r")
+            x[np.asarray(idx[i:j]) - a] = near[i:j]
+    x = np.sqrt(x)
+    acc = np.add.accumulate(np.concatenate([[carry], x]))
+    return float(acc[-1])

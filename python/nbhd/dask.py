@@ -1,0 +1,450 @@
+"""nbhd on Dask: neighbourhood tables, normals, curvatures and smoothing of clouds larger than
+one machine, identical to the one-machine results (python/DASK.md has the user guide and the
+halo reasoning).
+
+A cloud — a Dask array ``(n, 3)`` of float32/float64, or a list of LAS/LAZ/PLY files whose
+concatenation in list order is the caller's order — is first cut into spatial tiles written to
+a *store* directory (:func:`tile_array`, :func:`tile_files`). Every computation then runs one
+Dask task per tile: the task reads its tile plus a halo from the store, runs nbhd, writes the
+owned points' rows or values to ``.npz`` files and returns a few numbers. A :class:`TileResult`
+lists those files and assembles them back in caller order.
+
+Tasks use whatever Dask scheduler is active: a ``distributed.Client`` (a LocalCluster or a real
+cluster; the store must then be on storage every worker mounts) or Dask's local schedulers.
+
+Exactness: every tile sees every point its owned points' results read (the halo), in caller
+index order, so trees, ties and sums run the same operations on the same numbers as one machine.
+Lengths relative to the mean spacing h use the library's h, summed one by one in caller order by
+a chain of tasks (:meth:`TiledCloud.spacing`): the same bits.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections import namedtuple
+from dataclasses import asdict
+
+import dask
+import numpy as np
+
+from . import _tiles
+from ._tiles import Spec, Tile, piece_path
+
+__all__ = ["TiledCloud", "TileResult", "AssembledTable", "tile_array", "tile_files", "open_store"]
+
+AssembledTable = namedtuple("AssembledTable", "offsets indices sq_dists")
+AssembledTable.__doc__ = """A table in caller order as compressed rows (the arrays of
+:class:`nbhd.Table`): row i is ``indices[offsets[i]:offsets[i+1]]`` with its ``sq_dists``."""
+
+
+def _grid(n, lo, hi, points_per_tile):
+    """Tiles per axis: about ``n / points_per_tile`` tiles of roughly cubic shape over the
+    extent; an axis thinner than a tile's side gets one tile (a terrain is cut in x and y)."""
+    ext = np.maximum(np.asarray(hi, np.float64) - np.asarray(lo, np.float64), 0.0)
+    want = max(1, math.ceil(n / max(1, points_per_tile)))
+    live = ext > 0
+    while live.any():
+        side = (np.prod(ext[live]) / want) ** (1.0 / live.sum())
+        thin = live & (ext < side)
+        if not thin.any():
+            break
+        live &= ~thin
+    if not live.any() or want == 1:
+        return [1] * len(ext)
+    return [max(1, int(round(e / side))) if on else 1 for e, on in zip(ext, live)]
+
+
+def _bucket(chunk, start, lo, hi, grid, store, c):
+    """Task: the points of one input chunk sorted into grid tiles, one piece file per
+    (chunk, tile); returns each piece's tile, count and tight box."""
+    pts = np.asarray(chunk)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise ValueError(f"points must be an (n, 3) array, chunk {c} is {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(pts), axis=1))[0]) + start
+        raise ValueError(f"point {bad} has a non-finite coordinate")
+    lo = np.asarray(lo, np.float64)
+    size = (np.asarray(hi, np.float64) - lo) / np.asarray(grid)
+    size[size == 0] = 1.0
+    cell = np.floor((pts.astype(np.float64) - lo) / size).astype(np.int64)
+    cell = np.clip(cell, 0, np.asarray(grid) - 1)
+    tile = np.ravel_multi_index(tuple(cell.T), tuple(grid))
+    order = np.argsort(tile, kind="stable")  # stable: ascending index within a tile
+    tile_sorted = tile[order]
+    cuts = np.flatnonzero(np.diff(tile_sorted)) + 1
+    out = []
+    for sel in np.split(order, cuts):
+        if len(sel) == 0:
+            continue
+        t = int(tile[sel[0]])
+        base = piece_path(store, c, t)
+        p = pts[sel]
+        np.save(base + ".pts.npy", p)
+        np.save(base + ".idx.npy", sel.astype(np.int64) + start)
+        out.append((t, len(sel), p.min(axis=0).tolist(), p.max(axis=0).tolist(), c))
+    return out
+
+
+def _ingest(path, i, store, dtype):
+    """Task: one LAS/LAZ/PLY file read with nbhd.read and kept as a piece (the file is a tile)."""
+    import nbhd
+
+    pts = np.ascontiguousarray(nbhd.read(path)["positions"], dtype=dtype)
+    if len(pts) and not np.all(np.isfinite(pts)):
+        raise ValueError(f"{path}: a point has a non-finite coordinate")
+    out = os.path.join(store, f"file_{i:06d}.pts.npy")
+    np.save(out, pts)
+    if len(pts) == 0:
+        return 0, [0.0] * 3, [0.0] * 3, out
+    return len(pts), pts.min(axis=0).tolist(), pts.max(axis=0).tolist(), out
+
+
+def tile_array(points, store, *, points_per_tile=250_000, grid=None):
+    """Cuts a Dask array ``(n, 3)`` (float32 or float64; rows in any chunks) into spatial tiles
+    written under the directory ``store``: one pass for the bounding box, one task per chunk
+    sorting its points into tiles. ``grid`` (tiles per axis) overrides ``points_per_tile``.
+    Returns the :class:`TiledCloud`."""
+    import dask.array as da
+
+    points = da.asarray(points)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f"points must be an (n, 3) array, not {points.shape}")
+    if points.dtype not in (np.float32, np.float64):
+        points = points.astype(np.float64)
+    os.makedirs(store, exist_ok=True)
+    points = points.rechunk({1: -1})
+    n = int(points.shape[0])
+    if n < 2:
+        raise ValueError("a tiled cloud needs at least two points")
+    lo, hi, big = dask.compute(points.min(axis=0), points.max(axis=0), abs(points).max())
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    grid = list(grid) if grid is not None else _grid(n, lo, hi, points_per_tile)
+    starts = np.concatenate([[0], np.cumsum(points.chunks[0])])
+    blocks = points.to_delayed().ravel()
+    tasks = [
+        dask.delayed(_bucket)(b, int(starts[c]), lo.tolist(), hi.tolist(), grid, store, c)
+        for c, b in enumerate(blocks)
+    ]
+    pieces = dask.compute(*tasks)
+    tiles = [Tile([0.0] * 3, [0.0] * 3, 0, t) for t in range(int(np.prod(grid)))]
+    for chunk in pieces:  # chunks in order: a tile's pieces ascend in caller index
+        for t, count, plo, phi, c in chunk:
+            tile = tiles[t]
+            if tile.count == 0:
+                tile.lo, tile.hi = plo, phi
+            else:
+                tile.lo = np.minimum(tile.lo, plo).tolist()
+                tile.hi = np.maximum(tile.hi, phi).tolist()
+            tile.count += count
+            tile.chunks.append(c)
+    spec = Spec(n, np.dtype(points.dtype).name, [t for t in tiles if t.count], float(big), store)
+    return TiledCloud(spec, store)
+
+
+def tile_files(paths, store, *, dtype=np.float64):
+    """A cloud given as LAS/LAZ/PLY (any format nbhd.read reads) tile files: their points in
+    list order are the caller's rows. Each file is read once, by a task, with nbhd's own
+    readers and kept in the store as one tile (its points and tight box; files may overlap, the
+    halos stay exact). ``dtype``: the type the computations see (float64: the files' own
+    coordinates; float32 to compute as with a float32 array)."""
+    os.makedirs(store, exist_ok=True)
+    dtype = np.dtype(dtype)
+    if dtype not in (np.float32, np.float64):
+        raise ValueError(f"dtype must be float32 or float64, not {dtype}")
+    done = dask.compute(
+        *[dask.delayed(_ingest)(os.fspath(p), i, store, dtype) for i, p in enumerate(paths)]
+    )
+    tiles, start, big = [], 0, 0.0
+    for count, lo, hi, out in done:
+        if count:
+            tiles.append(Tile(lo, hi, count, file=out, start=start))
+            big = max(big, max(abs(v) for v in lo + hi))
+        start += count
+    if start < 2:
+        raise ValueError("a tiled cloud needs at least two points")
+    return TiledCloud(Spec(start, dtype.name, tiles, big, store), store)
+
+
+def open_store(store):
+    """The :class:`TiledCloud` saved in ``store`` by :meth:`TiledCloud.save`."""
+    with open(os.path.join(store, "cloud.json")) as f:
+        d = json.load(f)
+    tiles = [Tile(**t) for t in d["tiles"]]
+    return TiledCloud(Spec(d["n"], d["dtype"], tiles, d["scale"], store), store)
+
+
+def _first_halo(spec, t, k):
+    """A first kNN halo: the spacing k points would have if the tile's points filled its box
+    evenly, times 2 (it doubles as needed)."""
+    tile = spec.tiles[t]
+    ext = np.maximum(np.asarray(tile.hi) - np.asarray(tile.lo), 0)
+    live = ext[ext > 0]
+    if len(live) == 0:
+        return max(spec.scale * 1e-6, 1e-12)
+    vol = np.prod(live) * max(k, 1) / tile.count
+    return float(2.0 * vol ** (1.0 / len(live)))
+
+
+class TiledCloud:
+    """A cloud cut into spatial tiles in a store directory (see the module doc). Its methods
+    run one Dask task per tile and return a :class:`TileResult`; ``out`` names a directory
+    for the result files (default: a new folder in the store)."""
+
+    def __init__(self, spec: Spec, store: str):
+        self.spec = spec
+        self.store = store
+        self._h = None
+
+    @property
+    def n(self) -> int:
+        return self.spec.n
+
+    @property
+    def dtype(self) -> np.dtype:
+        return np.dtype(self.spec.dtype)
+
+    @property
+    def tiles(self) -> int:
+        return len(self.spec.tiles)
+
+    def __repr__(self):
+        return (
+            f"TiledCloud(n={self.n}, dtype={self.spec.dtype}, tiles={self.tiles}, "
+            f"store={self.store!r})"
+        )
+
+    def save(self):
+        """Writes ``cloud.json`` in the store (:func:`open_store` reads it back)."""
+        d = {"n": self.spec.n, "dtype": self.spec.dtype, "scale": self.spec.scale,
+             "tiles": [asdict(t) for t in self.spec.tiles]}
+        with open(os.path.join(self.store, "cloud.json"), "w") as f:
+            json.dump(d, f)
+
+    def _spec_node(self):
+        """The tile list as one node of the graph, which every tile task depends on: shipped
+        to a worker once, not copied into every task (a task holding its own copy of a list of
+        thousands of tiles, with hundreds of tasks queued on a worker, fills its memory)."""
+        return dask.delayed(self.spec, pure=False, traverse=False)
+
+    def _out(self, out, name):
+        if out is None:
+            i = 0
+            while os.path.exists(os.path.join(self.store, f"{name}-{i}")):
+                i += 1
+            out = os.path.join(self.store, f"{name}-{i}")
+        os.makedirs(out, exist_ok=True)
+        return out
+
+    # --- neighbourhood tables -------------------------------------------------------------
+
+    def knn(self, k, *, threads=0, batch=_tiles.BATCH, out=None, **tree_options):
+        """Every point's ``k`` nearest other points: ``KdTree(points).neighborhoods(k=k)``,
+        byte for byte (halos grow until exact). ``tree_options`` go to each tile's KdTree;
+        ``threads`` is each task's nbhd threads (0: all cores), ``batch`` the queries a task
+        answers at a time (its memory; the result is the same)."""
+        if k < 1:
+            raise ValueError("k must be >= 1")
+        out = self._out(out, "knn")
+        spec = self._spec_node()
+        tasks = [
+            dask.delayed(_tiles.knn_tile, pure=False)(
+                spec, t, k, _first_halo(self.spec, t, k),
+                os.path.join(out, f"tile_{t:06d}.npz"), tree_options, threads, batch)
+            for t in range(self.tiles)
+        ]
+        return TileResult("table", self.n, list(dask.compute(*tasks)))
+
+    def radius(self, radius, *, k=None, threads=0, batch=_tiles.BATCH, out=None,
+               **tree_options):
+        """Every point's other points within ``radius`` (inclusive; absolute units), or with
+        ``k`` the ε-k-neighbourhood (the ``k`` nearest of them):
+        ``KdTree(points).neighborhoods(radius=radius[, k=k])``, byte for byte (halo: the
+        radius)."""
+        if not (np.isfinite(radius) and radius >= 0):
+            raise ValueError(f"radius {radius} must be finite and >= 0")
+        if k is not None and k < 1:
+            raise ValueError("k must be >= 1")
+        out = self._out(out, "radius")
+        spec = self._spec_node()
+        tasks = [
+            dask.delayed(_tiles.radius_tile, pure=False)(
+                spec, t, k, float(radius), os.path.join(out, f"tile_{t:06d}.npz"),
+                tree_options, threads, batch)
+            for t in range(self.tiles)
+        ]
+        return TileResult("table", self.n, list(dask.compute(*tasks)))
+
+    def knn_radius(self, k, radius, *, threads=0, batch=_tiles.BATCH, out=None, **tree_options):
+        """The ε-k-neighbourhood table (see :meth:`radius`)."""
+        return self.radius(radius, k=k, threads=threads, batch=batch, out=out, **tree_options)
+
+    # --- spacing, geometry, smoothing ------------------------------------------------------
+
+    def spacing(self, block: int = 4_000_000) -> float:
+        """The mean nearest-neighbour spacing h exactly as nbhd.smooth/normals/curvatures
+        compute it (f64, the square roots summed one by one in caller order, divided by n):
+        per-tile nearest distances (kNN halos), then a chain of tasks adding them in order,
+        ``block`` points each (the running sum passes from one to the next)."""
+        if self._h is None:
+            out = self._out(None, "nearest")
+            spec = self._spec_node()
+            parts = dask.compute(*[
+                dask.delayed(_tiles.nearest_tile, pure=False)(
+                    spec, t, _first_halo(self.spec, t, 1),
+                    os.path.join(out, f"tile_{t:06d}"))
+                for t in range(self.tiles)])
+            block = max(1, min(self.n, int(block)))
+            carry = 0.0
+            for a in range(0, self.n, block):
+                b = min(a + block, self.n)
+                carry = dask.delayed(_tiles.partial_sum, pure=False)(list(parts), a, b, carry)
+            self._h = float(dask.compute(carry)[0]) / self.n
+        return self._h
+
+    def _length(self, v, units):
+        if units == "absolute":
+            return float(v)
+        if units != "relative":
+            raise ValueError(f"unknown units {units!r}; expected 'relative' or 'absolute'")
+        return float(v) * self.spacing()
+
+    def _curvature(self, v, units):
+        if units == "absolute":
+            return float(v)
+        if units != "relative":
+            raise ValueError(f"unknown units {units!r}; expected 'relative' or 'absolute'")
+        return float(v) / self.spacing()
+
+    def _geometry(self, what, halo, kwargs, out):
+        out = self._out(out, what)
+        spec = self._spec_node()
+        tasks = [
+            dask.delayed(_tiles.geometry_tile, pure=False)(
+                spec, t, what, halo, os.path.join(out, f"tile_{t:06d}.npz"), kwargs)
+            for t in range(self.tiles)
+        ]
+        return TileResult("arrays", self.n, list(dask.compute(*tasks)))
+
+    @staticmethod
+    def _orientation(orientation):
+        if orientation.replace("_", "-") == "propagate":
+            raise ValueError("orientation 'propagate' is global (a spanning tree over the whole "
+                             "cloud) and is not computed per tile")
+
+    def normals(self, *, k=15, epsilon=6.0, epsilon_units="relative", orientation="unoriented",
+                orientation_point=(0.0, 0.0, 0.0), threads=0, out=None):
+        """``nbhd.normals(points, ...)`` tile by tile (halo ε): arrays ``normals``,
+        ``surface_variation``, ``flags``, identical to the last bit."""
+        self._orientation(orientation)
+        eps = self._length(epsilon, epsilon_units)
+        kw = dict(k=k, epsilon=eps, epsilon_units="absolute", orientation=orientation,
+                  orientation_point=tuple(orientation_point), threads=threads)
+        r = self._geometry("normals", eps, kw, out)
+        r.epsilon = eps
+        return r
+
+    def curvatures(self, *, k=15, epsilon=6.0, epsilon_units="relative", orientation="unoriented",
+                   orientation_point=(0.0, 0.0, 0.0), density="abs-linear", formula="eq2.25",
+                   threads=0, out=None):
+        """``nbhd.curvatures(points, ...)`` tile by tile (halo ε): its arrays, identical to the
+        last bit."""
+        self._orientation(orientation)
+        eps = self._length(epsilon, epsilon_units)
+        kw = dict(k=k, epsilon=eps, epsilon_units="absolute", orientation=orientation,
+                  orientation_point=tuple(orientation_point), density=density, formula=formula,
+                  threads=threads)
+        r = self._geometry("curvatures", eps, kw, out)
+        r.epsilon = eps
+        return r
+
+    def smooth(self, *, method="anisotropic", k=15, epsilon=6.0, epsilon_units="relative",
+               steps=None, tau=0.5, weighting=None, lambda_=0.2, lambda_units="relative",
+               feature="all", feature_threshold=None, feature_units="relative",
+               constrain_interior=None, orientation="unoriented",
+               orientation_point=(0.0, 0.0, 0.0), outputs=False, threads=0, out=None):
+        """``nbhd.smooth(points, ...)`` (the faithful method) tile by tile: array ``points``
+        and, with ``outputs``, ``outputs.<name>``, identical to the last bit. Halo: steps·ε
+        (a step reads only the point's own row, fixed on the input), plus ε for the outputs.
+        ``update_neighbors`` is not offered (rows follow the moving points; no halo is proven
+        for it), nor the robust mode (python/DASK.md says why)."""
+        self._orientation(orientation)
+        if steps is None:
+            steps = 2 if method == "isotropic" else 3
+        eps = self._length(epsilon, epsilon_units)
+        lam = self._curvature(lambda_, lambda_units)
+        thr = feature_threshold
+        if thr is not None and feature in ("principal", "directional"):
+            thr = self._curvature(thr, feature_units)
+        kw = dict(method=method, k=k, epsilon=eps, epsilon_units="absolute", steps=steps, tau=tau,
+                  weighting=weighting, lambda_=lam, lambda_units="absolute", feature=feature,
+                  feature_threshold=thr, feature_units="absolute",
+                  constrain_interior=constrain_interior, orientation=orientation,
+                  orientation_point=tuple(orientation_point), outputs=outputs, threads=threads)
+        halo = eps * (steps + (1 if outputs else 0))
+        r = self._geometry("smooth", halo, kw, out)
+        r.epsilon = eps
+        return r
+
+
+class TileResult:
+    """The per-tile result files of one computation (``parts``: one dict per tile with its
+    ``path``, ``rows`` and ``halo``) and their assembly in caller order."""
+
+    def __init__(self, kind, n, parts):
+        self.kind = kind
+        self.n = n
+        self.parts = parts
+        self.epsilon = None
+
+    @property
+    def halos(self):
+        return [p["halo"] for p in self.parts]
+
+    @property
+    def paths(self):
+        return [p["path"] for p in self.parts]
+
+    def assemble(self):
+        """The result in caller order, in memory: an :class:`AssembledTable` for tables, a dict
+        of arrays otherwise (as the one-machine call returns them)."""
+        if self.kind == "table":
+            return self._table()
+        out = {}
+        for p in self.parts:
+            with np.load(p["path"]) as z:
+                idx = z["idx"]
+                for key in z.files:
+                    if key == "idx":
+                        continue
+                    v = z[key]
+                    if key not in out:
+                        out[key] = np.empty((self.n,) + v.shape[1:], v.dtype)
+                    out[key][idx] = v
+        return out
+
+    def _table(self):
+        lens = np.zeros(self.n, np.uint64)
+        loaded = []
+        for p in self.parts:
+            z = np.load(p["path"])
+            lens[z["idx"]] = np.diff(z["offsets"])
+            loaded.append(z)
+        offsets = np.concatenate([[0], np.cumsum(lens)]).astype(np.uint64)
+        total = int(offsets[-1])
+        indices = np.empty(total, np.uint32)
+        sq = None
+        for z in loaded:
+            idx, loff = z["idx"], z["offsets"].astype(np.int64)
+            d2 = z["sq_dists"]
+            if sq is None:
+                sq = np.empty(total, d2.dtype)
+            rl = np.diff(loff)
+            dest = np.repeat(offsets[idx].astype(np.int64) - loff[:-1], rl) + np.arange(loff[-1])
+            indices[dest] = z["indices"]
+            sq[dest] = d2
+            z.close()
+        if sq is None:
+            sq = np.empty(0, np.float64)
+        return AssembledTable(offsets, indices, sq)
