@@ -159,14 +159,22 @@ fn large_set_per_axis_leaves() {
 fn borders_and_negative_coordinates() {
     // x: -0.5 → ⌊-1⌋ = -1; -0.25 → -1; 0 → 0; 0.5 → 1; 1.0 → 2 (b_min = -1)
     let c: Vec<f64> = vec![
-        1.0, 0.0, // 0: voxel (3, 0)
-        -0.5, 0.0, // 1: voxel (0, 0)
-        0.5, 0.0, // 2: voxel (2, 0)
-        -0.25, 0.0, // 3: voxel (0, 0)
-        0.0, 0.5, // 4: voxel (1, 1)
-        0.25, 0.25, // 5: voxel (1, 0)
-        0.0, 0.0, // 6: voxel (1, 0)
-        f64::NAN, 0.0, // 7: none
+        1.0,
+        0.0, // 0: voxel (3, 0)
+        -0.5,
+        0.0, // 1: voxel (0, 0)
+        0.5,
+        0.0, // 2: voxel (2, 0)
+        -0.25,
+        0.0, // 3: voxel (0, 0)
+        0.0,
+        0.5, // 4: voxel (1, 1)
+        0.25,
+        0.25, // 5: voxel (1, 0)
+        0.0,
+        0.0, // 6: voxel (1, 0)
+        f64::NAN,
+        0.0, // 7: none
     ];
     let v = PointsView::from_flat(&c, 2).unwrap();
     let g = voxel_grid::<f64>(&v, &VoxelGridOptions::cube(0.5)).unwrap();
@@ -200,7 +208,10 @@ fn all_nan_gives_nothing() {
 
 fn leaf_refused(r: nbhd::Result<VoxelGrid<f64>>) -> String {
     match r {
-        Err(NbhdError::InvalidOption { name: "leaf", reason }) => reason,
+        Err(NbhdError::InvalidOption {
+            name: "leaf",
+            reason,
+        }) => reason,
         other => panic!("expected a refused leaf, got {other:?}"),
     }
 }
@@ -251,7 +262,10 @@ fn huge_extents_are_refused() {
     let far32 = vec![0.0f32, 2e7];
     let v = PointsView::from_flat(&far32, 1).unwrap();
     match voxel_grid::<f32>(&v, &VoxelGridOptions::cube(1.0)) {
-        Err(NbhdError::InvalidOption { name: "leaf", reason }) => {
+        Err(NbhdError::InvalidOption {
+            name: "leaf",
+            reason,
+        }) => {
             assert!(reason.contains("2^24"), "{reason}")
         }
         other => panic!("{other:?}"),

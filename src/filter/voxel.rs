@@ -143,13 +143,16 @@ fn bounds<T: Scalar>(view: &PointsView<'_>) -> Option<(Vec<T>, Vec<T>)> {
             acc
         })
         .collect();
-    pieces.into_iter().flatten().reduce(|(mut lo, mut hi), (l, h)| {
-        for a in 0..d {
-            lo[a] = lo[a].min_of(l[a]);
-            hi[a] = hi[a].max_of(h[a]);
-        }
-        (lo, hi)
-    })
+    pieces
+        .into_iter()
+        .flatten()
+        .reduce(|(mut lo, mut hi), (l, h)| {
+            for a in 0..d {
+                lo[a] = lo[a].min_of(l[a]);
+                hi[a] = hi[a].max_of(h[a]);
+            }
+            (lo, hi)
+        })
 }
 
 fn leaf_error(reason: String) -> NbhdError {
@@ -220,7 +223,11 @@ fn grid<T: Scalar>(lo: &[T], hi: &[T], inv: Vec<T>) -> Result<Grid<T>> {
                 hi[a],
                 mantissa_bits::<T>(),
                 type_name::<T>(),
-                if T::TYPE == ScalarType::F32 { " or f64 points" } else { "" }
+                if T::TYPE == ScalarType::F32 {
+                    " or f64 points"
+                } else {
+                    ""
+                }
             )));
         }
         mul.push(cells);

@@ -10,7 +10,7 @@ use nbhd::filter::{
     radius_outlier_removal, statistical_outlier_removal, voxel_grid, RadiusOutlierOptions,
     StatisticalOutlierOptions, VoxelGrid, VoxelGridOptions,
 };
-use nbhd::io::{Precision, PointCloud, ScalarField};
+use nbhd::io::{PointCloud, Precision, ScalarField};
 use nbhd::smooth::Length;
 use nbhd::{BuildOptions, KdTree, NonFinitePolicy};
 use serde_json::json;
@@ -248,7 +248,8 @@ pub fn run_ror(a: RorArgs, out: &Output) -> Result<()> {
 
 /// The centroid cloud of `g`: positions, averaged normals (renormalised) and fields.
 fn centroid_cloud<T: nbhd::Scalar>(cloud: &PointCloud, g: &VoxelGrid<T>) -> PointCloud {
-    let mean = |v: &[f64], m: &[u32]| m.iter().map(|&i| v[i as usize]).sum::<f64>() / m.len() as f64;
+    let mean =
+        |v: &[f64], m: &[u32]| m.iter().map(|&i| v[i as usize]).sum::<f64>() / m.len() as f64;
     let voxels = 0..g.len();
     PointCloud {
         positions: voxels
@@ -280,7 +281,10 @@ fn centroid_cloud<T: nbhd::Scalar>(cloud: &PointCloud, g: &VoxelGrid<T>) -> Poin
             .iter()
             .map(|f| ScalarField {
                 name: f.name.clone(),
-                values: voxels.clone().map(|v| mean(&f.values, g.members_of(v))).collect(),
+                values: voxels
+                    .clone()
+                    .map(|v| mean(&f.values, g.members_of(v)))
+                    .collect(),
             })
             .collect(),
         grid: None,
@@ -292,7 +296,9 @@ pub fn run_voxel(a: VoxelArgs, out: &Output) -> Result<()> {
     let name = a.input.input.display().to_string();
     let cloud = a.input.read()?;
     let leaf = match a.leaf {
-        Length::Relative(_) => a.leaf.resolve(tree(&cloud, &name)?.spacing(0).context(&name)?.mean),
+        Length::Relative(_) => a
+            .leaf
+            .resolve(tree(&cloud, &name)?.spacing(0).context(&name)?.mean),
         _ => a.leaf.resolve(1.0),
     };
     let view = cloud.view().context(&name)?;
@@ -339,7 +345,11 @@ pub fn run_voxel(a: VoxelArgs, out: &Output) -> Result<()> {
     out.text(format!(
         "voxel: {} points -> {voxels} {} (leaf {}) in {millis:.1} ms -> {}",
         cloud.len(),
-        if a.nearest { "nearest points" } else { "centroids" },
+        if a.nearest {
+            "nearest points"
+        } else {
+            "centroids"
+        },
         num(leaf),
         a.output.display()
     ));
