@@ -294,8 +294,8 @@ fn run<T: Scalar>(
     // (voxel, index) pairs of the finite points; index order within a piece
     let key = |p: &[T]| -> u64 {
         let mut k = 0u64;
-        for a in 0..d {
-            let i = cell(p[a], g.inv[a]) as i64 - g.low[a];
+        for (a, &x) in p.iter().enumerate() {
+            let i = cell(x, g.inv[a]) as i64 - g.low[a];
             k += i as u64 * g.mul[a];
         }
         k
