@@ -315,8 +315,18 @@ fn run<T: Scalar>(
         })
         .collect();
     debug_assert!(pairs.iter().all(|&(k, _)| k < g.cells));
-    // distinct pairs: the unstable sort has one result
-    pairs.par_sort_unstable();
+    // distinct pairs: the unstable sort has one result. With at most 2^32 voxels a pair packs
+    // into one u64 (voxel above index), whose order is the pairs' order and sorts faster.
+    if g.cells <= 1 << 32 {
+        let mut packed: Vec<u64> = pairs.par_iter().map(|&(k, i)| k << 32 | i as u64).collect();
+        packed.par_sort_unstable();
+        pairs
+            .par_iter_mut()
+            .zip(packed.par_iter())
+            .for_each(|(p, &k)| *p = (k >> 32, k as u32));
+    } else {
+        pairs.par_sort_unstable();
+    }
     // runs of one voxel
     let mut starts: Vec<usize> = Vec::new();
     let mut s = 0;
