@@ -1629,6 +1629,45 @@ nbhd_status nbhd_remove_radius_outliers(const nbhd_tree *tree,
                                         uint8_t *mask);
 
 /**
+ * Voxel-grid downsampling (PCL's VoxelGrid, Open3D's voxel_down_sample) of the points
+ * `*points` (no tree needed): the occupied voxels of the finite points, in ascending linear
+ * voxel index (x fastest), each with its centroid and the index of its point nearest the
+ * centroid (ties by the smaller index: an original point, whose attributes the caller keeps).
+ * The arithmetic is PCL 1.13's in the points' scalar type: float points give PCL's voxels
+ * exactly (centroids summed in ascending index; PCL's order within a voxel is not defined).
+ *
+ * - `leaf`: `leaf_count` edge lengths, 1 (a cube) or `points->dim`; each finite and > 0.
+ * - `min_points_per_voxel`: voxels with fewer points are left out (0 and 1 keep all).
+ * - `centroids`: NULL, or `capacity * points->dim` doubles: voxel v's centroid at
+ *   `centroids[v * dim ..]` (float values converted exactly).
+ * - `nearest`: NULL, or `capacity` uint32_t: voxel v's point nearest its centroid.
+ * - `*count` receives the number of voxels. The number of points always suffices as
+ *   capacity; with less, the status is NBHD_STATUS_BUFFER_TOO_SMALL, `*count` the number
+ *   needed, nothing written.
+ *
+ * Errors: NULL_POINTER (`points`, `leaf`, `count`), MISALIGNED_POINTER, the point-buffer
+ * statuses of nbhd_tree_build, INVALID_OPTION (a leaf NaN, <= 0 or infinite, a leaf count
+ * other than 1 or dim, a leaf so small for the points' extent that a voxel number passes the
+ * exact integers of the type — 2^24 for float — or the box holds more than 2^64 voxels;
+ * threads above NBHD_MAX_THREADS), BUFFER_TOO_SMALL, OUT_OF_MEMORY. On error `*count` is 0
+ * except for BUFFER_TOO_SMALL.
+ *
+ * # Safety
+ * `points` NULL or a readable description of readable memory; `leaf` NULL or readable for
+ * `leaf_count` values; `centroids`, `nearest` NULL or writable as described; `count` NULL or
+ * writable.
+ */
+nbhd_status nbhd_voxel_grid(const nbhd_points *points,
+                            const double *leaf,
+                            size_t leaf_count,
+                            size_t min_points_per_voxel,
+                            size_t threads,
+                            double *centroids,
+                            uint32_t *nearest,
+                            size_t capacity,
+                            size_t *count);
+
+/**
  * The default table options: each point left out of its own row, the shared thread pool.
  */
 nbhd_table_options nbhd_table_options_default(void);

@@ -98,6 +98,7 @@ enum Command {
     Crop(commands::filter::CropArgs),
     Sor(commands::filter::SorArgs),
     Ror(commands::filter::RorArgs),
+    Voxel(commands::filter::VoxelArgs),
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -133,6 +134,7 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Crop(a)) => commands::filter::run_crop(a, &out),
         Some(Command::Sor(a)) => commands::filter::run_sor(a, &out),
         Some(Command::Ror(a)) => commands::filter::run_ror(a, &out),
+        Some(Command::Voxel(a)) => commands::filter::run_voxel(a, &out),
     }
 }
 

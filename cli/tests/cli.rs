@@ -1154,4 +1154,38 @@ fn filters_write_the_kept_points_and_info_prints_the_spacing() {
     )
     .unwrap();
     assert_eq!(count(&out), want.indices.len());
+
+    // voxel grid in f32 (a float file): the library's centroids, and with --nearest the
+    // original points themselves
+    let pts32: Vec<f32> = cloud
+        .positions
+        .iter()
+        .flatten()
+        .map(|&x| x as f32)
+        .collect();
+    let v32 = nbhd::PointsView::from_flat(&pts32, 3).unwrap();
+    let g =
+        nbhd::filter::voxel_grid::<f32>(&v32, &nbhd::filter::VoxelGridOptions::cube(0.01)).unwrap();
+    assert!(g.len() > 10 && g.len() < cloud.len());
+    let out = tmp("voxel.pcd");
+    let o = nbhd(&["voxel", &f, &out, "--leaf", "0.01"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = nbhd::io::read(&out).unwrap();
+    assert_eq!(got.len(), g.len());
+    for (v, p) in got.positions.iter().enumerate() {
+        let c = g.centroid(v);
+        assert_eq!(*p, [c[0] as f64, c[1] as f64, c[2] as f64]);
+    }
+    let o = nbhd(&["voxel", &f, &out, "--leaf", "0.01", "--nearest"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = nbhd::io::read(&out).unwrap();
+    let want: Vec<[f64; 3]> = g
+        .nearest
+        .iter()
+        .map(|&i| cloud.positions[i as usize])
+        .collect();
+    assert_eq!(got.positions, want);
+    let o = nbhd(&["voxel", &f, &out, "--leaf", "0"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("leaf"), "{}", stderr(&o));
 }

@@ -4,11 +4,13 @@
 use super::args::{check_optional, check_ptr, deref, init_out};
 use super::status::{guard, nbhd_status, FfiError};
 use super::tree::{nbhd_tree, with_tree};
+use super::types::{nbhd_points, PointsArg};
 use crate::error::NbhdError;
 use crate::filter::{
-    radius_outlier_removal, statistical_outlier_removal, RadiusOutlierOptions,
-    StatisticalOutlierOptions,
+    radius_outlier_removal, statistical_outlier_removal, voxel_grid, RadiusOutlierOptions,
+    StatisticalOutlierOptions, VoxelGridOptions,
 };
+use crate::scalar::ScalarType;
 
 /// The nearest-neighbour spacing of a point set: the distance of each point to its nearest
 /// other point, summarised. `mean` is the h of every relative length (epsilon = 6 h).
@@ -179,5 +181,94 @@ pub unsafe extern "C" fn nbhd_remove_radius_outliers(
         let result = with_tree!(&tree.inner, t => radius_outlier_removal(t, &options))?;
         // SAFETY: the buffers are as the caller describes (contract above).
         unsafe { write_kept(&result, kept, capacity, count, mask) }
+    })
+}
+
+/// Voxel-grid downsampling (PCL's VoxelGrid, Open3D's voxel_down_sample) of the points
+/// `*points` (no tree needed): the occupied voxels of the finite points, in ascending linear
+/// voxel index (x fastest), each with its centroid and the index of its point nearest the
+/// centroid (ties by the smaller index: an original point, whose attributes the caller keeps).
+/// The arithmetic is PCL 1.13's in the points' scalar type: float points give PCL's voxels
+/// exactly (centroids summed in ascending index; PCL's order within a voxel is not defined).
+///
+/// - `leaf`: `leaf_count` edge lengths, 1 (a cube) or `points->dim`; each finite and > 0.
+/// - `min_points_per_voxel`: voxels with fewer points are left out (0 and 1 keep all).
+/// - `centroids`: NULL, or `capacity * points->dim` doubles: voxel v's centroid at
+///   `centroids[v * dim ..]` (float values converted exactly).
+/// - `nearest`: NULL, or `capacity` uint32_t: voxel v's point nearest its centroid.
+/// - `*count` receives the number of voxels. The number of points always suffices as
+///   capacity; with less, the status is NBHD_STATUS_BUFFER_TOO_SMALL, `*count` the number
+///   needed, nothing written.
+///
+/// Errors: NULL_POINTER (`points`, `leaf`, `count`), MISALIGNED_POINTER, the point-buffer
+/// statuses of nbhd_tree_build, INVALID_OPTION (a leaf NaN, <= 0 or infinite, a leaf count
+/// other than 1 or dim, a leaf so small for the points' extent that a voxel number passes the
+/// exact integers of the type — 2^24 for float — or the box holds more than 2^64 voxels;
+/// threads above NBHD_MAX_THREADS), BUFFER_TOO_SMALL, OUT_OF_MEMORY. On error `*count` is 0
+/// except for BUFFER_TOO_SMALL.
+///
+/// # Safety
+/// `points` NULL or a readable description of readable memory; `leaf` NULL or readable for
+/// `leaf_count` values; `centroids`, `nearest` NULL or writable as described; `count` NULL or
+/// writable.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn nbhd_voxel_grid(
+    points: *const nbhd_points,
+    leaf: *const f64,
+    leaf_count: usize,
+    min_points_per_voxel: usize,
+    threads: usize,
+    centroids: *mut f64,
+    nearest: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    guard("nbhd_voxel_grid", || {
+        // SAFETY: `count` is NULL or writable (caller).
+        let count = unsafe { init_out(count, "count", 0) }?;
+        // SAFETY: `points` is NULL or a readable struct (caller).
+        let arg = unsafe { PointsArg::read(points, "points") }?;
+        check_ptr(leaf, "leaf")?;
+        check_optional(centroids.cast_const(), "centroids")?;
+        check_optional(nearest.cast_const(), "nearest")?;
+        // SAFETY: `leaf` is non-NULL, aligned and readable for `leaf_count` values (caller).
+        let leaf = unsafe { std::slice::from_raw_parts(leaf, leaf_count) }.to_vec();
+        // SAFETY: the caller's description of the point memory is true (contract above).
+        let view = unsafe { arg.view() }?;
+        let options = VoxelGridOptions {
+            leaf,
+            min_points_per_voxel,
+            threads,
+        };
+        let (cents, near): (Vec<f64>, Vec<u32>) = match arg.scalar {
+            ScalarType::F32 => {
+                let g = voxel_grid::<f32>(&view, &options)?;
+                (g.centroids.iter().map(|&c| c as f64).collect(), g.nearest)
+            }
+            ScalarType::F64 => {
+                let g = voxel_grid::<f64>(&view, &options)?;
+                (g.centroids, g.nearest)
+            }
+        };
+        // SAFETY: `count` was checked by init_out.
+        unsafe { count.write(near.len()) };
+        if near.len() > capacity {
+            return Err(NbhdError::BufferTooSmall {
+                what: "voxels (the size needed is in *count; the number of points always suffices)",
+                len: capacity,
+                needed: near.len(),
+            }
+            .into());
+        }
+        if !centroids.is_null() {
+            // SAFETY: non-NULL, aligned, writable for capacity * dim >= len doubles (caller).
+            unsafe { std::ptr::copy_nonoverlapping(cents.as_ptr(), centroids, cents.len()) };
+        }
+        if !nearest.is_null() {
+            // SAFETY: non-NULL, aligned, writable for capacity >= len values (caller).
+            unsafe { std::ptr::copy_nonoverlapping(near.as_ptr(), nearest, near.len()) };
+        }
+        Ok(())
     })
 }

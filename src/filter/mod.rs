@@ -2,6 +2,9 @@
 //! removal (PCL `StatisticalOutlierRemoval`, Open3D `remove_statistical_outlier`) and radius
 //! outlier removal (PCL `RadiusOutlierRemoval`, Open3D `remove_radius_outlier`). Each returns
 //! the caller's indices of the points it keeps, ascending, and can give them as a mask.
+//! Voxel-grid downsampling (PCL `VoxelGrid`, Open3D `voxel_down_sample`, `voxel.rs`) needs no
+//! tree: it reads the caller's buffer and gives each occupied voxel's centroid, members and
+//! the member nearest the centroid.
 //!
 //! Both are exact (the tree's exact neighbourhoods, `src/tree/`) and identical for any thread
 //! count (the per-point values come from an all-point table in the caller's order and are
@@ -12,8 +15,10 @@
 //! the first.)
 
 mod outliers;
+mod voxel;
 
 pub use outliers::{
     radius_outlier_removal, statistical_outlier_removal, Kept, RadiusOutlierOptions,
     StatisticalOutlierOptions,
 };
+pub use voxel::{voxel_grid, VoxelGrid, VoxelGridOptions};

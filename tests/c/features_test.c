@@ -301,6 +301,89 @@ static void test_outliers(int f32) {
     nbhd_tree_free(tree);
 }
 
+/* Voxel grid, leaf 1 (exact): voxel = floor(x) - floor(min) per axis, linear index x fastest;
+ * centroids summed in ascending index in the points' type; nearest member, ties by index. */
+static void test_voxel(int f32) {
+    nbhd_points p;
+    static double cen[N * DIM], wsum[125 * DIM];
+    static float wsumf[125 * DIM];
+    uint32_t near[N];
+    size_t wcount[125], count = 99, i, v, c, nv = 0;
+    double lo[DIM] = {INFINITY, INFINITY, INFINITY};
+    double leaf = 1.0, bad = 0.0;
+    int vox[N];
+    p.data = f32 ? (const void *)ptsf : (const void *)pts;
+    p.count = N;
+    p.dim = DIM;
+    p.stride = 0;
+    p.scalar_type = f32 ? NBHD_SCALAR_TYPE_F32 : NBHD_SCALAR_TYPE_F64;
+    for (i = 0; i < N; i++)
+        for (c = 0; c < DIM; c++)
+            if (pts[i * DIM + c] < lo[c]) lo[c] = pts[i * DIM + c];
+    for (v = 0; v < 125 * DIM; v++) { wsum[v] = 0.0; wsumf[v] = 0.0f; }
+    for (v = 0; v < 125; v++) wcount[v] = 0;
+    for (i = 0; i < N; i++) {
+        int id = 0, mul = 1;
+        for (c = 0; c < DIM; c++) {
+            id += (int)(floor(pts[i * DIM + c]) - floor(lo[c])) * mul;
+            mul *= 5; /* coordinates 0 .. 4 */
+        }
+        vox[i] = id;
+        wcount[id]++;
+        for (c = 0; c < DIM; c++) {
+            wsum[id * DIM + c] += pts[i * DIM + c];
+            wsumf[id * DIM + c] += ptsf[i * DIM + c];
+        }
+    }
+    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, 0, 2, cen, near, N, &count), NBHD_STATUS_OK);
+    for (v = 0; v < 125; v++) {
+        size_t best = N;
+        double bd = INFINITY, want[DIM];
+        if (wcount[v] == 0) continue;
+        for (c = 0; c < DIM; c++)
+            want[c] = f32 ? (double)(wsumf[v * DIM + c] / (float)wcount[v])
+                          : wsum[v * DIM + c] / (double)wcount[v];
+        for (i = 0; i < N; i++) {
+            double d2 = 0.0;
+            if (vox[i] != (int)v) continue;
+            for (c = 0; c < DIM; c++) {
+                double t = pts[i * DIM + c] - want[c];
+                d2 += t * t;
+            }
+            if (d2 < bd) { bd = d2; best = i; }
+        }
+        if (nv < count) {
+            for (c = 0; c < DIM; c++) CHECK(cen[nv * DIM + c] == want[c]);
+            CHECK(near[nv] == best);
+        }
+        nv++;
+    }
+    CHECK(count == nv);
+    /* one per voxel with at least 5 points; NULL outputs count only */
+    {
+        size_t n5 = 0;
+        for (v = 0; v < 125; v++) n5 += wcount[v] >= 5;
+        CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, 5, 1, NULL, NULL, N, &count), NBHD_STATUS_OK);
+        CHECK(count == n5);
+    }
+    /* too small: the size needed in *count */
+    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, 0, 1, cen, near, 3, &count),
+                 NBHD_STATUS_BUFFER_TOO_SMALL);
+    CHECK(count == nv);
+    CHECK_STATUS(nbhd_voxel_grid(&p, &bad, 1, 0, 1, cen, near, N, &count),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK(count == 0);
+    bad = NAN;
+    CHECK_STATUS(nbhd_voxel_grid(&p, &bad, 1, 0, 1, cen, near, N, &count),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 2, 0, 1, cen, near, N, &count),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK_STATUS(nbhd_voxel_grid(&p, NULL, 1, 0, 1, cen, near, N, &count),
+                 NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_voxel_grid(NULL, &leaf, 1, 0, 1, cen, near, N, &count),
+                 NBHD_STATUS_NULL_POINTER);
+}
+
 int main(void) {
     make_points();
     test_boxes(0);
@@ -309,6 +392,8 @@ int main(void) {
     test_spacing(1);
     test_outliers(0);
     test_outliers(1);
+    test_voxel(0);
+    test_voxel(1);
     printf("features_test: %d checks, %d failures\n", checks, failures);
     return failures == 0 ? 0 : 1;
 }

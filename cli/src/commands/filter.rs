@@ -7,10 +7,10 @@ use crate::error::{Context, Result};
 use crate::output::{ms, num, Output};
 use crate::write;
 use nbhd::filter::{
-    radius_outlier_removal, statistical_outlier_removal, RadiusOutlierOptions,
-    StatisticalOutlierOptions,
+    radius_outlier_removal, statistical_outlier_removal, voxel_grid, RadiusOutlierOptions,
+    StatisticalOutlierOptions, VoxelGrid, VoxelGridOptions,
 };
-use nbhd::io::{PointCloud, ScalarField};
+use nbhd::io::{PointCloud, Precision, ScalarField};
 use nbhd::smooth::Length;
 use nbhd::{BuildOptions, KdTree, NonFinitePolicy};
 use serde_json::json;
@@ -70,6 +70,31 @@ pub struct RorArgs {
     /// Other points needed within the radius (PCL's setMinNeighborsInRadius)
     #[arg(long, short, default_value_t = 2)]
     pub min_neighbors: usize,
+    #[command(flatten)]
+    pub precision: PrecisionArgs,
+}
+
+/// Downsample on a voxel grid (PCL VoxelGrid, Open3D voxel_down_sample)
+///
+/// One point per occupied voxel, in PCL's order: the centroid of the voxel's points, with
+/// their fields averaged (normals averaged and renormalised); or, with --nearest, the
+/// original point nearest that centroid, with its own fields. Float files are computed in
+/// float, as PCL does.
+#[derive(clap::Args, Debug)]
+pub struct VoxelArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Output file (.ply, .pcd, .xyz)
+    pub output: PathBuf,
+    /// Voxel edge: a length like 0.01, or a multiple of the mean spacing h like 3h
+    #[arg(long, short, value_parser = parse_length)]
+    pub leaf: Length,
+    /// Keep the original point nearest each centroid instead of the centroid
+    #[arg(long)]
+    pub nearest: bool,
+    /// Leave out voxels with fewer points (PCL's setMinimumPointsNumberPerVoxel)
+    #[arg(long, default_value_t = 0)]
+    pub min_points: usize,
     #[command(flatten)]
     pub precision: PrecisionArgs,
 }
@@ -219,4 +244,114 @@ pub fn run_ror(a: RorArgs, out: &Output) -> Result<()> {
         ms(t),
         out,
     )
+}
+
+/// The centroid cloud of `g`: positions, averaged normals (renormalised) and fields.
+fn centroid_cloud<T: nbhd::Scalar>(cloud: &PointCloud, g: &VoxelGrid<T>) -> PointCloud {
+    let mean =
+        |v: &[f64], m: &[u32]| m.iter().map(|&i| v[i as usize]).sum::<f64>() / m.len() as f64;
+    let voxels = 0..g.len();
+    PointCloud {
+        positions: voxels
+            .clone()
+            .map(|v| {
+                let c = g.centroid(v);
+                [c[0].to_f64(), c[1].to_f64(), c[2].to_f64()]
+            })
+            .collect(),
+        normals: cloud.normals.as_ref().map(|n| {
+            voxels
+                .clone()
+                .map(|v| {
+                    let mut s = [0.0; 3];
+                    for &i in g.members_of(v) {
+                        (0..3).for_each(|a| s[a] += n[i as usize][a]);
+                    }
+                    let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+                    if len > 0.0 {
+                        s.map(|x| x / len)
+                    } else {
+                        s
+                    }
+                })
+                .collect()
+        }),
+        scalars: cloud
+            .scalars
+            .iter()
+            .map(|f| ScalarField {
+                name: f.name.clone(),
+                values: voxels
+                    .clone()
+                    .map(|v| mean(&f.values, g.members_of(v)))
+                    .collect(),
+            })
+            .collect(),
+        grid: None,
+        source_precision: cloud.source_precision,
+    }
+}
+
+pub fn run_voxel(a: VoxelArgs, out: &Output) -> Result<()> {
+    let name = a.input.input.display().to_string();
+    let cloud = a.input.read()?;
+    let leaf = match a.leaf {
+        Length::Relative(_) => a
+            .leaf
+            .resolve(tree(&cloud, &name)?.spacing(0).context(&name)?.mean),
+        _ => a.leaf.resolve(1.0),
+    };
+    let view = cloud.view().context(&name)?;
+    let opts = VoxelGridOptions {
+        leaf: vec![leaf],
+        min_points_per_voxel: a.min_points,
+        threads: 0,
+    };
+    let t = Instant::now();
+    let single = cloud.source_precision == Some(Precision::Single);
+    let (result, voxels) = if single {
+        let g = voxel_grid::<f32>(&view, &opts).context(&name)?;
+        let c = (!a.nearest).then(|| centroid_cloud(&cloud, &g));
+        let n = g.len();
+        (c.ok_or(g.nearest), n)
+    } else {
+        let g = voxel_grid::<f64>(&view, &opts).context(&name)?;
+        let c = (!a.nearest).then(|| centroid_cloud(&cloud, &g));
+        let n = g.len();
+        (c.ok_or(g.nearest), n)
+    };
+    let millis = ms(t);
+    let written = match &result {
+        Ok(c) => c.clone(),
+        Err(nearest) => subset(&cloud, nearest),
+    };
+    let stored = write::cloud(&a.output, &written, &a.precision.write_options())?;
+    out.json(&json!({
+        "command": "voxel",
+        "input": a.input.input.display().to_string(),
+        "output": a.output.display().to_string(),
+        "points": cloud.len(),
+        "voxels": voxels,
+        "parameters": {
+            "leaf": length_text(a.leaf),
+            "leaf_resolved": num(leaf),
+            "nearest": a.nearest,
+            "min_points": a.min_points,
+            "arithmetic": if single { "f32" } else { "f64" },
+        },
+        "filter_ms": num(millis),
+        "precision": stored,
+    }));
+    out.text(format!(
+        "voxel: {} points -> {voxels} {} (leaf {}) in {millis:.1} ms -> {}",
+        cloud.len(),
+        if a.nearest {
+            "nearest points"
+        } else {
+            "centroids"
+        },
+        num(leaf),
+        a.output.display()
+    ));
+    Ok(())
 }
