@@ -58,10 +58,14 @@ impl Neighborhood {
             v.clear();
             v.resize(padded, 0.0);
         }
-        let (x, y, z) = (&mut self.x[1..], &mut self.y[1..], &mut self.z[1..]);
-        for (k, &j) in row.iter().enumerate() {
+        // zipped, so that only the read of a neighbour is bounds-checked
+        let coordinates = self.x[1..]
+            .iter_mut()
+            .zip(&mut self.y[1..])
+            .zip(&mut self.z[1..]);
+        for (((x, y), z), &j) in coordinates.zip(row) {
             let d = points[j as usize] - p;
-            (x[k], y[k], z[k]) = (d.x, d.y, d.z);
+            (*x, *y, *z) = (d.x, d.y, d.z);
         }
     }
 
