@@ -32,7 +32,10 @@ import numpy as np
 from . import _tiles
 from ._tiles import Spec, Tile, piece_path
 
-__all__ = ["TiledCloud", "TileResult", "AssembledTable", "tile_array", "tile_files", "open_store"]
+__all__ = [
+    "TiledCloud", "TileJob", "TileResult", "AssembledTable", "tile_array", "tile_files",
+    "open_store",
+]
 
 AssembledTable = namedtuple("AssembledTable", "offsets indices sq_dists")
 AssembledTable.__doc__ = """A table in caller order as compressed rows (the arrays of
@@ -239,11 +242,12 @@ class TiledCloud:
 
     # --- neighbourhood tables -------------------------------------------------------------
 
-    def knn(self, k, *, threads=0, batch=_tiles.BATCH, out=None, **tree_options):
+    def knn(self, k, *, threads=0, batch=_tiles.BATCH, out=None, compute=True, **tree_options):
         """Every point's ``k`` nearest other points: ``KdTree(points).neighborhoods(k=k)``,
         byte for byte (halos grow until exact). ``tree_options`` go to each tile's KdTree;
         ``threads`` is each task's nbhd threads (0: all cores), ``batch`` the queries a task
-        answers at a time (its memory; the result is the same)."""
+        answers at a time (its memory; the result is the same). ``compute=False`` returns the
+        :class:`TileJob` unstarted (progress and cancellation through its futures)."""
         if k < 1:
             raise ValueError("k must be >= 1")
         out = self._out(out, "knn")
@@ -254,9 +258,9 @@ class TiledCloud:
                 os.path.join(out, f"tile_{t:06d}.npz"), tree_options, threads, batch)
             for t in range(self.tiles)
         ]
-        return TileResult("table", self.n, list(dask.compute(*tasks)))
+        return TileJob("table", self.n, tasks).run(compute)
 
-    def radius(self, radius, *, k=None, threads=0, batch=_tiles.BATCH, out=None,
+    def radius(self, radius, *, k=None, threads=0, batch=_tiles.BATCH, out=None, compute=True,
                **tree_options):
         """Every point's other points within ``radius`` (inclusive; absolute units), or with
         ``k`` the ε-k-neighbourhood (the ``k`` nearest of them):
@@ -274,11 +278,13 @@ class TiledCloud:
                 tree_options, threads, batch)
             for t in range(self.tiles)
         ]
-        return TileResult("table", self.n, list(dask.compute(*tasks)))
+        return TileJob("table", self.n, tasks).run(compute)
 
-    def knn_radius(self, k, radius, *, threads=0, batch=_tiles.BATCH, out=None, **tree_options):
+    def knn_radius(self, k, radius, *, threads=0, batch=_tiles.BATCH, out=None, compute=True,
+                   **tree_options):
         """The ε-k-neighbourhood table (see :meth:`radius`)."""
-        return self.radius(radius, k=k, threads=threads, batch=batch, out=out, **tree_options)
+        return self.radius(radius, k=k, threads=threads, batch=batch, out=out, compute=compute,
+                           **tree_options)
 
     # --- spacing, geometry, smoothing ------------------------------------------------------
 
@@ -317,7 +323,7 @@ class TiledCloud:
             raise ValueError(f"unknown units {units!r}; expected 'relative' or 'absolute'")
         return float(v) / self.spacing()
 
-    def _geometry(self, what, halo, kwargs, out):
+    def _geometry(self, what, halo, kwargs, out, compute, epsilon):
         out = self._out(out, what)
         spec = self._spec_node()
         tasks = [
@@ -325,7 +331,7 @@ class TiledCloud:
                 spec, t, what, halo, os.path.join(out, f"tile_{t:06d}.npz"), kwargs)
             for t in range(self.tiles)
         ]
-        return TileResult("arrays", self.n, list(dask.compute(*tasks)))
+        return TileJob("arrays", self.n, tasks, epsilon).run(compute)
 
     @staticmethod
     def _orientation(orientation):
@@ -334,20 +340,18 @@ class TiledCloud:
                              "cloud) and is not computed per tile")
 
     def normals(self, *, k=15, epsilon=6.0, epsilon_units="relative", orientation="unoriented",
-                orientation_point=(0.0, 0.0, 0.0), threads=0, out=None):
+                orientation_point=(0.0, 0.0, 0.0), threads=0, out=None, compute=True):
         """``nbhd.normals(points, ...)`` tile by tile (halo ε): arrays ``normals``,
         ``surface_variation``, ``flags``, identical to the last bit."""
         self._orientation(orientation)
         eps = self._length(epsilon, epsilon_units)
         kw = dict(k=k, epsilon=eps, epsilon_units="absolute", orientation=orientation,
                   orientation_point=tuple(orientation_point), threads=threads)
-        r = self._geometry("normals", eps, kw, out)
-        r.epsilon = eps
-        return r
+        return self._geometry("normals", eps, kw, out, compute, eps)
 
     def curvatures(self, *, k=15, epsilon=6.0, epsilon_units="relative", orientation="unoriented",
                    orientation_point=(0.0, 0.0, 0.0), density="abs-linear", formula="eq2.25",
-                   threads=0, out=None):
+                   threads=0, out=None, compute=True):
         """``nbhd.curvatures(points, ...)`` tile by tile (halo ε): its arrays, identical to the
         last bit."""
         self._orientation(orientation)
@@ -355,15 +359,14 @@ class TiledCloud:
         kw = dict(k=k, epsilon=eps, epsilon_units="absolute", orientation=orientation,
                   orientation_point=tuple(orientation_point), density=density, formula=formula,
                   threads=threads)
-        r = self._geometry("curvatures", eps, kw, out)
-        r.epsilon = eps
-        return r
+        return self._geometry("curvatures", eps, kw, out, compute, eps)
 
     def smooth(self, *, method="anisotropic", k=15, epsilon=6.0, epsilon_units="relative",
                steps=None, tau=0.5, weighting=None, lambda_=0.2, lambda_units="relative",
                feature="all", feature_threshold=None, feature_units="relative",
                constrain_interior=None, orientation="unoriented",
-               orientation_point=(0.0, 0.0, 0.0), outputs=False, threads=0, out=None):
+               orientation_point=(0.0, 0.0, 0.0), outputs=False, threads=0, out=None,
+               compute=True):
         """``nbhd.smooth(points, ...)`` (the faithful method) tile by tile: array ``points``
         and, with ``outputs``, ``outputs.<name>``, identical to the last bit. Halo: steps·ε
         (a step reads only the point's own row, fixed on the input), plus ε for the outputs.
@@ -383,8 +386,55 @@ class TiledCloud:
                   constrain_interior=constrain_interior, orientation=orientation,
                   orientation_point=tuple(orientation_point), outputs=outputs, threads=threads)
         halo = eps * (steps + (1 if outputs else 0))
-        r = self._geometry("smooth", halo, kw, out)
-        r.epsilon = eps
+        return self._geometry("smooth", halo, kw, out, compute, eps)
+
+
+class TileJob:
+    """The tile tasks of one computation, not yet run (a method's ``compute=False``): one
+    ``dask.delayed`` per tile in ``tasks``. On a ``distributed`` cluster, :meth:`submit` starts
+    them and returns their futures — ``distributed.progress(futures)`` shows the progress,
+    :meth:`cancel` (or ``client.cancel(futures)``) cancels the tiles not yet finished — and
+    :meth:`result` waits for them and returns the :class:`TileResult`.
+
+    A cancelled tile that was already running finishes its nbhd call on its worker (a task is
+    not interrupted) and its file is written; a tile file appears only once complete (written
+    under another name, then renamed), so a cancelled run leaves complete files only."""
+
+    def __init__(self, kind, n, tasks, epsilon=None):
+        self.kind = kind
+        self.n = n
+        self.tasks = tasks
+        self.epsilon = epsilon
+        self.futures = None
+
+    def run(self, compute):
+        return self.result() if compute else self
+
+    def submit(self, client=None):
+        """Starts the tasks on ``client`` (default: the current ``distributed`` client) and
+        returns their futures, one per tile."""
+        if self.futures is None:
+            if client is None:
+                import distributed
+
+                client = distributed.get_client()
+            self.futures = client.compute(self.tasks)
+        return self.futures
+
+    def cancel(self):
+        """Cancels the submitted tiles not yet finished (nothing when not submitted)."""
+        if self.futures:
+            self.futures[0].client.cancel(self.futures)
+
+    def result(self):
+        """The :class:`TileResult`: waits for the submitted futures (raising
+        ``CancelledError`` when cancelled), or runs the tasks on the active scheduler."""
+        if self.futures is not None:
+            parts = self.futures[0].client.gather(self.futures) if self.futures else []
+        else:
+            parts = dask.compute(*self.tasks)
+        r = TileResult(self.kind, self.n, list(parts))
+        r.epsilon = self.epsilon
         return r
 
 

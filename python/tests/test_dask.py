@@ -2,6 +2,8 @@
 results exactly: tables byte for byte, spacing, normals, curvatures and smoothed points to the
 last bit, for float32 and float64, from a Dask array and from LAS/PLY tile files."""
 
+import concurrent.futures
+
 import numpy as np
 import pytest
 
@@ -159,3 +161,43 @@ def test_halos_grow_and_refusals(client, tmp_path):
     bad[17, 1] = np.nan
     with pytest.raises(ValueError, match="point 17"):
         ndask.tile_array(da.from_array(bad, chunks=(2000, 3)), str(tmp_path / "bad"))
+
+
+def test_progress_and_cancel(client, tmp_path):
+    """compute=False: the job's futures (what distributed.progress draws) give the same result;
+    cancelled before its tiles run, a job writes no file and the cluster stays usable."""
+    pts = surface(np.float64)
+    cloud = ndask.tile_array(da.from_array(pts, chunks=(25_000, 3)), str(tmp_path), grid=(4, 4, 2))
+    job = cloud.knn(10, threads=1, compute=False)
+    assert isinstance(job, ndask.TileJob) and len(job.tasks) == cloud.tiles
+    futures = job.submit(client)
+    distributed.wait(futures)
+    assert [f.status for f in futures] == ["finished"] * cloud.tiles
+    assert same_table(job.result().assemble(), nbhd.KdTree(pts).neighborhoods(k=10))
+
+    # every worker's only thread held by a gate task, so that no tile can start before the cancel
+    started, gate = distributed.Queue(), distributed.Event()
+
+    def hold():
+        started.put(1)
+        gate.wait()
+
+    workers = list(client.scheduler_info()["workers"])
+    holds = [client.submit(hold, workers=[w], pure=False) for w in workers]
+    for _ in workers:
+        started.get(timeout=60)
+    out = tmp_path / "cancelled"
+    job = cloud.normals(k=10, epsilon=0.02, epsilon_units="absolute", threads=1, out=str(out),
+                        compute=False)
+    futures = job.submit()  # the current client
+    job.cancel()
+    gate.set()
+    distributed.wait(holds)
+    assert all(f.cancelled() for f in futures)
+    with pytest.raises(concurrent.futures.CancelledError):
+        job.result()
+    assert not any(out.glob("tile_*"))
+
+    got = cloud.normals(k=10, epsilon=0.02, epsilon_units="absolute", threads=1).assemble()
+    n_ref, _, _ = nbhd.normals(pts, k=10, epsilon=0.02, epsilon_units="absolute")
+    assert same(got["normals"], n_ref)
