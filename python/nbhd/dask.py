@@ -7,7 +7,8 @@ concatenation in list order is the caller's order — is first cut into spatial 
 a *store* directory (:func:`tile_array`, :func:`tile_files`). Every computation then runs one
 Dask task per tile: the task reads its tile plus a halo from the store, runs nbhd, writes the
 owned points' rows or values to ``.npz`` files and returns a few numbers. A :class:`TileResult`
-lists those files and assembles them back in caller order.
+lists those files and assembles them back in caller order. With ``compute=False`` a method
+returns the :class:`TileJob` instead (its futures give progress and cancellation).
 
 Tasks use whatever Dask scheduler is active: a ``distributed.Client`` (a LocalCluster or a real
 cluster; the store must then be on storage every worker mounts) or Dask's local schedulers.
@@ -192,8 +193,9 @@ def _first_halo(spec, t, k):
 
 class TiledCloud:
     """A cloud cut into spatial tiles in a store directory (see the module doc). Its methods
-    run one Dask task per tile and return a :class:`TileResult`; ``out`` names a directory
-    for the result files (default: a new folder in the store)."""
+    run one Dask task per tile and return a :class:`TileResult` (with ``compute=False``: the
+    unstarted :class:`TileJob`); ``out`` names a directory for the result files (default: a
+    new folder in the store)."""
 
     def __init__(self, spec: Spec, store: str):
         self.spec = spec
