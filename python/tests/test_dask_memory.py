@@ -17,6 +17,7 @@ border, and the comparison counts those rows.
 
 import os
 import resource
+import shutil
 import sys
 
 import numpy as np
@@ -186,3 +187,4 @@ def test_exact_under_a_memory_limit_smaller_than_the_cloud(cluster, tmp_path):
     _tiles.geometry_tile(spec, t, "normals", 0.0, ctrl, kw)
     wrong = array_mismatches(ctrl, want, want)
     assert 0 < wrong < spec.tiles[t].count
+    shutil.rmtree(tmp_path)  # 1.3 GB of tiles and results: not kept among pytest's last runs
