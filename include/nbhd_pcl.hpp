@@ -129,6 +129,7 @@ public:
                        const IndicesConstPtr& indices = IndicesConstPtr()) override {
         table_.store(nullptr, std::memory_order_release);
         tables_.clear();
+        refused_key_.store(0, std::memory_order_relaxed);
         run_key_.store(0, std::memory_order_relaxed);
         run_len_.store(0, std::memory_order_relaxed);
         tree_.reset();
@@ -519,15 +520,22 @@ private:
         if (!table_runs_) return false;
         const RowTable* t = table_.load(std::memory_order_acquire);
         if (!t || t->key != key) {
+            if (refused_key_.load(std::memory_order_relaxed) == key) return false;
             if (run_key_.load(std::memory_order_relaxed) != key) {
                 run_key_.store(key, std::memory_order_relaxed);
                 run_len_.store(1, std::memory_order_relaxed);
                 return false;
             }
             const std::size_t threshold = distinct_ / 32 > 1024 ? distinct_ / 32 : 1024;
-            if (run_len_.fetch_add(1, std::memory_order_relaxed) + 1 != threshold) return false;
+            if (run_len_.fetch_add(1, std::memory_order_relaxed) + 1 < threshold) return false;
+            // Past the threshold every thread asks for the table: the first builds it (on all
+            // cores), the others of a parallel algorithm wait on the lock instead of answering
+            // single queries beside it (measured: that doubled work and crowded the cores).
             t = make_table(key, k, r);
-            if (!t) return false;
+            if (!t) {
+                refused_key_.store(key, std::memory_order_relaxed);
+                return false;
+            }
         }
         const std::size_t a = t->off[index], b = t->off[index + 1];
         if (a == b) return false;
@@ -594,6 +602,7 @@ private:
     mutable std::atomic<const RowTable*> table_{nullptr};    // the latest, read lock-free
     mutable std::atomic<Key> run_key_{0};
     mutable std::atomic<std::size_t> run_len_{0};
+    mutable std::atomic<Key> refused_key_{0};  // a run whose table would be too large
     std::size_t searched_ = 0;  // points searched: in the tree, and the extra copies of listed ones
     std::size_t distinct_ = 0;  // points in the tree
     std::vector<std::uint32_t> copies_;  // times each cloud index was listed, if one was repeated
