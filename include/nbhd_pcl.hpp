@@ -38,7 +38,8 @@
 //   - Index queries go through nbhd's index path (nbhd_tree_knn_index, ...): the tree answers
 //     around its own copy of the point, without reading the cloud again. So do queries by a
 //     point that is one of the input cloud's (its address lies in the cloud's storage, as when
-//     EuclideanClusterExtraction passes cloud[i]). A run of index
+//     EuclideanClusterExtraction passes cloud[i]). As for every search in PCL, a cloud changed
+//     after setInputCloud needs setInputCloud again: such a point is searched from where it was. A run of index
 //     queries with the same k (or radius, max_nn) — what PCL's algorithms do, one per point —
 //     is served, once the run is long (max(1024, points / 32) queries), from one table of
 //     every point's answer computed at once on all cores (nbhd_tree_neighborhoods;
