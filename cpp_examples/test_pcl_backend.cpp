@@ -7,7 +7,8 @@
 //    subset in setInputCloud, k nearest, radius and radius with max_nn, on the cloud's own
 //    points (NaN holes included: they are skipped) — squared distances must be bitwise equal
 //    position by position, and indices equal except inside a run of points tied at the last
-//    distance of an answer cut at k or max_nn (counted). Also PointXYZRGB and PointNormal.
+//    distance of an answer cut at k or max_nn (counted). Also PointXYZRGB and PointNormal, and
+//    an index subset that lists points two and three times (KdTree finds each copy).
 // 2. PCL's algorithms with each backend: NormalEstimation k = 16 and r = 3h,
 //    NormalEstimationOMP on 2 threads, MovingLeastSquares r = 5h, EuclideanClusterExtraction
 //    1.5h, RegionGrowing k = 30, FPFHEstimation r = 4h and FPFHEstimationOMP on 2 threads. The
@@ -382,6 +383,36 @@ int main(int argc, char** argv) {
             every_third->push_back(static_cast<pcl::index_t>(i));  // NaN holes included
         interface_checks<pcl::PointXYZ>(cloud, every_third, in.h, 3000,
                                         "PointXYZ, indices: every third");
+    }
+    {
+        // Indices listing points more than once (NaN holes too): KdTreeFLANN copies every
+        // listed point, so a point listed twice is found twice; nbhd must answer the same.
+        pcl::IndicesPtr repeated(new pcl::Indices);
+        for (std::size_t i = 0; i < cloud->size(); i += 3) {
+            const auto c = static_cast<pcl::index_t>(i);
+            repeated->push_back(c);
+            if (i % 7 == 0) repeated->push_back(c);                       // twice, adjacent
+            if (i % 11 == 0) repeated->insert(repeated->begin() + repeated->size() / 2, c);  // again
+        }
+        interface_checks<pcl::PointXYZ>(cloud, repeated, in.h, 3000,
+                                        "PointXYZ, indices: some listed 2-3 times");
+        // The fact itself, not only agreement: a finite point listed three times is found three
+        // times around itself, at squared distance 0.
+        nbhd::PclSearch<pcl::PointXYZ> nb;
+        nb.setInputCloud(cloud, repeated);
+        std::size_t checked = 0;
+        for (std::size_t i = 0; i < cloud->size() && checked < 20; i += 3 * 7 * 11) {
+            const auto& p = (*cloud)[i];
+            if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) continue;
+            pcl::Indices ni;
+            std::vector<float> nd;
+            nb.radiusSearch(*cloud, static_cast<pcl::index_t>(i), in.h, ni, nd);
+            const auto times = std::count(ni.begin(), ni.end(), static_cast<pcl::index_t>(i));
+            EXPECT(times == 3 && nd.size() >= 3 && nd[0] == 0 && nd[2] == 0,
+                   "point %zu listed 3 times found %ld times", i, static_cast<long>(times));
+            ++checked;
+        }
+        EXPECT(checked > 0, "no point listed three times was checked");
     }
     interface_checks<pcl::PointXYZRGB>(as_type<pcl::PointXYZRGB>(*cloud), nullptr, in.h, 500,
                                        "PointXYZRGB");

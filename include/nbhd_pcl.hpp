@@ -36,10 +36,14 @@
 //   - A query point with a non-finite coordinate (PCL asserts) gives 0 results and empty
 //     vectors; so does an index out of range.
 //   - Index queries go through nbhd's index path (nbhd_tree_knn_index, ...): the tree answers
-//     around its own copy of the point, without reading the cloud again. A run of index
+//     around its own copy of the point, without reading the cloud again. So do queries by a
+//     point that is one of the input cloud's (its address lies in the cloud's storage, as when
+//     EuclideanClusterExtraction passes cloud[i]). As for every search in PCL, a cloud changed
+//     after setInputCloud needs setInputCloud again: such a point is searched from where it was. A run of index
 //     queries with the same k (or radius, max_nn) — what PCL's algorithms do, one per point —
 //     is served, once the run is long (max(1024, points / 32) queries), from one table of
-//     every point's answer computed at once on all cores (nbhd_tree_neighborhoods): the same
+//     every point's answer computed at once on all cores (nbhd_tree_neighborhoods;
+//     setTableThreads(n) for n threads): the same
 //     rows, in less time than the single queries for k nearest and for radius answers of up to
 //     64 points on average (measured, cpp_examples/README.md; larger radius answers stay single
 //     queries). Tables are kept until the next setInputCloud (at most 4, each at most 2^25
@@ -49,9 +53,11 @@
 //     FPFHEstimationOMP). setInputCloud must not run concurrently with queries, as for every
 //     PCL search.
 //
-// Indices given to setInputCloud must be distinct and within the cloud (KdTreeFLANN would
-// search a listed point twice); otherwise setInputCloud throws with nbhd's message naming the
-// index.
+// Indices given to setInputCloud may repeat a point: as KdTreeFLANN, which copies every listed
+// point, the point is then searched as that many points (a radius answer holds its index that
+// many times, adjacent; k nearest count each copy). The tree holds it once and the answers are
+// expanded. An index outside the cloud (KdTreeFLANN reads out of bounds) makes setInputCloud
+// throw with nbhd's message naming the index.
 // Errors of nbhd that PCL's interface cannot carry (out of memory while building, ...) throw
 // std::runtime_error with nbhd's message; PCL's KdTree prints an error and searches nothing
 // for an empty cloud, which this class does too (every query then gives 0 results).
@@ -124,10 +130,13 @@ public:
                        const IndicesConstPtr& indices = IndicesConstPtr()) override {
         table_.store(nullptr, std::memory_order_release);
         tables_.clear();
+        refused_key_.store(0, std::memory_order_relaxed);
         run_key_.store(0, std::memory_order_relaxed);
         run_len_.store(0, std::memory_order_relaxed);
         tree_.reset();
         searched_ = 0;
+        distinct_ = 0;
+        copies_.clear();
         input_ = cloud;
         indices_ = indices;
         if (!cloud || cloud->empty() || (indices && indices->empty())) return;
@@ -137,8 +146,13 @@ public:
         nbhd_tree* t = nullptr;
         nbhd_status s;
         if (indices) {
-            s = nbhd_tree_build_indices(&pts, reinterpret_cast<const std::uint32_t*>(indices->data()),
-                                        indices->size(), &opt, &t);
+            // A point listed more than once is searched as that many points, as KdTreeFLANN
+            // does (it copies each listed point): the tree holds it once and copies_ says how
+            // many times each result is repeated.
+            const pcl::Indices distinct = distinct_listed(*cloud, *indices);
+            const pcl::Indices& list = distinct.empty() ? *indices : distinct;
+            s = nbhd_tree_build_indices(&pts, reinterpret_cast<const std::uint32_t*>(list.data()),
+                                        list.size(), &opt, &t);
         } else {
             s = nbhd_tree_build(&pts, &opt, &t);
         }
@@ -149,19 +163,29 @@ public:
         tree_.reset(t);
         nbhd_stats st{};
         nbhd_tree_stats(t, &st);
+        distinct_ = st.points;
         searched_ = st.points;
+        if (!copies_.empty())  // the extra copies of listed finite points count as points
+            for (std::size_t c = 0; c < copies_.size(); ++c)
+                if (copies_[c] > 1 && finite((*cloud)[c])) searched_ += copies_[c] - 1;
     }
 
     // ---- by point ------------------------------------------------------------------------
 
     int nearestKSearch(const PointT& point, int k, pcl::Indices& k_indices,
                        std::vector<float>& k_sqr_distances) const override {
+        const std::ptrdiff_t c = own_index(point);
+        if (c >= 0) return knn(at(*input_, static_cast<pcl::index_t>(c)), k, k_indices, k_sqr_distances);
         const float q[3] = {point.x, point.y, point.z};
         return knn(At{q, 0, false}, k, k_indices, k_sqr_distances);
     }
 
     int radiusSearch(const PointT& point, double radius, pcl::Indices& k_indices,
                      std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override {
+        const std::ptrdiff_t c = own_index(point);
+        if (c >= 0)
+            return within(at(*input_, static_cast<pcl::index_t>(c)), radius, k_indices,
+                          k_sqr_distances, max_nn);
         const float q[3] = {point.x, point.y, point.z};
         return within(At{q, 0, false}, radius, k_indices, k_sqr_distances, max_nn);
     }
@@ -223,6 +247,11 @@ public:
     /// (default true; see the top of this file). Not to be changed while queries run.
     void setTableRuns(bool on) { table_runs_ = on; }
 
+    /// Threads that compute a table (default 0: all cores, whatever the calling algorithm
+    /// uses; 1 keeps the search on the caller's thread, as pcl::search::KdTree is). Not to be
+    /// changed while queries run.
+    void setTableThreads(std::size_t threads) { table_threads_ = threads; }
+
     /// nbhd's tree (NULL before setInputCloud or for a cloud without finite points).
     const nbhd_tree* tree() const { return tree_.get(); }
 
@@ -244,6 +273,84 @@ private:
         const std::size_t x_at =
             static_cast<std::size_t>(reinterpret_cast<const char*>(&cloud.points[0].x) - base);
         return nbhd_points{base + x_at, cloud.size(), 3, sizeof(PointT), NBHD_SCALAR_TYPE_F32};
+    }
+
+    /// `p`'s index in the input cloud when `p` is one of its points (PCL's algorithms pass
+    /// `cloud[i]` to the by-point overloads: EuclideanClusterExtraction does), else -1: such a
+    /// query takes the index path (and the table of its run) instead of a search by coordinates.
+    std::ptrdiff_t own_index(const PointT& p) const {
+        if (!input_ || input_->empty()) return -1;
+        const auto a = reinterpret_cast<std::uintptr_t>(&p);
+        const auto b = reinterpret_cast<std::uintptr_t>(input_->points.data());
+        if (a < b || a - b >= input_->size() * sizeof(PointT) || (a - b) % sizeof(PointT) != 0)
+            return -1;
+        return static_cast<std::ptrdiff_t>((a - b) / sizeof(PointT));
+    }
+
+    /// Empty when `indices` lists no point twice; otherwise each listed index once (first
+    /// occurrences, in order), with copies_[c] = the times cloud index c is listed.
+    pcl::Indices distinct_listed(const PointCloud& cloud, const pcl::Indices& indices) {
+        std::vector<std::uint32_t> times(cloud.size(), 0);
+        bool repeated = false;
+        for (pcl::index_t c : indices) {
+            if (c < 0 || static_cast<std::size_t>(c) >= cloud.size()) continue;  // nbhd refuses it
+            repeated |= times[static_cast<std::size_t>(c)]++ > 0;
+        }
+        if (!repeated) return pcl::Indices();
+        pcl::Indices distinct;
+        std::vector<bool> taken(cloud.size(), false);
+        for (pcl::index_t c : indices) {
+            if (c >= 0 && static_cast<std::size_t>(c) < cloud.size()) {
+                if (taken[static_cast<std::size_t>(c)]) continue;
+                taken[static_cast<std::size_t>(c)] = true;
+            }
+            distinct.push_back(c);
+        }
+        copies_ = std::move(times);
+        return distinct;
+    }
+
+    /// Each result repeated as many times as its point was listed (copies_), then cut at
+    /// `most` (the k or max_nn asked; 0: no cut). The order stays (squared distance, index).
+    void repeat_copies(pcl::Indices& idx, std::vector<float>& dist, std::size_t most) const {
+        if (copies_.empty()) return;
+        std::size_t n = 0;
+        for (pcl::index_t c : idx) n += copies_[static_cast<std::size_t>(c)];
+        if (most > 0 && n > most) n = most;
+        pcl::Indices i2;
+        std::vector<float> d2;
+        i2.reserve(n);
+        d2.reserve(n);
+        for (std::size_t j = 0; j < idx.size() && i2.size() < n; ++j)
+            for (std::uint32_t t = 0; t < copies_[static_cast<std::size_t>(idx[j])] && i2.size() < n; ++t) {
+                i2.push_back(idx[j]);
+                d2.push_back(dist[j]);
+            }
+        idx.swap(i2);
+        dist.swap(d2);
+    }
+
+    /// pcl_detail::inclusive_radius_for(limit), remembered for the last limit (a run of queries
+    /// asks the same radius): one relaxed atomic holding both floats' bits.
+    double inclusive_radius(float limit) const {
+        std::uint32_t lb;
+        std::memcpy(&lb, &limit, sizeof lb);
+        const std::uint64_t memo = radius_memo_.load(std::memory_order_relaxed);
+        if (static_cast<std::uint32_t>(memo >> 32) == lb && memo != 0) {
+            float r;
+            const auto rb = static_cast<std::uint32_t>(memo);
+            std::memcpy(&r, &rb, sizeof r);
+            return static_cast<double>(r);
+        }
+        const double r = pcl_detail::inclusive_radius_for(limit);
+        if (r > 0.0) {
+            const float rf = static_cast<float>(r);  // exact: r is a float
+            std::uint32_t rb;
+            std::memcpy(&rb, &rf, sizeof rb);
+            radius_memo_.store((static_cast<std::uint64_t>(lb) << 32) | rb,
+                               std::memory_order_relaxed);
+        }
+        return r;
     }
 
     static bool finite(const PointT& p) {
@@ -291,13 +398,22 @@ private:
     }
 
     int knn(At a, int k, pcl::Indices& idx, std::vector<float>& dist) const {
+        const int n = knn_distinct(a, k, idx, dist);
+        if (copies_.empty() || n == 0) return n;
+        const std::size_t kk = static_cast<std::size_t>(k);
+        repeat_copies(idx, dist, kk < searched_ ? kk : searched_);
+        return static_cast<int>(idx.size());
+    }
+
+    /// k nearest among the points the tree holds (each listed point once).
+    int knn_distinct(At a, int k, pcl::Indices& idx, std::vector<float>& dist) const {
         if (a.invalid || k <= 0 || !tree_) {
             idx.clear();
             dist.clear();
             return 0;
         }
-        std::size_t kk = static_cast<std::size_t>(k) < searched_ ? static_cast<std::size_t>(k)
-                                                                 : searched_;
+        std::size_t kk = static_cast<std::size_t>(k) < distinct_ ? static_cast<std::size_t>(k)
+                                                                  : distinct_;
         const nbhd_tree* t = tree_.get();
         nbhd_status s;
         if (a.q) {
@@ -312,7 +428,7 @@ private:
             });
             if (s == NBHD_STATUS_SKIPPED_POINT) {  // not in the tree: around its coordinates
                 const PointT& p = (*input_)[a.index];
-                return knn(At{&p.x, 0, false}, k, idx, dist);
+                return knn_distinct(At{&p.x, 0, false}, k, idx, dist);
             }
         }
         return static_cast<int>(idx.size());
@@ -320,15 +436,24 @@ private:
 
     int within(At a, double radius, pcl::Indices& idx, std::vector<float>& dist,
                unsigned int max_nn) const {
+        const int n = within_distinct(a, radius, idx, dist, max_nn);
+        if (copies_.empty() || n == 0) return n;
+        repeat_copies(idx, dist, max_nn > 0 && max_nn < searched_ ? max_nn : 0);
+        return static_cast<int>(idx.size());
+    }
+
+    /// Within `radius` among the points the tree holds (each listed point once).
+    int within_distinct(At a, double radius, pcl::Indices& idx, std::vector<float>& dist,
+                        unsigned int max_nn) const {
         const float limit = static_cast<float>(radius * radius);  // as KdTreeFLANN
-        const double r = pcl_detail::inclusive_radius_for(limit);
+        const double r = inclusive_radius(limit);
         if (a.invalid || !tree_ || r < 0.0) {
             idx.clear();
             dist.clear();
             return 0;
         }
         const nbhd_tree* t = tree_.get();
-        const bool capped = max_nn > 0 && max_nn < searched_;
+        const bool capped = max_nn > 0 && max_nn < distinct_;
         const std::size_t k = max_nn;
         nbhd_status s;
         // Room for the answer, so that nbhd searches once: PCL's algorithms often pass fresh
@@ -353,7 +478,7 @@ private:
             });
             if (s == NBHD_STATUS_SKIPPED_POINT) {
                 const PointT& p = (*input_)[a.index];
-                return within(At{&p.x, 0, false}, radius, idx, dist, max_nn);
+                return within_distinct(At{&p.x, 0, false}, radius, idx, dist, max_nn);
             }
         }
         if (!capped) {  // written only when it moves by half or more (no cache-line ping-pong)
@@ -396,15 +521,22 @@ private:
         if (!table_runs_) return false;
         const RowTable* t = table_.load(std::memory_order_acquire);
         if (!t || t->key != key) {
+            if (refused_key_.load(std::memory_order_relaxed) == key) return false;
             if (run_key_.load(std::memory_order_relaxed) != key) {
                 run_key_.store(key, std::memory_order_relaxed);
                 run_len_.store(1, std::memory_order_relaxed);
                 return false;
             }
-            const std::size_t threshold = searched_ / 32 > 1024 ? searched_ / 32 : 1024;
-            if (run_len_.fetch_add(1, std::memory_order_relaxed) + 1 != threshold) return false;
+            const std::size_t threshold = distinct_ / 32 > 1024 ? distinct_ / 32 : 1024;
+            if (run_len_.fetch_add(1, std::memory_order_relaxed) + 1 < threshold) return false;
+            // Past the threshold every thread asks for the table: the first builds it (on all
+            // cores), the others of a parallel algorithm wait on the lock instead of answering
+            // single queries beside it (measured: that doubled work and crowded the cores).
             t = make_table(key, k, r);
-            if (!t) return false;
+            if (!t) {
+                refused_key_.store(key, std::memory_order_relaxed);
+                return false;
+            }
         }
         const std::size_t a = t->off[index], b = t->off[index + 1];
         if (a == b) return false;
@@ -445,11 +577,11 @@ private:
             // with about 50 (FPFH r = 4h) and below, the table was.
             if (per_point > kMaxRadiusRow) return nullptr;
         }
-        if (per_point > (std::size_t(1) << 25) / (searched_ + 1)) return nullptr;
+        if (per_point > (std::size_t(1) << 25) / (distinct_ + 1)) return nullptr;
         nbhd_neighborhood_spec spec = {kind, k, r};
         nbhd_table_options o = nbhd_table_options_default();
         o.exclude_self = false;
-        o.threads = 0;
+        o.threads = table_threads_;
         std::unique_ptr<RowTable> t(new RowTable);
         if (nbhd_tree_neighborhoods(tree_.get(), &spec, &o, &t->table) != NBHD_STATUS_OK)
             return nullptr;
@@ -465,13 +597,18 @@ private:
 
     std::unique_ptr<nbhd_tree, pcl_detail::TreeFree> tree_;
     bool table_runs_ = true;
+    std::size_t table_threads_ = 0;
     mutable std::mutex table_mutex_;
     mutable std::vector<std::unique_ptr<RowTable>> tables_;  // freed by setInputCloud
     mutable std::atomic<const RowTable*> table_{nullptr};    // the latest, read lock-free
     mutable std::atomic<Key> run_key_{0};
     mutable std::atomic<std::size_t> run_len_{0};
-    std::size_t searched_ = 0;  // points in the tree
+    mutable std::atomic<Key> refused_key_{0};  // a run whose table would be too large
+    std::size_t searched_ = 0;  // points searched: in the tree, and the extra copies of listed ones
+    std::size_t distinct_ = 0;  // points in the tree
+    std::vector<std::uint32_t> copies_;  // times each cloud index was listed, if one was repeated
     mutable std::atomic<std::size_t> size_hint_{64};  // expected radius answer size
+    mutable std::atomic<std::uint64_t> radius_memo_{0};  // limit bits << 32 | radius bits
 };
 
 }  // namespace nbhd
