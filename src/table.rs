@@ -669,8 +669,8 @@ fn rows_in_place<T: Scalar>(
             }
             Ok::<_, NbhdError>(())
         })?;
-    // `table`'s pointers are not used past this point; the vectors are whole again.
-    drop(table);
+    // `table`'s pointers are not used past this point (the workers are done): the vectors
+    // are whole again.
     if mismatch.load(Ordering::Relaxed) {
         return Ok(None);
     }
