@@ -710,3 +710,60 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::query::Neighborhood;
+    use crate::tree::KdTree;
+    use crate::{BuildOptions, PointsView, TableOptions};
+
+    /// Rows computed a block of tree positions at a time (blocks that start past position 0,
+    /// written in place for k-nearest, through the buffers otherwise, copies included) equal
+    /// the whole table's rows of the same points.
+    #[test]
+    fn blocks_of_positions_give_the_whole_table_rows() {
+        let mut state = 12_345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut pts: Vec<[f32; 3]> = (0..5000).map(|_| [next(), next(), next()]).collect();
+        // copies of a few points, for the shared rows of groups of copies
+        for i in 0..600 {
+            pts[4000 + i] = pts[i % 5];
+        }
+        let view = PointsView::from_rows(&pts).unwrap();
+        let tree = KdTree::<f32>::build(&view, &BuildOptions::default()).unwrap();
+        for nbhd in [
+            Neighborhood::Knn { k: 7 },
+            Neighborhood::KnnRadius { k: 7, radius: 0.05 },
+            Neighborhood::Radius {
+                radius: 0.04,
+                sorted: true,
+            },
+        ] {
+            for exclude_self in [true, false] {
+                let opts = TableOptions {
+                    exclude_self,
+                    threads: 2,
+                };
+                let whole = tree.neighborhoods(nbhd, &opts).unwrap();
+                let mut seen = 0;
+                tree.neighborhoods_by_blocks(nbhd, exclude_self, 2000, &mut |positions, t| {
+                    assert_eq!(t.len(), positions.len());
+                    for (r, pos) in positions.enumerate() {
+                        let i = tree.ids[pos] as usize;
+                        assert_eq!(t.indices_of(r), whole.indices_of(i));
+                        assert_eq!(t.sq_dists_of(r), whole.sq_dists_of(i));
+                        seen += 1;
+                    }
+                    Ok(())
+                })
+                .unwrap();
+                assert_eq!(seen, pts.len());
+            }
+        }
+    }
+}
