@@ -116,60 +116,216 @@ pub(crate) const CHUNK: usize = 1024;
 /// table.
 const ROW_BLOCK: usize = 4096;
 
-/// Row lengths, neighbour indices and squared distances of one chunk of queries, and the bytes
-/// an allocation for them failed to get (`.3`; the chunk takes no more rows once set).
-///
-/// Rows are appended through [`RowsChunk::reserve_row`], which reserves fallibly: the size of
-/// a table comes from the caller's input (a radius covering every point, a huge `k`), and an
-/// allocation failure must become [`NbhdError::OutOfMemory`], never an abort. The bytes a
-/// chunk holds count against [`IN_CHUNKS`] until it is dropped.
-#[derive(Debug, Default)]
-pub(crate) struct RowsChunk<T>(
-    pub(crate) Vec<usize>,
-    pub(crate) Vec<u32>,
-    pub(crate) Vec<T>,
-    pub(crate) Option<u128>,
-    /// Bytes of this chunk counted in [`IN_CHUNKS`].
-    u64,
-);
+/// Where one row of a chunk is in the chunk's buffers: the entries `at..at + len`, less the
+/// entry at `at + skip` when `skip < len` (the rows of copies of one point share one stored row,
+/// each without its own point; see [`RowsChunk::push_shared`]).
+#[derive(Clone, Copy, Debug)]
+struct RowSource {
+    at: usize,
+    len: usize,
+    skip: usize,
+}
 
-impl<T> RowsChunk<T> {
-    /// Makes room for one more row of `len` neighbours; `false` (and the failure recorded)
-    /// if the memory cannot be had — the allocator refuses, or the rows of all tables being
-    /// computed would exceed the machine's memory ([`memory_limit`]) — or if an earlier
-    /// reservation of this chunk failed.
+impl RowSource {
+    /// Entries of the row.
+    fn row_len(&self) -> usize {
+        self.len - usize::from(self.skip < self.len)
+    }
+}
+
+/// The final table's entries, written in place by the workers of [`rows_in_chunks`] when
+/// every row's length is known in advance (k-nearest tables).
+struct InPlace<T> {
+    ids: *mut u32,
+    dists: *mut T,
+    total: usize,
+}
+
+// SAFETY: the pointers are only written through [`RowsChunk::push_row`] and
+// [`RowsChunk::push_shared`], each worker into the slots of its own work items, which are
+// disjoint (`rows_in_chunks` checks that no two work items map to one row), and only while
+// `rows_in_chunks` keeps the vectors they point into alive and otherwise untouched.
+unsafe impl<T: Send> Send for InPlace<T> {}
+// SAFETY: as above: no two threads ever write the same entry, and nobody reads them meanwhile.
+unsafe impl<T: Send> Sync for InPlace<T> {}
+
+/// A chunk that writes its rows in place: the table's entries, the rows' offsets, the map from
+/// work item to row, and the next work item.
+struct Direct<'a, T> {
+    table: &'a InPlace<T>,
+    offsets: &'a [usize],
+    row_of: &'a (dyn Fn(usize) -> usize + Sync),
+    next: usize,
+}
+
+impl<T: Copy> Direct<'_, T> {
+    /// The entries of the next work item's row as two slices, if its slot has `len` entries.
     #[inline]
-    pub(crate) fn reserve_row(&mut self, len: usize) -> bool {
-        if self.3.is_some() {
-            return false;
+    fn next_slot(&mut self, len: usize) -> Option<(&mut [u32], &mut [T])> {
+        let r = (self.row_of)(self.next);
+        self.next += 1;
+        let (from, to) = (self.offsets[r], self.offsets[r + 1]);
+        if to - from != len || to > self.table.total {
+            return None;
         }
-        let needed = self.1.len() as u128 + len as u128;
-        if needed > self.1.capacity() as u128 {
+        // SAFETY: `from..to` lies inside the table's two vectors (`to ≤ total`, their length);
+        // the slot belongs to this work item alone (no two work items map to one row, checked
+        // when the offsets were built, and each work item is taken once, by `next`), so no
+        // other reference to these entries exists while the slices live.
+        unsafe {
+            Some((
+                std::slice::from_raw_parts_mut(self.table.ids.add(from), len),
+                std::slice::from_raw_parts_mut(self.table.dists.add(from), len),
+            ))
+        }
+    }
+}
+
+/// The rows of one chunk of queries, appended in work order: into the chunk's buffers (row
+/// sources, neighbour indices, squared distances), gathered into the table afterwards, or —
+/// when every row's length is known in advance — straight into the final table.
+///
+/// Rows go in through [`RowsChunk::push_row`] and [`RowsChunk::push_shared`], which reserve
+/// fallibly: the size of a table comes from the caller's input (a radius covering every point,
+/// a huge `k`), and an allocation failure must become [`NbhdError::OutOfMemory`], never an
+/// abort. The bytes a chunk holds count against [`IN_CHUNKS`] until it is dropped.
+#[derive(Default)]
+pub(crate) struct RowsChunk<'a, T> {
+    rows: Vec<RowSource>,
+    ids: Vec<u32>,
+    dists: Vec<T>,
+    /// The bytes an allocation failed to get (the chunk takes no more rows once set).
+    failed: Option<u128>,
+    /// Bytes of this chunk counted in [`IN_CHUNKS`].
+    counted: u64,
+    direct: Option<Direct<'a, T>>,
+    /// A row's length differed from its slot's in the final table (the table is then built
+    /// through the buffers instead).
+    mismatch: bool,
+}
+
+impl<T: Copy + Default> RowsChunk<'_, T> {
+    /// `true` once the chunk takes no more rows (an allocation failed, or a row did not fit
+    /// its slot): the caller may stop computing them.
+    #[inline]
+    pub(crate) fn is_done(&self) -> bool {
+        self.failed.is_some() || self.mismatch
+    }
+
+    /// Appends the row of the next work item: `len` pairs `(sq_dist, index)`.
+    #[inline]
+    pub(crate) fn push_row(&mut self, len: usize, row: impl Iterator<Item = (T, u32)>) {
+        if self.is_done() {
+            return;
+        }
+        if let Some(direct) = &mut self.direct {
+            match direct.next_slot(len) {
+                Some((ids, dists)) => {
+                    for ((id, d), (sd, i)) in ids.iter_mut().zip(dists.iter_mut()).zip(row) {
+                        (*id, *d) = (i, sd);
+                    }
+                }
+                None => self.mismatch = true,
+            }
+            return;
+        }
+        if !self.reserve(len) {
+            return;
+        }
+        let at = self.ids.len();
+        for (sd, i) in row.take(len) {
+            self.ids.push(i);
+            self.dists.push(sd);
+        }
+        let len = self.ids.len() - at;
+        self.rows.push(RowSource {
+            at,
+            len,
+            skip: usize::MAX,
+        });
+    }
+
+    /// Appends the rows of the next `own.len()` work items, copies of one point: each the
+    /// shared row `ids`/`dists` less the entry of its own index (if the row holds it). The
+    /// shared row is stored once; each member's row is written only into the final table.
+    pub(crate) fn push_shared(&mut self, ids: &[u32], dists: &[T], own: &[u32]) {
+        if self.is_done() {
+            return;
+        }
+        let skip_of = |o: u32| ids.iter().position(|&i| i == o).unwrap_or(usize::MAX);
+        if let Some(direct) = &mut self.direct {
+            for &o in own {
+                let skip = skip_of(o);
+                let (before, after) = if skip < ids.len() {
+                    (skip, skip + 1)
+                } else {
+                    (ids.len(), ids.len())
+                };
+                let len = before + ids.len() - after;
+                match direct.next_slot(len) {
+                    Some((out_ids, out_dists)) => {
+                        out_ids[..before].copy_from_slice(&ids[..before]);
+                        out_ids[before..].copy_from_slice(&ids[after..]);
+                        out_dists[..before].copy_from_slice(&dists[..before]);
+                        out_dists[before..].copy_from_slice(&dists[after..]);
+                    }
+                    None => {
+                        self.mismatch = true;
+                        return;
+                    }
+                }
+            }
+            return;
+        }
+        if !self.reserve(ids.len()) || self.rows.try_reserve(own.len()).is_err() {
+            self.failed.get_or_insert(0);
+            return;
+        }
+        let at = self.ids.len();
+        self.ids.extend_from_slice(ids);
+        self.dists.extend_from_slice(dists);
+        for &o in own {
+            self.rows.push(RowSource {
+                at,
+                len: ids.len(),
+                skip: skip_of(o),
+            });
+        }
+    }
+
+    /// Makes room in the buffers for one more row of `len` neighbours; `false` (and the
+    /// failure recorded) if the memory cannot be had — the allocator refuses, or the rows of
+    /// all tables being computed would exceed the machine's memory ([`memory_limit`]).
+    #[inline]
+    fn reserve(&mut self, len: usize) -> bool {
+        let needed = self.ids.len() as u128 + len as u128;
+        if needed > self.ids.capacity() as u128 {
             // the buffers grow (at least doubling): count the new capacity
-            let grown = (needed.max(2 * self.1.capacity() as u128) * entry_bytes::<T>())
+            let grown = (needed.max(2 * self.ids.capacity() as u128) * entry_bytes::<T>())
                 .min(u128::from(u64::MAX)) as u64;
-            let extra = grown.saturating_sub(self.4);
+            let extra = grown.saturating_sub(self.counted);
             let before = IN_CHUNKS.fetch_add(extra, Ordering::Relaxed);
-            self.4 += extra;
+            self.counted += extra;
+            let want = needed.max(2 * self.ids.capacity() as u128) as usize;
             let fits = u128::from(before) + u128::from(extra) <= memory_limit()
-                && self.1.try_reserve(needed as usize - self.1.len()).is_ok()
-                && self.2.try_reserve(needed as usize - self.2.len()).is_ok();
+                && self.ids.try_reserve(want - self.ids.len()).is_ok()
+                && self.dists.try_reserve(want - self.dists.len()).is_ok();
             if !fits {
-                self.3 = Some(needed * entry_bytes::<T>());
+                self.failed = Some(needed * entry_bytes::<T>());
                 return false;
             }
         }
-        if self.0.try_reserve(1).is_err() {
-            self.3 = Some(needed * entry_bytes::<T>());
+        if self.rows.try_reserve(1).is_err() {
+            self.failed = Some(needed * entry_bytes::<T>());
             return false;
         }
         true
     }
 }
 
-impl<T> Drop for RowsChunk<T> {
+impl<T> Drop for RowsChunk<'_, T> {
     fn drop(&mut self) {
-        IN_CHUNKS.fetch_sub(self.4, Ordering::Relaxed);
+        IN_CHUNKS.fetch_sub(self.counted, Ordering::Relaxed);
     }
 }
 
@@ -331,17 +487,15 @@ pub(crate) fn rows_in_work_order<T: Scalar>(
         .map(|c| c * CHUNK)
         .chain(std::iter::once(work))
         .collect();
-    rows_in_chunks(rows, &bounds, row_of, |c, chunk| {
+    rows_in_chunks(rows, &bounds, row_of, None, |c, chunk| {
         let mut row: Vec<Neighbor<T>> = Vec::new();
         let mut scratch: Vec<T> = Vec::new();
         for w in bounds[c]..bounds[c + 1] {
             query(w, &mut row, &mut scratch)?;
-            if !chunk.reserve_row(row.len()) {
+            chunk.push_row(row.len(), row.iter().map(|nb| (nb.sq_dist, nb.index)));
+            if chunk.is_done() {
                 break;
             }
-            chunk.0.push(row.len());
-            chunk.1.extend(row.iter().map(|nb| nb.index));
-            chunk.2.extend(row.iter().map(|nb| nb.sq_dist));
         }
         Ok(())
     })
@@ -352,31 +506,42 @@ pub(crate) fn rows_in_work_order<T: Scalar>(
 /// of item `w` goes to table row `row_of(w)` (rows no item maps to stay empty). The chunks are
 /// fixed by `bounds`, not by the threads, and each row is computed on its own, so the table is
 /// identical for any number of threads.
+///
+/// With `row_len = Some(len)` every work item's row holds `len` entries (k-nearest tables):
+/// the offsets are known before any search, and the rows are written once, straight into
+/// their place in the table. Otherwise (or should a row not have that length) they are
+/// collected in per-chunk buffers and gathered into the table afterwards.
 pub(crate) fn rows_in_chunks<T: Scalar>(
     rows: usize,
     bounds: &[usize],
     row_of: impl Fn(usize) -> usize + Sync,
-    fill: impl Fn(usize, &mut RowsChunk<T>) -> Result<()> + Sync,
+    row_len: Option<usize>,
+    fill: impl Fn(usize, &mut RowsChunk<'_, T>) -> Result<()> + Sync,
 ) -> Result<NeighborTable<T>> {
+    if let Some(len) = row_len.filter(|&l| l > 0) {
+        if let Some(table) = rows_in_place(rows, bounds, &row_of, len, &fill)? {
+            return Ok(table);
+        }
+    }
     let out_of_memory = AtomicBool::new(false);
-    let chunks: Vec<Result<RowsChunk<T>>> = (0..bounds.len().saturating_sub(1))
+    let chunks: Vec<Result<RowsChunk<'_, T>>> = (0..bounds.len().saturating_sub(1))
         .into_par_iter()
         .map(|c| {
             let mut chunk = RowsChunk::default();
             if out_of_memory.load(Ordering::Relaxed) {
                 // another chunk's rows did not fit: the table is refused, skip the work
-                chunk.3 = Some(0);
+                chunk.failed = Some(0);
                 return Ok(chunk);
             }
             fill(c, &mut chunk)?;
-            if chunk.3.is_some() {
+            if chunk.failed.is_some() {
                 out_of_memory.store(true, Ordering::Relaxed);
             }
             Ok(chunk)
         })
         .collect();
-    let chunks: Vec<RowsChunk<T>> = chunks.into_iter().collect::<Result<_>>()?;
-    if let Some(failed) = chunks.iter().filter_map(|c| c.3).max() {
+    let chunks: Vec<RowsChunk<'_, T>> = chunks.into_iter().collect::<Result<_>>()?;
+    if let Some(failed) = chunks.iter().filter_map(|c| c.failed).max() {
         // The rows of one chunk did not fit; the whole table needs about that much for every
         // chunk (an estimate from the failing chunk's share of the rows).
         let n_chunks = bounds.len().saturating_sub(1).max(1) as u128;
@@ -386,16 +551,14 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
             bytes: failed.saturating_mul(n_chunks),
         });
     }
-    // Where each row is: its length and its chunk and start in that chunk's buffers.
+    // Where each row is: its length and its chunk and row in that chunk.
     let mut offsets = try_zeroed::<usize>(rows + 1, "the table's row offsets")?;
     let mut source = try_filled(rows, (0u32, 0usize), "the table's row sources")?;
-    for (c, RowsChunk(lens, ..)) in chunks.iter().enumerate() {
-        let mut at = 0;
-        for (j, &len) in lens.iter().enumerate() {
+    for (c, chunk) in chunks.iter().enumerate() {
+        for (j, s) in chunk.rows.iter().enumerate() {
             let r = row_of(bounds[c] + j);
-            offsets[r + 1] = len;
-            source[r] = (c as u32, at);
-            at += len;
+            offsets[r + 1] = s.row_len();
+            source[r] = (c as u32, j);
         }
     }
     for r in 0..rows {
@@ -433,10 +596,20 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
             if from == to {
                 continue;
             }
-            let (c, at) = source[r];
-            let RowsChunk(_, chunk_ids, chunk_dists, ..) = &chunks[c as usize];
-            ids[from..to].copy_from_slice(&chunk_ids[at..at + to - from]);
-            dists[from..to].copy_from_slice(&chunk_dists[at..at + to - from]);
+            let (c, j) = source[r];
+            let chunk = &chunks[c as usize];
+            let s = chunk.rows[j];
+            let (src_ids, src_dists) = (
+                &chunk.ids[s.at..s.at + s.len],
+                &chunk.dists[s.at..s.at + s.len],
+            );
+            let before = s.skip.min(s.len);
+            let after = (before + 1).min(s.len);
+            let mid = from + before;
+            ids[from..mid].copy_from_slice(&src_ids[..before]);
+            ids[mid..to].copy_from_slice(&src_ids[after..]);
+            dists[from..mid].copy_from_slice(&src_dists[..before]);
+            dists[mid..to].copy_from_slice(&src_dists[after..]);
         }
     });
     Ok(NeighborTable {
@@ -444,6 +617,68 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
         indices,
         sq_dists,
     })
+}
+
+/// [`rows_in_chunks`] for rows of `len` entries each, written in place; `None` (nothing
+/// written that counts) if two work items map to one row or a row turned out to have another
+/// length, for the caller to build the table through the buffers instead.
+fn rows_in_place<T: Scalar>(
+    rows: usize,
+    bounds: &[usize],
+    row_of: &(dyn Fn(usize) -> usize + Sync),
+    len: usize,
+    fill: &(dyn Fn(usize, &mut RowsChunk<'_, T>) -> Result<()> + Sync),
+) -> Result<Option<NeighborTable<T>>> {
+    let work = bounds.first().copied().unwrap_or(0)..bounds.last().copied().unwrap_or(0);
+    let mut offsets = try_zeroed::<usize>(rows + 1, "the table's row offsets")?;
+    for w in work {
+        let r = row_of(w);
+        if offsets[r + 1] != 0 {
+            return Ok(None);
+        }
+        offsets[r + 1] = len;
+    }
+    for r in 0..rows {
+        offsets[r + 1] += offsets[r];
+    }
+    let total = offsets[rows];
+    let (mut indices, mut sq_dists) = (
+        try_filled_par(total, 0u32, "the neighbour table (indices)")?,
+        try_filled_par(total, T::ZERO, "the neighbour table (squared distances)")?,
+    );
+    let table = InPlace {
+        ids: indices.as_mut_ptr(),
+        dists: sq_dists.as_mut_ptr(),
+        total,
+    };
+    let mismatch = AtomicBool::new(false);
+    (0..bounds.len().saturating_sub(1))
+        .into_par_iter()
+        .try_for_each(|c| {
+            let mut chunk = RowsChunk::default();
+            chunk.direct = Some(Direct {
+                table: &table,
+                offsets: &offsets,
+                row_of,
+                next: bounds[c],
+            });
+            fill(c, &mut chunk)?;
+            let written = chunk.direct.as_ref().map_or(0, |d| d.next);
+            if chunk.mismatch || written != bounds[c + 1] {
+                mismatch.store(true, Ordering::Relaxed);
+            }
+            Ok::<_, NbhdError>(())
+        })?;
+    // `table`'s pointers are not used past this point (the workers are done): the vectors
+    // are whole again.
+    if mismatch.load(Ordering::Relaxed) {
+        return Ok(None);
+    }
+    Ok(Some(NeighborTable {
+        offsets,
+        indices,
+        sq_dists,
+    }))
 }
 
 /// `n` copies of `value` in a vector allocated fallibly: [`NbhdError::OutOfMemory`] naming

@@ -238,10 +238,10 @@ trait RowSets<T: Scalar> {
     /// Whether keys change as candidates arrive (k-nearest) or stay the radius (radius).
     const TIGHTENS: bool;
     /// Appends the first `m` rows, in `(sq_dist, index)` order where asked, to `out`.
-    fn write(&mut self, m: usize, out: &mut RowsChunk<T>);
+    fn write(&mut self, m: usize, out: &mut RowsChunk<'_, T>);
     /// Appends, for every id of `self_ids`, row 0 without that id: the rows of a group of
     /// copies of one point, searched once (radius rows only; see [`Search::group`]).
-    fn write_copies(&mut self, _self_ids: &[u32], _out: &mut RowsChunk<T>) {
+    fn write_copies(&mut self, _self_ids: &[u32], _out: &mut RowsChunk<'_, T>) {
         unreachable!("only radius rows are shared by copies")
     }
 }
@@ -279,43 +279,18 @@ impl<T: Scalar, E: RowEntry<T>> RowSets<T> for SortedRows<T, E> {
             sq_radius: self.sq_radius,
         }
     }
-    fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
+    fn write(&mut self, m: usize, out: &mut RowsChunk<'_, T>) {
         for i in 0..m {
             let row = &self.buf[i * self.k..i * self.k + self.len[i]];
-            write_row(row.len(), row.iter().map(|&e| e.pair()), out);
+            out.push_row(row.len(), row.iter().map(|&e| e.pair()));
         }
     }
 }
 
-/// Appends one row of `len` pairs `(sq_dist, index)` to the chunk's buffers.
+/// Appends one row of neighbours to the chunk.
 #[inline]
-fn write_row<T: Scalar>(len: usize, row: impl Iterator<Item = (T, u32)>, out: &mut RowsChunk<T>) {
-    if !out.reserve_row(len) {
-        return;
-    }
-    out.0.push(len);
-    let at = out.1.len();
-    out.1.resize(at + len, 0);
-    out.2.resize(at + len, T::ZERO);
-    for ((id, d), pair) in out.1[at..].iter_mut().zip(&mut out.2[at..]).zip(row) {
-        (*d, *id) = pair;
-    }
-}
-
-/// Appends one row of neighbours to the chunk's buffers ([`write_row`] for a slice).
-#[inline]
-fn write_neighbors<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<T>) {
-    if !out.reserve_row(row.len()) {
-        return;
-    }
-    out.0.push(row.len());
-    let at = out.1.len();
-    out.1.resize(at + row.len(), 0);
-    out.2.resize(at + row.len(), T::ZERO);
-    for ((id, d), nb) in out.1[at..].iter_mut().zip(&mut out.2[at..]).zip(row) {
-        *id = nb.index;
-        *d = nb.sq_dist;
-    }
+fn write_neighbors<T: Scalar>(row: &[Neighbor<T>], out: &mut RowsChunk<'_, T>) {
+    out.push_row(row.len(), row.iter().map(|nb| (nb.sq_dist, nb.index)));
 }
 
 /// Sorts a row by `(sq_dist, index)` through the packed keys of `src/query/order.rs`; every key
@@ -370,7 +345,7 @@ impl<T: Scalar> RowSets<T> for HeapRows<T> {
     fn set(&mut self, i: usize) -> NeighborHeap<'_, T> {
         NeighborHeap::resume(&mut self.rows[i], self.k, self.sq_radius)
     }
-    fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
+    fn write(&mut self, m: usize, out: &mut RowsChunk<'_, T>) {
         for r in &mut self.rows[..m] {
             sort_row(r, &mut self.keys);
             write_neighbors(r, out);
@@ -403,7 +378,7 @@ impl<T: Scalar> RowSets<T> for RadiusRows<T> {
             sq_radius: self.sq_radius,
         }
     }
-    fn write(&mut self, m: usize, out: &mut RowsChunk<T>) {
+    fn write(&mut self, m: usize, out: &mut RowsChunk<'_, T>) {
         for r in &mut self.rows[..m] {
             if self.sorted {
                 sort_row(r, &mut self.keys);
@@ -411,28 +386,16 @@ impl<T: Scalar> RowSets<T> for RadiusRows<T> {
             write_neighbors(r, out);
         }
     }
-    fn write_copies(&mut self, self_ids: &[u32], out: &mut RowsChunk<T>) {
+    fn write_copies(&mut self, self_ids: &[u32], out: &mut RowsChunk<'_, T>) {
         let r = &mut self.rows[0];
         if self.sorted {
             sort_row(r, &mut self.keys);
         }
-        // The shared row as two flat arrays, so that each member's row is at most two copies
-        // of contiguous runs (the rows of a large cluster of copies are most of such a table).
+        // The shared row as two flat arrays, stored once; each member's row (the shared one
+        // less the member itself) is written only into the final table.
         let ids: Vec<u32> = r.iter().map(|nb| nb.index).collect();
         let dists: Vec<T> = r.iter().map(|nb| nb.sq_dist).collect();
-        for &own in self_ids {
-            let skip = ids.iter().position(|&i| i == own);
-            let len = ids.len() - usize::from(skip.is_some());
-            if !out.reserve_row(len) {
-                return;
-            }
-            out.0.push(len);
-            let (before, after) = skip.map_or((ids.len(), ids.len()), |p| (p, p + 1));
-            out.1.extend_from_slice(&ids[..before]);
-            out.1.extend_from_slice(&ids[after..]);
-            out.2.extend_from_slice(&dists[..before]);
-            out.2.extend_from_slice(&dists[after..]);
-        }
+        out.push_shared(&ids, &dists, self_ids);
     }
 }
 
@@ -528,10 +491,19 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
                 rows(&search, g.clone());
             }
         };
+        // Every row of a k-nearest table (no radius) holds k of the tree's other points, or
+        // all of them: its place in the table is known before the search.
+        let row_len = match self.nbhd {
+            Neighborhood::Knn { k } => Some(k.min(
+                self.tree.ids.len() - usize::from(self.exclude_self).min(self.tree.ids.len()),
+            )),
+            _ => None,
+        };
         rows_in_chunks(
             rows,
             &self.work_bounds[chunks.start..=chunks.end],
             row_of,
+            row_len,
             |c, out| {
                 let mut stack = Vec::new();
                 if k == usize::MAX {
@@ -543,7 +515,7 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
                     };
                     run(c, &mut |s, g| {
                         // a chunk whose rows did not fit takes no more (see `RowsChunk`)
-                        if out.3.is_none() {
+                        if !out.is_done() {
                             s.group(g, &mut rows, &mut stack, out)
                         }
                     });
@@ -555,7 +527,7 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
                         buf: vec![Key32::default(); GROUP * k],
                     };
                     run(c, &mut |s, g| {
-                        if out.3.is_none() {
+                        if !out.is_done() {
                             s.group(g, &mut rows, &mut stack, out)
                         }
                     });
@@ -567,7 +539,7 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
                         buf: vec![Neighbor::default(); GROUP * k],
                     };
                     run(c, &mut |s, g| {
-                        if out.3.is_none() {
+                        if !out.is_done() {
                             s.group(g, &mut rows, &mut stack, out)
                         }
                     });
@@ -579,7 +551,7 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
                         keys: Keys::default(),
                     };
                     run(c, &mut |s, g| {
-                        if out.3.is_none() {
+                        if !out.is_done() {
                             s.group(g, &mut rows, &mut stack, out)
                         }
                     });
@@ -607,7 +579,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         g: Range<usize>,
         rows: &mut R,
         stack: &mut Vec<(u32, T)>,
-        out: &mut RowsChunk<T>,
+        out: &mut RowsChunk<'_, T>,
     ) {
         let (tree, boxes) = (self.tree, self.boxes);
         let m = g.len();
@@ -735,6 +707,63 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
             rows.write_copies(&self_ids[..g.len()], out);
         } else {
             rows.write(m, out);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::query::Neighborhood;
+    use crate::tree::KdTree;
+    use crate::{BuildOptions, PointsView, TableOptions};
+
+    /// Rows computed a block of tree positions at a time (blocks that start past position 0,
+    /// written in place for k-nearest, through the buffers otherwise, copies included) equal
+    /// the whole table's rows of the same points.
+    #[test]
+    fn blocks_of_positions_give_the_whole_table_rows() {
+        let mut state = 12_345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut pts: Vec<[f32; 3]> = (0..5000).map(|_| [next(), next(), next()]).collect();
+        // copies of a few points, for the shared rows of groups of copies
+        for i in 0..600 {
+            pts[4000 + i] = pts[i % 5];
+        }
+        let view = PointsView::from_rows(&pts).unwrap();
+        let tree = KdTree::<f32>::build(&view, &BuildOptions::default()).unwrap();
+        for nbhd in [
+            Neighborhood::Knn { k: 7 },
+            Neighborhood::KnnRadius { k: 7, radius: 0.05 },
+            Neighborhood::Radius {
+                radius: 0.04,
+                sorted: true,
+            },
+        ] {
+            for exclude_self in [true, false] {
+                let opts = TableOptions {
+                    exclude_self,
+                    threads: 2,
+                };
+                let whole = tree.neighborhoods(nbhd, &opts).unwrap();
+                let mut seen = 0;
+                tree.neighborhoods_by_blocks(nbhd, exclude_self, 2000, &mut |positions, t| {
+                    assert_eq!(t.len(), positions.len());
+                    for (r, pos) in positions.enumerate() {
+                        let i = tree.ids[pos] as usize;
+                        assert_eq!(t.indices_of(r), whole.indices_of(i));
+                        assert_eq!(t.sq_dists_of(r), whole.sq_dists_of(i));
+                        seen += 1;
+                    }
+                    Ok(())
+                })
+                .unwrap();
+                assert_eq!(seen, pts.len());
+            }
         }
     }
 }
