@@ -179,11 +179,9 @@ impl<T: Scalar, E: RowEntry<T>> ResultSet<T> for SortedRow<'_, T, E> {
 /// borrowed slice of length `k` that [`KnnRow::new`] fills with the sentinel
 /// `(sq_radius, u32::MAX)`, packed [`Key32`] entries. The sentinel is the worst admissible key
 /// of a set that is not yet full (caller indices are below `u32::MAX`), so the worst key is
-/// always the last entry and no count is kept; an insertion is one pass over the `k` entries
-/// with selects instead of branches (each entry becomes the one before it, the candidate or
-/// itself), so its cost does not depend on where the candidate lands. A single query is
-/// bounded by its mispredicted branches more than by its instructions (measured with
-/// cachegrind's branch simulation, README "Single queries, the floor, and copies of a point").
+/// always the last entry and no count is tested on every offer (cachegrind's branch simulation
+/// counted that test among the most mispredicted of a single query, README "Single queries, the
+/// floor, and copies of a point"); an insertion shifts the entries that follow the candidate.
 pub(crate) struct KnnRow<'a> {
     /// Storage of `k ≥ 1` entries, sorted, sentinels last.
     row: &'a mut [Key32],
