@@ -9,7 +9,9 @@
 //   radius      all points within r, r giving about 20 neighbours on average
 //   eps-k 16    the 16 nearest within that r
 // for nbhd with each pivot policy (one thread; tables with nbhd_tree_neighborhoods), nbhd's
-// default policy on all cores, nanoflann (leaf 10; queries in the caller's order and, as a
+// sliding-midpoint tree asked one query per point in the caller's order through the C ABI
+// (nbhd_tree_knn, nbhd_tree_radius, nbhd_tree_knn_radius: what a caller of PCL's nearestKSearch
+// gets), nbhd's default policy on all cores, nanoflann (leaf 10; queries in the caller's order and, as a
 // separate row, in the tree's leaf order), FLANN's KDTreeSingleIndex (leaf 10) and PCL's
 // KdTreeFLANN. Every result is stored (kNN into n x k arrays, radius into growing arrays, nbhd
 // into its table), so that no library is timed without its output. Prints the median of N
@@ -144,6 +146,56 @@ struct NbhdLib {
         spec.radius = r;
         nbhdpp::Table t = nbhdpp::neighborhoods(tree.get(), spec, /*exclude_self=*/false, table_threads);
         return nbhd_neighborhoods_total(t.get());
+    }
+};
+
+// nbhd single queries through the C ABI, as a C or C++ caller asks them (and as PCL's
+// nearestKSearch is called below): one nbhd_tree_knn / nbhd_tree_radius / nbhd_tree_knn_radius
+// call per point, in the caller's order, on the reference row's tree, the results copied into
+// n x k arrays (kNN, eps-k) or appended to growing arrays (radius).
+struct NbhdSingleLib {
+    const Cloud& c;
+    const NbhdLib* ref;
+    Sink sink;
+    std::vector<std::uint32_t> idx;
+    std::vector<float> sq;
+    std::size_t run(const Op& op, float r) {
+        const nbhd_tree* t = ref->tree.get();
+        std::size_t total = 0;
+        if (op.kind == 1 || op.kind == 3) {
+            const std::size_t k = op.k;
+            sink.reset_fixed(c.count * k);
+            for (std::uint32_t i : c.finite) {
+                std::size_t found = 0;
+                nbhd_status s = op.kind == 1
+                                    ? nbhd_tree_knn(t, c.point(i), k, &sink.idx[i * k], &sink.sq[i * k], k, &found)
+                                    : nbhd_tree_knn_radius(t, c.point(i), k, r, &sink.idx[i * k], &sink.sq[i * k], k,
+                                                           &found);
+                nbhdpp::check(s, "nbhd single query");
+                total += found;
+            }
+            return total;
+        }
+        sink.idx.clear();
+        sink.sq.clear();
+        if (idx.size() < 256) {
+            idx.resize(256);
+            sq.resize(256);
+        }
+        for (std::uint32_t i : c.finite) {
+            std::size_t found = 0;
+            nbhd_status s = nbhd_tree_radius(t, c.point(i), r, idx.data(), sq.data(), idx.size(), &found);
+            if (s == NBHD_STATUS_BUFFER_TOO_SMALL) {  // grows to the largest neighbourhood seen
+                idx.resize(found);
+                sq.resize(found);
+                s = nbhd_tree_radius(t, c.point(i), r, idx.data(), sq.data(), idx.size(), &found);
+            }
+            nbhdpp::check(s, "nbhd_tree_radius");
+            sink.idx.insert(sink.idx.end(), idx.begin(), idx.begin() + found);
+            sink.sq.insert(sink.sq.end(), sq.begin(), sq.begin() + found);
+            total += found;
+        }
+        return total;
     }
 };
 
@@ -325,6 +377,10 @@ bool bench_cloud(const Cloud& c, int reps) {
                            [l](const Op& op, float rr) { return l->run(op, rr); }, [l] { l->tree.reset(); }});
     };
     add_nbhd(NBHD_PIVOT_POLICY_SLIDING_MIDPOINT, 1, "nbhd sliding-midpoint");  // the reference
+    // The reference row's tree, asked one query at a time (it is released after this row).
+    NbhdSingleLib single{c, nb.back().get(), {}, {}, {}};
+    libs.push_back(Lib{"nbhd single queries (C ABI)", false, [] {},
+                       [&](const Op& op, float rr) { return single.run(op, rr); }, [&] { nb[0]->tree.reset(); }});
     add_nbhd(NBHD_PIVOT_POLICY_CYCLIC_MEDIAN, 1, "nbhd cyclic-median");
     add_nbhd(NBHD_PIVOT_POLICY_SPREAD_MEDIAN, 1, "nbhd spread-median");
     add_nbhd(NBHD_PIVOT_POLICY_CLOSEST_TO_MIDDLE, 1, "nbhd closest-to-middle");

@@ -18,6 +18,9 @@ fn neighborhoods<T: Scalar>(n: usize, radius: T) -> Vec<Neighborhood<T>> {
     vec![
         Neighborhood::Knn { k: 1 },
         Neighborhood::Knn { k: 7 },
+        // f32 single queries with 16 < k <= 32 collect into a buffer of 2k selected when full.
+        Neighborhood::Knn { k: 20 },
+        Neighborhood::KnnRadius { k: 24, radius },
         Neighborhood::Knn { k: n + 2 },
         Neighborhood::Radius {
             radius,

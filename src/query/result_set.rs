@@ -6,6 +6,7 @@
 //!
 //! - [`NeighborHeap`] (`src/query/heap.rs`): the k nearest within a radius, any `k`;
 //! - [`SortedRow`]: the same for small `k`, kept sorted by insertion;
+//! - [`KnnRow`]: the same for one single `f32` query, sorted by branch-free insertion;
 //! - [`WithinRadius`]: every point within a radius.
 //!
 //! All of them order by `(sq_dist, index)` (`src/query/order.rs`).
@@ -174,6 +175,128 @@ impl<T: Scalar, E: RowEntry<T>> ResultSet<T> for SortedRow<'_, T, E> {
     }
 }
 
+/// The k nearest within a radius for one single query with small `k`, kept sorted in a
+/// borrowed slice of length `k` that [`KnnRow::new`] fills with the sentinel
+/// `(sq_radius, u32::MAX)`, packed [`Key32`] entries. The sentinel is the worst admissible key
+/// of a set that is not yet full (caller indices are below `u32::MAX`), so the worst key is
+/// always the last entry and no count is tested on every offer (cachegrind's branch simulation
+/// counted that test among the most mispredicted of a single query, README "Single queries, the
+/// floor, and copies of a point"); an insertion shifts the entries that follow the candidate.
+pub(crate) struct KnnRow<'a> {
+    /// Storage of `k ≥ 1` entries, sorted, sentinels last.
+    row: &'a mut [Key32],
+}
+
+impl<'a> KnnRow<'a> {
+    /// A set over `row` (its length is `k`, at least 1), every entry the sentinel.
+    pub(crate) fn new<T: Scalar>(row: &'a mut [Key32], sq_radius: T) -> Self {
+        row.fill(Key32(order::key32(sq_radius, u32::MAX)));
+        Self { row }
+    }
+
+    /// The entries held, in `(sq_dist, index)` order.
+    pub(crate) fn held(&self) -> impl Iterator<Item = Key32> + '_ {
+        self.row
+            .iter()
+            .copied()
+            .take_while(|e| e.0 as u32 != u32::MAX)
+    }
+}
+
+impl<T: Scalar> ResultSet<T> for KnnRow<'_> {
+    #[inline(always)]
+    fn worst_key(&self) -> (T, u32) {
+        order::unkey32(self.row[self.row.len() - 1].0)
+    }
+
+    #[inline(always)]
+    fn insert(&mut self, index: u32, sq_dist: T) {
+        let cand = order::key32(sq_dist, index);
+        let row = &mut *self.row;
+        let mut j = row.len() - 1;
+        while j > 0 && cand < row[j - 1].0 {
+            row[j] = row[j - 1];
+            j -= 1;
+        }
+        row[j] = Key32(cand);
+    }
+
+    #[inline(always)]
+    fn offer(&mut self, index: u32, sq_dist: T) {
+        if order::key32(sq_dist, index) < self.row[self.row.len() - 1].0 {
+            <Self as ResultSet<T>>::insert(self, index, sq_dist);
+        }
+    }
+}
+
+/// The k nearest within a radius for one single `f32` query with larger `k`: packed
+/// [`order::key32`] keys appended unsorted to a buffer of `2k` while they precede the worst
+/// key, which is the `k`-th smallest key at the last compaction (a selection when the buffer is
+/// full), or `(sq_radius, u32::MAX)` before `k` keys were held. The worst key may lag behind
+/// the true `k`-th nearest held, which only lets a few more candidates in (pruning stays
+/// exact); [`KnnBuf::finish`] sorts and keeps `k`. An insertion costs a store instead of a
+/// shift by a mispredicted loop.
+pub(crate) struct KnnBuf<'a> {
+    /// Storage of `2k` keys, the first `len` held.
+    buf: &'a mut [u64],
+    len: usize,
+    k: usize,
+    worst: u64,
+}
+
+impl<'a> KnnBuf<'a> {
+    /// A set of the `k ≥ 1` nearest over `buf` (of length `2k`).
+    pub(crate) fn new<T: Scalar>(buf: &'a mut [u64], k: usize, sq_radius: T) -> Self {
+        debug_assert!(k >= 1 && buf.len() == 2 * k);
+        Self {
+            buf,
+            len: 0,
+            k,
+            worst: order::key32(sq_radius, u32::MAX),
+        }
+    }
+
+    /// Sorts the held keys and returns the `k` first (fewer if fewer were found).
+    pub(crate) fn finish(self) -> &'a [u64] {
+        let held = &mut self.buf[..self.len];
+        held.sort_unstable();
+        &held[..self.len.min(self.k)]
+    }
+}
+
+impl<T: Scalar> ResultSet<T> for KnnBuf<'_> {
+    #[inline(always)]
+    fn worst_key(&self) -> (T, u32) {
+        order::unkey32(self.worst)
+    }
+
+    #[inline(always)]
+    fn insert(&mut self, index: u32, sq_dist: T) {
+        self.buf[self.len] = order::key32(sq_dist, index);
+        self.len += 1;
+        if self.len == self.k && self.worst as u32 == u32::MAX {
+            // Full for the first time: the worst is the largest held.
+            self.worst = self.buf[..self.k]
+                .iter()
+                .copied()
+                .max()
+                .unwrap_or(self.worst);
+        } else if self.len == self.buf.len() {
+            let k = self.k;
+            self.buf[..self.len].select_nth_unstable(k - 1);
+            self.worst = self.buf[k - 1];
+            self.len = k;
+        }
+    }
+
+    #[inline(always)]
+    fn offer(&mut self, index: u32, sq_dist: T) {
+        if order::key32(sq_dist, index) < self.worst {
+            <Self as ResultSet<T>>::insert(self, index, sq_dist);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -206,18 +329,36 @@ mod tests {
                     len: &mut key_len,
                     sq_radius: r2,
                 };
+                let mut single_keys = vec![Key32::default(); k];
+                let mut single = KnnRow::new(&mut single_keys[..], r2);
+                let mut buf_keys = vec![0u64; 2 * k];
+                let mut buffered = KnnBuf::new(&mut buf_keys[..], k, r2);
                 for &(i, d) in &cands {
                     heap.offer(i, d);
                     sorted.offer(i, d);
                     packed.offer(i, d);
+                    single.offer(i, d);
+                    buffered.offer(i, d);
+                    // The buffer's worst key never precedes the exact one (it may lag).
+                    let (exact, lagging) = (heap.worst_key(), buffered.worst_key());
+                    assert!(!order::precedes(lagging, exact), "k {k} r2 {r2}");
                     assert_eq!(heap.worst_key(), sorted.worst_key());
                     assert_eq!(heap.worst_key(), packed.worst_key());
+                    assert_eq!(heap.worst_key(), single.worst_key());
                 }
                 heap.finish();
                 let want: Vec<(f32, u32)> = heap_out.iter().map(|n| n.key()).collect();
                 let got: Vec<(f32, u32)> = nb[..nb_len].iter().map(|n| n.key()).collect();
                 let got_packed: Vec<(f32, u32)> =
                     keys[..key_len].iter().map(|&e| e.pair()).collect();
+                let got_single: Vec<(f32, u32)> = single.held().map(|e| e.pair()).collect();
+                assert_eq!(got_single, want, "k {k} r2 {r2}");
+                let got_buffered: Vec<(f32, u32)> = buffered
+                    .finish()
+                    .iter()
+                    .map(|&e| order::unkey32(e))
+                    .collect();
+                assert_eq!(got_buffered, want, "k {k} r2 {r2}");
                 assert_eq!(got, want, "k {k} r2 {r2}");
                 assert_eq!(got_packed, want, "k {k} r2 {r2}");
                 // a brute-force reference: sort all within the radius, keep k
