@@ -21,45 +21,132 @@ pub(super) fn step(
     width: f64,
     o: &RobustOptions,
 ) -> Vec<DVec3> {
-    let patch = PatchWeight::new(o.feature_angle);
-    let chord_width = CHORD_WIDTH * width;
+    let kernel = Kernel::new(width, o);
     (0..points.len())
         .into_par_iter()
-        .map(|s| {
-            let (p, ni) = (points[s], normals[s]);
-            let (mut acc, mut ws) = (DVec3::ZERO, 0.0);
-            for &j in rows.narrow(s, o.k) {
-                let (x, nj) = (points[j as usize], normals[j as usize]);
-                let e = x - p;
+        .map(|s| kernel.moved(points, normals, s, rows.narrow(s, o.k)))
+        .collect()
+}
+
+/// Neighbours evaluated together: four `f64` lanes, one AVX register.
+const LANES: usize = 4;
+
+/// The constants of one step.
+struct Kernel {
+    /// Width of the biweight of a neighbour's tangent-plane distance.
+    width: f64,
+    /// Square of the width within which a chord counts as perpendicular to the mean normal.
+    chord_width_sq: f64,
+    /// The weight of "one smooth patch" between two normals.
+    patch: PatchWeight,
+    tau: f64,
+}
+
+/// What a block of neighbours adds: the weight `g_ij`, the step term `g_ij m_ij m_ijᵀ (x_j −
+/// p_i)`, and whether the direction `m_ij` exists (`‖v‖ > 0`).
+struct Terms {
+    g: [f64; LANES],
+    term: [[f64; LANES]; 3],
+    has_direction: [bool; LANES],
+}
+
+impl Kernel {
+    fn new(width: f64, o: &RobustOptions) -> Self {
+        Self {
+            width,
+            chord_width_sq: (CHORD_WIDTH * width).powi(2),
+            patch: PatchWeight::new(o.feature_angle),
+            tau: o.tau,
+        }
+    }
+
+    /// Stored point `s` after the step over its umbrella `row`.
+    fn moved(&self, points: &[DVec3], normals: &[DVec3], s: usize, row: &[u32]) -> DVec3 {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the processor supports AVX (checked just above).
+            return unsafe { self.moved_avx(points, normals, s, row) };
+        }
+        self.moved_lanes(points, normals, s, row)
+    }
+
+    /// [`Kernel::moved`] compiled for AVX: the same operations on the same lanes, so the same
+    /// bits (no FMA, which would round differently).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn moved_avx(&self, points: &[DVec3], normals: &[DVec3], s: usize, row: &[u32]) -> DVec3 {
+        self.moved_lanes(points, normals, s, row)
+    }
+
+    /// The neighbours' terms in blocks of [`LANES`], added in row order.
+    #[inline(always)]
+    fn moved_lanes(&self, points: &[DVec3], normals: &[DVec3], s: usize, row: &[u32]) -> DVec3 {
+        let (p, ni) = (points[s], normals[s]);
+        let (mut acc, mut ws) = (DVec3::ZERO, 0.0);
+        for block in row.chunks(LANES) {
+            let (mut e, mut nj) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+            for (l, &j) in block.iter().enumerate() {
+                let (x, n) = (points[j as usize] - p, normals[j as usize]);
+                (e[0][l], e[1][l], e[2][l]) = (x.x, x.y, x.z);
+                (nj[0][l], nj[1][l], nj[2][l]) = (n.x, n.y, n.z);
+            }
+            let t = self.terms(ni, &e, &nj);
+            for l in 0..block.len() {
                 // the neighbour's tangent plane far from p: another face, drops out
-                let g = biweight(nj.dot(e), width);
-                if g == 0.0 {
+                if t.g[l] == 0.0 {
                     continue;
                 }
-                let c = ni.dot(nj);
-                let nj = if c < 0.0 { -nj } else { nj };
-                // one smooth patch: normals close, or the chord perpendicular to their mean
-                // (⟨n_i + n_j, e⟩ / ‖n_i + n_j‖ within the chord width; squared, no root)
-                let sum = ni + nj;
-                let a = patch.weight(c.abs()).max(biweight_sq(
-                    sum.dot(e).powi(2),
-                    sum.length_squared() * chord_width.powi(2),
-                ));
-                // m = v/‖v‖ with v = a n_i + n_j: m mᵀ e = v ⟨v, e⟩ / ‖v‖²
-                let v = a * ni + nj;
-                let vv = v.length_squared();
-                if vv > 0.0 {
-                    acc += g * v * (v.dot(e) / vv);
+                if t.has_direction[l] {
+                    acc += DVec3::new(t.term[0][l], t.term[1][l], t.term[2][l]);
                 }
-                ws += g;
+                ws += t.g[l];
             }
-            if ws > 0.0 {
-                p + o.tau * acc / ws
-            } else {
-                p
+        }
+        if ws > 0.0 {
+            p + self.tau * acc / ws
+        } else {
+            p
+        }
+    }
+
+    /// The terms of the neighbours at offsets `e = x_j − p_i` with normals `n_j`, lane by lane
+    /// (each lane's arithmetic in the order of the scalar formula, so the lanes vectorise and
+    /// every instruction set gives the same bits).
+    #[inline(always)]
+    fn terms(&self, ni: DVec3, e: &[[f64; LANES]; 3], nj: &[[f64; LANES]; 3]) -> Terms {
+        let mut t = Terms {
+            g: [0.0; LANES],
+            term: [[0.0; LANES]; 3],
+            has_direction: [false; LANES],
+        };
+        for l in 0..LANES {
+            let (ex, ey, ez) = (e[0][l], e[1][l], e[2][l]);
+            let (mut nx, mut ny, mut nz) = (nj[0][l], nj[1][l], nj[2][l]);
+            let g = biweight(nx * ex + ny * ey + nz * ez, self.width);
+            let c = ni.x * nx + ni.y * ny + ni.z * nz;
+            if c < 0.0 {
+                (nx, ny, nz) = (-nx, -ny, -nz);
             }
-        })
-        .collect()
+            // one smooth patch: normals close, or the chord perpendicular to their mean
+            // (⟨n_i + n_j, e⟩ / ‖n_i + n_j‖ within the chord width; squared, no root)
+            let (sx, sy, sz) = (ni.x + nx, ni.y + ny, ni.z + nz);
+            let chord = sx * ex + sy * ey + sz * ez;
+            let a = self.patch.weight(c.abs()).max(biweight_sq(
+                chord * chord,
+                (sx * sx + sy * sy + sz * sz) * self.chord_width_sq,
+            ));
+            // m = v/‖v‖ with v = a n_i + n_j: m mᵀ e = v ⟨v, e⟩ / ‖v‖²
+            let (vx, vy, vz) = (a * ni.x + nx, a * ni.y + ny, a * ni.z + nz);
+            let vv = vx * vx + vy * vy + vz * vz;
+            let f = (vx * ex + vy * ey + vz * ez) / vv;
+            t.g[l] = g;
+            t.term[0][l] = g * vx * f;
+            t.term[1][l] = g * vy * f;
+            t.term[2][l] = g * vz * f;
+            t.has_direction[l] = vv > 0.0;
+        }
+        t
+    }
 }
 
 /// Tukey's biweight from squares: `(1 − d²/w²)²` for `d² < w²`, else 0 (see
@@ -92,15 +179,129 @@ impl PatchWeight {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn weight(&self, abs_cos: f64) -> f64 {
-        (-2.0 * (1.0 - abs_cos.min(1.0)) * self.inv_c2).exp()
+        exp_non_positive(-2.0 * (1.0 - abs_cos.min(1.0)) * self.inv_c2)
     }
+}
+
+/// `eˣ` for finite `x ≤ 0`, to within two units in the last place, in plain arithmetic
+/// that vectorises and gives the same bits on every machine and instruction set (the C
+/// library's `exp` may differ between versions). Cody–Waite reduction `x = k ln 2 + r`,
+/// `|r| ≤ ln 2 / 2`, and the Taylor polynomial of `eʳ` to degree 13 (truncation below 1e-17);
+/// below −700 it returns e⁻⁷⁰⁰ ≈ 1e-304, which is 0 to every use here.
+#[inline(always)]
+fn exp_non_positive(x: f64) -> f64 {
+    // 1.5·2⁵²: adding it rounds to an integer held in the low bits of the mantissa
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    // ln 2 split so that k·LN2_HI is exact for |k| < 2¹¹
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    let x = x.max(-700.0);
+    let t = x * std::f64::consts::LOG2_E + ROUND;
+    let k = t - ROUND;
+    let ki = t.to_bits() as i64 - ROUND.to_bits() as i64;
+    let r = (x - k * LN2_HI) - k * LN2_LO;
+    let mut p = 1.0 / 6_227_020_800.0;
+    for d in [
+        479_001_600.0,
+        39_916_800.0,
+        3_628_800.0,
+        362_880.0,
+        40_320.0,
+        5_040.0,
+        720.0,
+        120.0,
+        24.0,
+        6.0,
+        2.0,
+        1.0,
+        1.0,
+    ] {
+        p = p * r + 1.0 / d;
+    }
+    p * f64::from_bits(((ki + 1023) as u64) << 52)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn exp_matches_the_c_library_to_the_last_bits() {
+        let mut worst = 0.0f64;
+        for i in 0..200_000 {
+            let x = -(i as f64) * 3.5e-3 - (i % 7) as f64 * 1e-9;
+            let (ours, libm) = (exp_non_positive(x), x.exp());
+            worst = worst.max(((ours - libm) / libm).abs());
+        }
+        assert!(worst < 4.5e-16, "{worst}");
+        assert_eq!(exp_non_positive(0.0), 1.0);
+        assert_eq!(exp_non_positive(-0.0), 1.0);
+        assert!(exp_non_positive(f64::NEG_INFINITY) < 1e-300);
+    }
+
+    /// The step of one point as the formula reads, neighbour by neighbour in plain `DVec3`
+    /// arithmetic, against the lanes (and the AVX lanes where they run): the same bits.
+    #[test]
+    fn lanes_give_the_scalar_formula_bits() {
+        let o = RobustOptions::default();
+        let width = 0.3;
+        let kernel = Kernel::new(width, &o);
+        let points: Vec<DVec3> = (0..23)
+            .map(|i| {
+                let f = i as f64;
+                DVec3::new((f * 0.37).sin(), (f * 0.61).cos(), 0.05 * (f * 1.3).sin())
+            })
+            .collect();
+        let normals: Vec<DVec3> = (0..23)
+            .map(|i| {
+                let f = i as f64;
+                let n = DVec3::new(0.2 * (f * 0.9).sin(), 0.3 * (f * 0.4).cos(), 1.0).normalize();
+                if i % 5 == 0 {
+                    -n
+                } else {
+                    n
+                }
+            })
+            .collect();
+        let row: Vec<u32> = (1..23).collect();
+        let (p, ni) = (points[0], normals[0]);
+        let (mut acc, mut ws) = (DVec3::ZERO, 0.0);
+        for &j in &row {
+            let (x, nj) = (points[j as usize], normals[j as usize]);
+            let e = x - p;
+            let g = biweight(nj.dot(e), width);
+            if g == 0.0 {
+                continue;
+            }
+            let c = ni.dot(nj);
+            let nj = if c < 0.0 { -nj } else { nj };
+            let sum = ni + nj;
+            let a = kernel.patch.weight(c.abs()).max(biweight_sq(
+                sum.dot(e).powi(2),
+                sum.length_squared() * (CHORD_WIDTH * width).powi(2),
+            ));
+            let v = a * ni + nj;
+            let vv = v.length_squared();
+            if vv > 0.0 {
+                acc += g * v * (v.dot(e) / vv);
+            }
+            ws += g;
+        }
+        assert!(ws > 0.0);
+        let expect = p + o.tau * acc / ws;
+        let lanes = kernel.moved_lanes(&points, &normals, 0, &row);
+        assert_eq!(
+            lanes.to_array().map(f64::to_bits),
+            expect.to_array().map(f64::to_bits)
+        );
+        let dispatched = kernel.moved(&points, &normals, 0, &row);
+        assert_eq!(
+            dispatched.to_array().map(f64::to_bits),
+            expect.to_array().map(f64::to_bits)
+        );
+    }
 
     #[test]
     fn patch_weight_is_a_gaussian_in_the_normals_distance() {
