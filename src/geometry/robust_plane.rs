@@ -55,8 +55,11 @@ impl Neighborhood {
         self.len = row.len() + 1;
         let padded = self.len.div_ceil(LANES) * LANES;
         for v in [&mut self.x, &mut self.y, &mut self.z] {
-            v.clear();
+            // every element is written below: no clearing pass
+            v.truncate(padded);
             v.resize(padded, 0.0);
+            v[0] = 0.0;
+            v[self.len..].fill(0.0);
         }
         // zipped, so that only the read of a neighbour is bounds-checked
         let coordinates = self.x[1..]
@@ -110,19 +113,43 @@ impl Neighborhood {
     /// smallest eigenvector of `Σ w (d − c)(d − c)ᵀ` about the weighted barycentre `c`. `None`
     /// when no point has weight. The orientation is the eigen-solver's.
     pub(crate) fn weighted_normal(&mut self, n: DVec3, offset: f64, width: f64) -> Option<DVec3> {
+        self.weighted_sums(n, offset, width).normal()
+    }
+
+    /// The sums behind [`Neighborhood::weighted_normal`]; their weight `Σ w` is the plane's
+    /// support, the robust count of the points it explains.
+    pub(crate) fn weighted_sums(&mut self, n: DVec3, offset: f64, width: f64) -> WeightedSums {
         let mut w = std::mem::take(&mut self.w);
-        w.clear();
+        // every element is written below: no clearing pass
+        w.truncate(self.x.len());
         w.resize(self.x.len(), 0.0);
         lanes::plane_weights(self, n, offset, width, &mut w);
         w[self.len..].fill(0.0);
-        let (ws, sum, outer) = lanes::weighted_sums(self, &w);
+        let (weight, sum, outer) = lanes::weighted_sums(self, &w);
         self.w = w;
+        WeightedSums { weight, sum, outer }
+    }
+}
+
+/// `Σ w`, `Σ w d` and `Σ w d dᵀ` of a neighbourhood with a weight per point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct WeightedSums {
+    pub(crate) weight: f64,
+    sum: DVec3,
+    outer: DMat3,
+}
+
+impl WeightedSums {
+    /// The smallest eigenvector of `Σ w (d − c)(d − c)ᵀ` about the weighted barycentre `c`;
+    /// `None` when no point has weight.
+    pub(crate) fn normal(&self) -> Option<DVec3> {
+        let ws = self.weight;
         if !(ws > 0.0 && ws.is_finite()) {
             return None;
         }
         // Σ w (d − c)(d − c)ᵀ = Σ w d dᵀ − ws c cᵀ with c = sum/ws
-        let c = sum / ws;
-        let m = outer - DMat3::from_cols(c * c.x, c * c.y, c * c.z) * ws;
+        let c = self.sum / ws;
+        let m = self.outer - DMat3::from_cols(c * c.x, c * c.y, c * c.z) * ws;
         let normal = smallest_eigenvector(m);
         normal.is_finite().then_some(normal)
     }
