@@ -164,6 +164,10 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
         );
     }
     batch.push(free[1].clone());
+    // every live point: a batch dense enough to be answered in groups (`src/dynamic/batch.rs`)
+    for &p in &live {
+        batch.push(model.coords[p as usize * d..(p as usize + 1) * d].to_vec());
+    }
     let flat_free: Vec<T> = batch.concat();
     let qview = PointsView::from_flat(&flat_free, d).unwrap();
     for nbhd in [

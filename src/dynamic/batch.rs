@@ -36,6 +36,10 @@ pub(super) const GROUP: usize = 8;
 /// time, in straight-line code the compiler vectorises.
 const BLOCK: usize = 8;
 
+/// Queries in one group lie in leaves of the largest tree at most this many leaves (of the
+/// build's leaf size) apart (chosen by measurement, `benches/dynamic.rs`).
+const SPAN_LEAVES: usize = 4;
+
 /// Rows up to this `k` are kept sorted by insertion; larger ones in a heap.
 const SORTED_MAX_K: usize = 64;
 
@@ -311,23 +315,23 @@ impl<T: Scalar> DynamicKdTree<T> {
     /// The rows of the packed, finite `queries` (dimension `D`), row `i` for query `i`,
     /// answered in groups along `order` (a permutation of the queries); in parallel over
     /// fixed chunks of `order`, so identical for any thread count.
+    ///
+    /// `leaves[w]` is the first tree position, in the largest tree, of the leaf the query
+    /// `order[w]` falls into (increasing): consecutive queries whose leaves lie within
+    /// `span` positions form a group, and a query with no such neighbour is answered alone by
+    /// the single-query descent (a group of far-apart queries would search the space between
+    /// them).
     pub(super) fn grouped_rows<const D: usize>(
         &self,
         queries: &[T],
         order: &[u32],
+        leaves: &[u32],
         nbhd: Neighborhood<T>,
     ) -> Result<NeighborTable<T>> {
-        let parts: Vec<(&Part<T>, &Cells<T>)> = {
-            // Largest tree first: its bounds prune the smaller trees most.
-            let mut p: Vec<&Part<T>> = self.parts.iter().collect();
-            p.sort_by_key(|p| std::cmp::Reverse(p.tree.len()));
-            // Prepare the trees not prepared yet, in parallel.
-            use rayon::prelude::*;
-            p.par_iter().for_each(|p| {
-                p.cells();
-            });
-            p.into_iter().map(|p| (p, p.cells())).collect()
-        };
+        // Largest tree first: its bounds prune the smaller trees most.
+        let mut parts: Vec<&Part<T>> = self.parts.iter().collect();
+        parts.sort_by_key(|p| std::cmp::Reverse(p.tree.len()));
+        let span = (SPAN_LEAVES * self.options.leaf_size) as u32;
         let n = order.len();
         let bounds: Vec<usize> = (0..n.div_ceil(CHUNK))
             .map(|c| c * CHUNK)
@@ -335,6 +339,8 @@ impl<T: Scalar> DynamicKdTree<T> {
             .collect();
         let (k, sq_radius) = nbhd.limits();
         let search = Group::<T, D> {
+            forest: self,
+            nbhd,
             parts: &parts,
             not_live: &self.not_live,
             sq_radius,
@@ -345,10 +351,17 @@ impl<T: Scalar> DynamicKdTree<T> {
             |w| order[w] as usize,
             |c, out| {
                 let work = &order[bounds[c]..bounds[c + 1]];
+                let leaves = &leaves[bounds[c]..bounds[c + 1]];
                 let mut stack = Vec::new();
                 let mut each = |rows: &mut dyn FnMut(&[u32], &mut Vec<(u32, T)>)| {
-                    for g in work.chunks(GROUP) {
-                        rows(g, &mut stack);
+                    let mut s = 0;
+                    while s < work.len() {
+                        let mut e = s + 1;
+                        while e < work.len() && e - s < GROUP && leaves[e] - leaves[s] <= span {
+                            e += 1;
+                        }
+                        rows(&work[s..e], &mut stack);
+                        s = e;
                     }
                 };
                 if k == usize::MAX {
@@ -390,7 +403,9 @@ impl<T: Scalar> DynamicKdTree<T> {
 
 /// What every group's search reads.
 struct Group<'a, T, const D: usize> {
-    parts: &'a [(&'a Part<T>, &'a Cells<T>)],
+    forest: &'a DynamicKdTree<T>,
+    nbhd: Neighborhood<T>,
+    parts: &'a [&'a Part<T>],
     not_live: &'a [u64],
     sq_radius: T,
 }
@@ -411,6 +426,14 @@ impl<T: Scalar, const D: usize> Group<'_, T, D> {
             return;
         }
         let m = members.len();
+        if m == 1 {
+            let at = members[0] as usize * D;
+            let mut row = Vec::new();
+            self.forest
+                .search_resolved(&queries[at..at + D], None, self.nbhd, &mut row);
+            write_row(row.len(), row.iter().map(|nb| nb.key()), out);
+            return;
+        }
         let mut q = [[T::ZERO; D]; GROUP];
         let mut glo = [T::INFINITY; D];
         let mut ghi = [T::ZERO - T::INFINITY; D];
@@ -427,10 +450,19 @@ impl<T: Scalar, const D: usize> Group<'_, T, D> {
         let mut bound = [self.sq_radius; GROUP];
         let mut worst = [u32::MAX; GROUP];
         let (mut gb, mut gw) = (self.sq_radius, u32::MAX);
-        for &(part, cells) in self.parts {
+        for &part in self.parts {
+            let (plo, phi): (&[T; D], &[T; D]) = (
+                part.bbox_lo[..].try_into().unwrap(),
+                part.bbox_hi[..].try_into().unwrap(),
+            );
+            let lb = box_dist(&glo, &ghi, plo, phi);
+            if !order::precedes((lb, part.lo), (gb, gw)) {
+                continue;
+            }
+            let cells = part.cells();
             let live_check = part.dead > 0;
             stack.clear();
-            stack.push((0, box_dist(&glo, &ghi, cells.lo(0), cells.hi(0))));
+            stack.push((0, lb));
             while let Some((mut node, lb)) = stack.pop() {
                 if !admits(lb, cells.min_gid[node as usize], gb, gw) {
                     continue;

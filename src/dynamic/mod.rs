@@ -22,7 +22,8 @@
 //! - **Search.** One result set (`src/query/result_set.rs`) is filled by the descents of all
 //!   trees in turn, largest first, skipping a tree whose bounding box is farther than the
 //!   set's current bound. The set orders by `(sq_dist, index)` (`src/query/order.rs`), so the
-//!   result is the static tree's, whatever the trees.
+//!   result is the static tree's, whatever the trees. A dense batch of queries is answered in
+//!   groups of nearby queries, each group descending every tree once (`batch.rs`).
 //!
 //! **Indices.** The points of a batch get consecutive indices, continuing from the previous
 //! batch: the first batch gets `0..n`. A point keeps its index until it is removed, and a

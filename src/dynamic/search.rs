@@ -103,6 +103,10 @@ fn box_sq_dist<T: Scalar>(q: &[T], lo: &[T], hi: &[T]) -> T {
     s
 }
 
+/// A batch is answered in groups when it holds at least 1/`DENSE` as many queries as the
+/// largest tree holds points.
+const DENSE: usize = 4;
+
 impl<T: Scalar> DynamicKdTree<T> {
     /// Offers every live point that may enter `set` (except the index `exclude`): the trees in
     /// turn, oldest (largest) first, each skipped if its bounding box lies beyond the bound.
@@ -129,7 +133,7 @@ impl<T: Scalar> DynamicKdTree<T> {
     }
 
     /// The search proper, on a validated query.
-    fn search_resolved(
+    pub(super) fn search_resolved(
         &self,
         q: &[T],
         exclude: Option<u32>,
@@ -210,10 +214,11 @@ impl<T: Scalar> DynamicKdTree<T> {
     }
 
     /// The neighbourhoods of a batch of query points (row `i` for query `i`), identical for
-    /// any thread count and the rows of single queries. In 1 to 3 dimensions the queries are
-    /// answered in small groups of nearby queries, each group descending every tree once
-    /// (`src/dynamic/batch.rs`); in more dimensions one by one, in the order of the leaves of
-    /// the largest tree they fall into. `options.exclude_self` does not apply.
+    /// any thread count and the rows of single queries. In 1 to 3 dimensions a dense batch (at
+    /// least a quarter as many queries as the largest tree has points) is answered in small
+    /// groups of nearby queries, each group descending every tree once
+    /// (`src/dynamic/batch.rs`); other batches one by one, in the order of the leaves of the
+    /// largest tree they fall into. `options.exclude_self` does not apply.
     ///
     /// Errors: those of the neighbourhood, [`NbhdError::DimensionMismatch`],
     /// [`NbhdError::NonFiniteQuery`] naming the first query (by position) with a non-finite
@@ -252,14 +257,21 @@ impl<T: Scalar> DynamicKdTree<T> {
             }
         }
         with_threads(options.threads, || {
-            let order = self.query_order(&packed);
+            let (order, leaves) = self.query_order(&packed);
             if self.parts.is_empty() {
                 return rows_in_work_order(n, 0, |w| w, |_, _, _| Ok(()));
             }
+            // Grouped only for dense batches: measured (`benches/dynamic.rs`) 1.2x the static
+            // tree's per-query batch with as many queries as points, but 1.9x for a frame of
+            // 10k queries against 300k points, where groups are far apart and preparing the
+            // trees' cells is not repaid; such batches take the single-query descents.
+            let big = self.parts.iter().map(|p| p.tree.len()).max().unwrap_or(0);
+            let dense = n.saturating_mul(DENSE) >= big;
             match d {
-                3 => return self.grouped_rows::<3>(&packed, &order, nbhd),
-                2 => return self.grouped_rows::<2>(&packed, &order, nbhd),
-                1 => return self.grouped_rows::<1>(&packed, &order, nbhd),
+                _ if !dense => {}
+                3 => return self.grouped_rows::<3>(&packed, &order, &leaves, nbhd),
+                2 => return self.grouped_rows::<2>(&packed, &order, &leaves, nbhd),
+                1 => return self.grouped_rows::<1>(&packed, &order, &leaves, nbhd),
                 _ => {}
             }
             rows_in_work_order(
@@ -276,11 +288,12 @@ impl<T: Scalar> DynamicKdTree<T> {
     }
 
     /// The indices of the packed `queries` ordered by the first position of the leaf of the
-    /// largest tree each falls into, ties by index (a counting sort).
-    fn query_order(&self, queries: &[T]) -> Vec<u32> {
+    /// largest tree each falls into, ties by index (a counting sort), and those positions in
+    /// that order.
+    fn query_order(&self, queries: &[T]) -> (Vec<u32>, Vec<u32>) {
         let n = queries.len() / self.dim;
         let Some(big) = self.parts.iter().max_by_key(|p| p.tree.len()) else {
-            return (0..n as u32).collect();
+            return ((0..n as u32).collect(), vec![0; n]);
         };
         let tree = &big.tree;
         let leaf_of: Vec<u32> = queries
@@ -299,7 +312,8 @@ impl<T: Scalar> DynamicKdTree<T> {
             order[starts[l as usize] as usize] = i as u32;
             starts[l as usize] += 1;
         }
-        order
+        let leaves = order.iter().map(|&i| leaf_of[i as usize]).collect();
+        (order, leaves)
     }
 }
 
