@@ -353,7 +353,7 @@ impl<T: Scalar> DynamicKdTree<T> {
                 let work = &order[bounds[c]..bounds[c + 1]];
                 let leaves = &leaves[bounds[c]..bounds[c + 1]];
                 let mut stack = Vec::new();
-                let mut each = |rows: &mut dyn FnMut(&[u32], &mut Vec<(u32, T)>)| {
+                let mut each = |rows: &mut GroupFn<'_, T>| {
                     let mut s = 0;
                     while s < work.len() {
                         let mut e = s + 1;
@@ -400,6 +400,9 @@ impl<T: Scalar> DynamicKdTree<T> {
         )
     }
 }
+
+/// Answers one group (its members, a scratch stack of cells).
+type GroupFn<'a, T> = dyn FnMut(&[u32], &mut Vec<(u32, T)>) + 'a;
 
 /// What every group's search reads.
 struct Group<'a, T, const D: usize> {
