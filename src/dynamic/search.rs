@@ -103,9 +103,10 @@ fn box_sq_dist<T: Scalar>(q: &[T], lo: &[T], hi: &[T]) -> T {
     s
 }
 
-/// A batch is answered in groups when it holds at least 1/`DENSE` as many queries as the
-/// largest tree holds points.
-const DENSE: usize = 4;
+/// A batch is answered in groups when it holds at least 1/`DENSE` as many queries as there
+/// are live points (a frame of 10k among 100k live points in the sliding-window benchmark was
+/// slower grouped).
+const DENSE: usize = 2;
 
 impl<T: Scalar> DynamicKdTree<T> {
     /// Offers every live point that may enter `set` (except the index `exclude`): the trees in
@@ -215,7 +216,7 @@ impl<T: Scalar> DynamicKdTree<T> {
 
     /// The neighbourhoods of a batch of query points (row `i` for query `i`), identical for
     /// any thread count and the rows of single queries. In 1 to 3 dimensions a dense batch (at
-    /// least a quarter as many queries as the largest tree has points) is answered in small
+    /// least half as many queries as live points) is answered in small
     /// groups of nearby queries, each group descending every tree once
     /// (`src/dynamic/batch.rs`); other batches one by one, in the order of the leaves of the
     /// largest tree they fall into. `options.exclude_self` does not apply.
@@ -265,8 +266,7 @@ impl<T: Scalar> DynamicKdTree<T> {
             // tree's per-query batch with as many queries as points, but 1.9x for a frame of
             // 10k queries against 300k points, where groups are far apart and preparing the
             // trees' cells is not repaid; such batches take the single-query descents.
-            let big = self.parts.iter().map(|p| p.tree.len()).max().unwrap_or(0);
-            let dense = n.saturating_mul(DENSE) >= big;
+            let dense = n.saturating_mul(DENSE) >= self.live;
             match d {
                 _ if !dense => {}
                 3 => return self.grouped_rows::<3>(&packed, &order, &leaves, nbhd),
