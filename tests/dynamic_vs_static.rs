@@ -150,7 +150,25 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
         },
     )
     .unwrap();
-    let flat_free: Vec<T> = free.concat();
+    // The batch: the free points, live points (copies among the stored points), a query
+    // twice, and points around the live ones, so groups of nearby queries form.
+    let mut batch: Vec<Vec<T>> = free.clone();
+    for _ in 0..40 {
+        let p = live[rng.below(live.len())] as usize;
+        let c = &model.coords[p * d..(p + 1) * d];
+        batch.push(c.to_vec());
+        batch.push(
+            c.iter()
+                .map(|&x| x + T::from_f64((rng.unit() - 0.5) * 0.05))
+                .collect(),
+        );
+    }
+    batch.push(free[1].clone());
+    // every live point: a batch dense enough to be answered in groups (`src/dynamic/batch.rs`)
+    for &p in &live {
+        batch.push(model.coords[p as usize * d..(p as usize + 1) * d].to_vec());
+    }
+    let flat_free: Vec<T> = batch.concat();
     let qview = PointsView::from_flat(&flat_free, d).unwrap();
     for nbhd in [
         Neighborhood::Knn { k: 4 },
@@ -181,6 +199,19 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
         let want = stat
             .neighborhoods_of(&qview, nbhd, &TableOptions::default())
             .unwrap();
+        // every row of the batch is brute force's over the live points
+        let mut row = Vec::new();
+        for (i, q) in batch.iter().enumerate() {
+            brute.search(Query::point(q), nbhd, &mut row).unwrap();
+            assert_eq!(
+                want.indices_of(i),
+                row.iter().map(|n| n.index).collect::<Vec<_>>()
+            );
+            assert_eq!(
+                want.sq_dists_of(i),
+                row.iter().map(|n| n.sq_dist).collect::<Vec<_>>()
+            );
+        }
         for threads in [1, 2] {
             let opts = TableOptions {
                 exclude_self: false,
@@ -427,6 +458,23 @@ fn bad_input() {
     assert!(tree
         .knn(Query::point(&[0.0, f64::NAN]), 1, &mut out)
         .is_err());
+    // a batch with NaN queries: the first by position is named, nothing else happens
+    let batch = [0.0, 0.0, 1.0, f64::NAN, f64::INFINITY, 0.0, 2.0, 2.0];
+    let qv = PointsView::from_flat(&batch, 2).unwrap();
+    for threads in [1, 2] {
+        let opts = TableOptions {
+            exclude_self: false,
+            threads,
+        };
+        assert_eq!(
+            tree.neighborhoods_of(&qv, Neighborhood::Knn { k: 1 }, &opts),
+            Err(NbhdError::NonFiniteQuery {
+                query: Some(1),
+                coordinate: 1
+            })
+        );
+    }
+    assert_eq!(tree.len(), 2);
     assert_eq!(
         tree.knn(Query::point(&[0.0, 0.0]), 0, &mut out),
         Err(NbhdError::ZeroK)

@@ -99,6 +99,7 @@ enum Command {
     Sor(commands::filter::SorArgs),
     Ror(commands::filter::RorArgs),
     Voxel(commands::filter::VoxelArgs),
+    Tree(commands::tree::Args),
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -135,6 +136,7 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Sor(a)) => commands::filter::run_sor(a, &out),
         Some(Command::Ror(a)) => commands::filter::run_ror(a, &out),
         Some(Command::Voxel(a)) => commands::filter::run_voxel(a, &out),
+        Some(Command::Tree(a)) => commands::tree::run(a, &out),
     }
 }
 

@@ -1189,3 +1189,118 @@ fn filters_write_the_kept_points_and_info_prints_the_spacing() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("leaf"), "{}", stderr(&o));
 }
+
+/// `nbhd tree save` writes the input's tree; `--tree` loads it instead of building: the same
+/// rows as brute force (and as a build with the saved options), and a tree of other points,
+/// a corrupted file or a file that is no tree is refused with a message naming it.
+#[test]
+fn saved_trees_are_loaded_by_the_neighbour_commands_and_checked() {
+    let (file, pts) = sphere_file("sphere-tree.xyz");
+    let bf = brute(&pts);
+    let saved = tmp("sphere.nbhdtree");
+    let o = nbhd(&[
+        "--json",
+        "tree",
+        "save",
+        &file,
+        &saved,
+        "--pivot",
+        "cyclic-median",
+        "--leaf-size",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = json_of(&o);
+    assert_eq!(v["skipped_non_finite"], 1);
+    assert_eq!(v["tree"]["pivot"], "cyclic-median");
+    assert_eq!(
+        v["file_bytes"].as_u64().unwrap(),
+        std::fs::metadata(&saved).unwrap().len()
+    );
+    for exclude in [false, true] {
+        let mut a = vec!["--json", "knn", "-k", "7", &file, "--tree", &saved];
+        if exclude {
+            a.push("--exclude-self");
+        }
+        let v = json_of(&nbhd(&a));
+        assert_eq!(v["tree_file"], saved.as_str());
+        assert_eq!(v["tree"]["pivot"], "cyclic-median", "the file's options");
+        assert_eq!(v["tree"]["leaf_size"], 3);
+        assert!(v["build_ms"].is_null() && v["load_ms"].is_number());
+        expect_brute(
+            &bf,
+            &rows(&v),
+            Neighborhood::Knn { k: 7 },
+            exclude,
+            "knn --tree",
+        );
+        // the same rows as building the tree with the saved options
+        let mut b = vec!["--json", "knn", "-k", "7", &file];
+        b.extend(["--pivot", "cyclic-median", "--leaf-size", "3"]);
+        if exclude {
+            b.push("--exclude-self");
+        }
+        assert_eq!(rows(&json_of(&nbhd(&b))), rows(&v));
+    }
+    // radius with query points from a file
+    let qfile = tmp("tree-queries.xyz");
+    std::fs::write(&qfile, "0 0 1\n0.5 0.5 0.5\n").unwrap();
+    let v = json_of(&nbhd(&[
+        "--json",
+        "radius",
+        "-r",
+        "0.3",
+        &file,
+        "--tree",
+        &saved,
+        "--queries",
+        &qfile,
+    ]));
+    let got = rows(&v);
+    for (q, (idx, _)) in [[0.0, 0.0, 1.0], [0.5, 0.5, 0.5]].iter().zip(&got) {
+        let mut want = Vec::new();
+        let nb = Neighborhood::Radius {
+            radius: 0.3,
+            sorted: true,
+        };
+        bf.search(Query::point(q), nb, &mut want).unwrap();
+        assert_eq!(idx, &want.iter().map(|n| n.index).collect::<Vec<_>>());
+    }
+    // the tree of other points: one point moved, or fewer points
+    let mut other = pts.clone();
+    other[5][0] += 1e-9;
+    let other_file = tmp("sphere-other.xyz");
+    let double = nbhd::io::WriteOptions {
+        precision: nbhd::io::Precision::Double,
+        ..nbhd::io::WriteOptions::ascii()
+    };
+    let cloud = nbhd::io::PointCloud::from_positions(other);
+    nbhd::io::write(&other_file, &cloud, &double).unwrap();
+    let o = nbhd(&["knn", "-k", "3", &other_file, "--tree", &saved]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("is not the tree of") && stderr(&o).contains("point 5 differs"),
+        "{}",
+        stderr(&o)
+    );
+    let cloud = nbhd::io::PointCloud::from_positions(pts[..300].to_vec());
+    nbhd::io::write(&other_file, &cloud, &double).unwrap();
+    let o = nbhd(&["knn", "-k", "3", &other_file, "--tree", &saved]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("built over 400 points, the input has 300"),
+        "{}",
+        stderr(&o)
+    );
+    // a corrupted file, and a point cloud given as a tree
+    let mut bytes = std::fs::read(&saved).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    let broken = tmp("broken.nbhdtree");
+    std::fs::write(&broken, &bytes).unwrap();
+    for bad in [&broken, &file] {
+        let o = nbhd(&["knn", "-k", "3", &file, "--tree", bad]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains(bad.as_str()), "{}", stderr(&o));
+    }
+}

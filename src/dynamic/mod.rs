@@ -22,7 +22,8 @@
 //! - **Search.** One result set (`src/query/result_set.rs`) is filled by the descents of all
 //!   trees in turn, largest first, skipping a tree whose bounding box is farther than the
 //!   set's current bound. The set orders by `(sq_dist, index)` (`src/query/order.rs`), so the
-//!   result is the static tree's, whatever the trees.
+//!   result is the static tree's, whatever the trees. A dense batch of queries is answered in
+//!   groups of nearby queries, each group descending every tree once (`batch.rs`).
 //!
 //! **Indices.** The points of a batch get consecutive indices, continuing from the previous
 //! batch: the first batch gets `0..n`. A point keeps its index until it is removed, and a
@@ -41,10 +42,11 @@
 //! until the oldest live point moves past them), the trees' own copies, and two bits per index
 //! ever given.
 
+mod batch;
 mod persist;
 mod search;
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use crate::cloud::NonFinitePolicy;
 use crate::error::{NbhdError, Result};
@@ -76,6 +78,30 @@ struct Part<T> {
     bbox_lo: Vec<T>,
     /// Largest coordinates of the tree's points.
     bbox_hi: Vec<T>,
+    /// The tree prepared for the grouped batch search (`batch.rs`), made on first use.
+    cells: Arc<OnceLock<batch::Cells<T>>>,
+}
+
+impl<T: Scalar> Part<T> {
+    /// A tree covering the indices `lo..hi`, `live` of its points live.
+    fn new(tree: KdTree<T>, lo: u32, hi: u32, live: usize) -> Self {
+        let (bbox_lo, bbox_hi) = tree.bounding_box();
+        Self {
+            dead: tree.len() - live,
+            live,
+            tree: Arc::new(tree),
+            lo,
+            hi,
+            bbox_lo,
+            bbox_hi,
+            cells: Arc::default(),
+        }
+    }
+
+    /// The tree prepared for the grouped batch search.
+    fn cells(&self) -> &batch::Cells<T> {
+        self.cells.get_or_init(|| batch::Cells::new(self))
+    }
 }
 
 /// Size and shape of a dynamic tree.
@@ -397,16 +423,8 @@ impl<T: Scalar> DynamicKdTree<T> {
             ..self.options
         };
         let tree = KdTree::build(&view, &options)?;
-        let (bbox_lo, bbox_hi) = tree.bounding_box();
-        Ok(Part {
-            live: tree.len(),
-            tree: Arc::new(tree),
-            lo,
-            hi,
-            dead: 0,
-            bbox_lo,
-            bbox_hi,
-        })
+        let live = tree.len();
+        Ok(Part::new(tree, lo, hi, live))
     }
 
     /// The forest `parts` with empty trees dropped, trees rebuilt whose removed points

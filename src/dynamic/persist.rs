@@ -15,7 +15,6 @@
 
 use std::io::{Read, Write};
 use std::path::Path;
-use std::sync::Arc;
 
 use super::{bit, DynamicKdTree, Part};
 use crate::cloud::NonFinitePolicy;
@@ -532,16 +531,7 @@ impl<T: Scalar> DynamicKdTree<T> {
                 return Err(invalid(format!("static tree {i} holds no live point")));
             }
             live_total += live;
-            let (bbox_lo, bbox_hi) = tree.bounding_box();
-            parts.push(Part {
-                dead: tree.len() - live,
-                live,
-                tree: Arc::new(tree),
-                lo,
-                hi: hi as u32,
-                bbox_lo,
-                bbox_hi,
-            });
+            parts.push(Part::new(tree, lo, hi as u32, live));
             end = hi as u32;
         }
         if !tree_bytes.is_empty() {

@@ -1,5 +1,5 @@
 //! What a structure made of several trees (the dynamic forest, `src/dynamic/`) reads from one
-//! of them: the single-query descent into a result set of its own (so that one result set
+//! of them: the nodes (for the forest's grouped batch search), the single-query descent into a result set of its own (so that one result set
 //! collects over every tree of the forest), the leaf a query falls into (to order a batch of
 //! queries for the cache), and the bounding box of the points.
 
@@ -30,6 +30,17 @@ impl<T: Scalar> KdTree<T> {
                 n.a as usize
             };
         }
+    }
+
+    /// The nodes in preorder (the left child of an internal node `i` is `i + 1`) as
+    /// `(split dimension, or None for a leaf; split value; right child, or a leaf's first tree
+    /// position; one past the subtree's last tree position)`: what a search of the forest's
+    /// own over this tree reads (the grouped batch search, `src/dynamic/batch.rs`).
+    pub(crate) fn nodes(&self) -> impl ExactSizeIterator<Item = (Option<usize>, T, u32, u32)> + '_ {
+        self.nodes.iter().map(|n| {
+            let dim = (!n.is_leaf()).then_some(n.dim as usize);
+            (dim, n.split, n.a, n.b)
+        })
     }
 
     /// The smallest and largest coordinate of the points in every dimension.

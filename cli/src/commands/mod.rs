@@ -11,3 +11,4 @@ pub mod info;
 pub mod neighbors;
 pub mod render;
 pub mod smooth;
+pub mod tree;

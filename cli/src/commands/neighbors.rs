@@ -2,6 +2,9 @@
 //! neighbourhood (the k nearest within ε, thesis Section 2.1.1) of every point of a file, or of
 //! the points of a second file, from a k-d tree built with the chosen variant.
 //!
+//! With `--tree FILE` the tree is loaded from a file written by `nbhd tree save` instead of
+//! built; it must hold exactly the input's points under their indices.
+//!
 //! Output: one line per neighbour, `query,rank,index,sq_dist` (caller indices: the points'
 //! positions in the file, counted from 0; `sq_dist` is the squared Euclidean distance, written
 //! with every digit), or a JSON document.
@@ -13,7 +16,9 @@ use crate::progress::Progress;
 use crate::read;
 use nbhd::io::PointCloud;
 use nbhd::smooth::Length;
-use nbhd::{BuildOptions, KdTree, NeighborTable, Neighborhood, TableOptions, TreeStats};
+use nbhd::{
+    BuildOptions, KdTree, NeighborSearch, NeighborTable, Neighborhood, TableOptions, TreeStats,
+};
 use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -41,6 +46,12 @@ pub struct Common {
     /// Search around the points of this file instead of the input's own points
     #[arg(long)]
     pub queries: Option<PathBuf>,
+
+    /// Load the k-d tree from this file (written by `nbhd tree save`) instead of building it:
+    /// it must hold exactly the input's points, else it is refused; the tree options are the
+    /// file's
+    #[arg(long = "tree", value_name = "FILE")]
+    pub tree_file: Option<PathBuf>,
 
     // The input file and its format: here, so that --from is listed after --queries.
     #[command(flatten)]
@@ -141,6 +152,7 @@ struct Facts {
     exclude_self: bool,
     points: usize,
     tree: BuildOptions,
+    tree_file: Option<PathBuf>,
     stats: TreeStats,
     table: NeighborTable<f64>,
     build_ms: f64,
@@ -161,9 +173,12 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
         Some(q) => Some((q, read::cloud(q, c.input.from.map(Into::into))?)),
         None => None,
     };
-    let opts = c.tree.options();
     let name = c.input.input.display().to_string();
-    let (tree, build_ms) = build_tree(&cloud, &opts, &name, out)?;
+    let (tree, build_ms) = match &c.tree_file {
+        Some(file) => load_tree(file, &cloud, &name)?,
+        None => build_tree(&cloud, &c.tree.options(), &name, out)?,
+    };
+    let opts = *tree.options();
     let length = match kind {
         Kind::Radius(l) | Kind::KnnRadius(_, l) => Some(l),
         Kind::Knn(_) => None,
@@ -200,6 +215,7 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
         exclude_self: c.exclude_self,
         points: cloud.len(),
         tree: opts,
+        tree_file: c.tree_file,
         stats: tree.stats(),
         table,
         build_ms,
@@ -224,6 +240,45 @@ fn build_tree(
         );
         KdTree::<f64>::build(&view, opts).context(name)?
     };
+    Ok((tree, ms(t)))
+}
+
+/// Loads the tree saved in `file` and checks that it holds exactly the points of `cloud` (read
+/// from `name`) under their indices, bit for bit; returns it and the milliseconds taken.
+fn load_tree(file: &Path, cloud: &PointCloud, name: &str) -> Result<(KdTree<f64>, f64)> {
+    let t = Instant::now();
+    let fname = file.display().to_string();
+    let tree = KdTree::<f64>::load_file(file).context(&fname)?;
+    let view = cloud.view().context(name)?;
+    let refuse = |what: String| -> Result<(KdTree<f64>, f64)> {
+        Err(format!("{fname}: the saved tree is not the tree of {name}: {what}").into())
+    };
+    if tree.dim() != view.dim() {
+        return refuse(format!(
+            "it is {}-dimensional, the input {}-dimensional",
+            tree.dim(),
+            view.dim()
+        ));
+    }
+    if tree.source_len() != view.len() {
+        return refuse(format!(
+            "it was built over {} points, the input has {}",
+            tree.source_len(),
+            view.len()
+        ));
+    }
+    let mut p = vec![0.0f64; view.dim()];
+    for i in 0..view.len() {
+        view.read_point(i, &mut p);
+        let finite = p.iter().all(|c| c.is_finite());
+        let same = match tree.point(i as u32) {
+            Some(q) => finite && q.iter().zip(&p).all(|(a, b)| a.to_bits() == b.to_bits()),
+            None => !finite,
+        };
+        if !same {
+            return refuse(format!("point {i} differs"));
+        }
+    }
     Ok((tree, ms(t)))
 }
 
@@ -290,7 +345,9 @@ impl Facts {
                 "leaves": self.stats.leaves,
                 "bytes": self.stats.bytes,
             },
-            "build_ms": num(self.build_ms),
+            "tree_file": self.tree_file.as_ref().map(|f| f.display().to_string()),
+            "build_ms": self.tree_file.is_none().then(|| num(self.build_ms)),
+            "load_ms": self.tree_file.is_some().then(|| num(self.build_ms)),
             "query_ms": num(self.query_ms),
             "rows": {
                 "min": self.table.min_row_len(),
@@ -306,7 +363,7 @@ impl Facts {
         format!(
             "{}: {} of {} queries over {} points ({} skipped as non-finite){}{}: \
              neighbours per row min {} / mean {:.2} / max {}, total {}\n\
-             tree {} / {} / leaf {}: depth {}, {} nodes, {} leaves, {} KiB, built in {:.1} ms; \
+             tree {} / {} / leaf {}: depth {}, {} nodes, {} leaves, {} KiB, {} in {:.1} ms; \
              queries {:.1} ms",
             self.name,
             self.kind_name(),
@@ -332,6 +389,12 @@ impl Facts {
             self.stats.nodes,
             self.stats.leaves,
             self.stats.bytes / 1024,
+            self.tree_file
+                .as_ref()
+                .map_or("built".to_string(), |f| format!(
+                    "loaded from {}",
+                    f.display()
+                )),
             self.build_ms,
             self.query_ms,
         )
