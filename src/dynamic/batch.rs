@@ -212,14 +212,7 @@ trait Rows<T: Scalar> {
 /// Appends one row of `(sq_dist, index)` pairs to a chunk.
 #[inline]
 fn write_row<T: Scalar>(len: usize, row: impl Iterator<Item = (T, u32)>, out: &mut RowsChunk<T>) {
-    if !out.reserve_row(len) {
-        return;
-    }
-    out.0.push(len);
-    for (d, i) in row {
-        out.1.push(i);
-        out.2.push(d);
-    }
+    out.push_row(len, row);
 }
 
 /// Small `k`: each row sorted by insertion in a fixed slice of a flat buffer.
@@ -349,6 +342,7 @@ impl<T: Scalar> DynamicKdTree<T> {
             n,
             &bounds,
             |w| order[w] as usize,
+            None,
             |c, out| {
                 let work = &order[bounds[c]..bounds[c + 1]];
                 let leaves = &leaves[bounds[c]..bounds[c + 1]];
@@ -424,7 +418,7 @@ impl<T: Scalar, const D: usize> Group<'_, T, D> {
         stack: &mut Vec<(u32, T)>,
         out: &mut RowsChunk<T>,
     ) {
-        if out.3.is_some() {
+        if out.is_done() {
             // a chunk whose rows did not fit takes no more (see `RowsChunk`)
             return;
         }
