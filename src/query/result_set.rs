@@ -161,12 +161,22 @@ impl<T: Scalar, E: RowEntry<T>> ResultSet<T> for SortedRow<'_, T, E> {
     fn insert(&mut self, index: u32, sq_dist: T) {
         let k = self.row.len();
         let cand = E::of(index, sq_dist);
-        let mut j = if *self.len < k {
+        let held = *self.len;
+        // the slot the candidate's entry ends in; the worst entry falls off a full row
+        let last = if held < k {
             *self.len += 1;
-            *self.len - 1
+            held
         } else {
             k - 1
         };
+        if last >= LONG_ROW {
+            // long rows: a binary search and one block move instead of a compare per entry
+            let at = self.row[..last].partition_point(|e| e.precedes(cand));
+            self.row.copy_within(at..last, at + 1);
+            self.row[at] = cand;
+            return;
+        }
+        let mut j = last;
         while j > 0 && cand.precedes(self.row[j - 1]) {
             self.row[j] = self.row[j - 1];
             j -= 1;
@@ -174,6 +184,9 @@ impl<T: Scalar, E: RowEntry<T>> ResultSet<T> for SortedRow<'_, T, E> {
         self.row[j] = cand;
     }
 }
+
+/// Held entries from which [`SortedRow`] finds a candidate's place by binary search.
+const LONG_ROW: usize = 24;
 
 /// The k nearest within a radius for one single query with small `k`, kept sorted in a
 /// borrowed slice of length `k` that [`KnnRow::new`] fills with the sentinel

@@ -70,7 +70,10 @@
 //! Speed (docs/smoothing-results.md#speed): one search instead of one per iteration, a quarter of
 //! the candidate planes, the scoring in eight `f32` lanes, and no arc cosine or square root in
 //! the step took the 80k torus of `cpp_examples/bench_smoothing` from 5.3 s to about 0.8 s on one
-//! thread; the figures of `tests/smoothing_quality.rs` held or improved.
+//! thread; the figures of `tests/smoothing_quality.rs` held or improved. Since then the plane
+//! fits and the step run in four `f64` lanes, and a point whose own plane already explains
+//! nine tenths of its wide neighbourhood skips the other candidates (73–98 % of the points of
+//! the analytic shapes; quality within 0.002h).
 
 mod candidates;
 mod planes;
