@@ -28,6 +28,7 @@ use crate::query::result_set::{Key32, ResultSet, RowEntry, SortedRow, WithinRadi
 use crate::query::{order, Neighbor, NeighborHeap, NeighborSearch, Neighborhood};
 use crate::scalar::{Scalar, ScalarType};
 use crate::table::{rows_in_chunks, NeighborTable, RowsChunk, CHUNK};
+use crate::tree::group_search::{admits, box_dist};
 
 /// Most queries in one group (chosen by measurement, `benches/dynamic.rs`).
 pub(super) const GROUP: usize = 8;
@@ -170,31 +171,6 @@ impl<T: Scalar> Cells<T> {
         }
         d
     }
-}
-
-/// Squared distance between the boxes `[alo, ahi]` and `[blo, bhi]` (0 where they overlap):
-/// per dimension the gap `max(blo − ahi, alo − bhi, 0)`, summed in the order of the point
-/// distance.
-#[inline(always)]
-fn box_dist<T: Scalar, const D: usize>(
-    alo: &[T; D],
-    ahi: &[T; D],
-    blo: &[T; D],
-    bhi: &[T; D],
-) -> T {
-    let mut s = T::ZERO;
-    for j in 0..D {
-        let g = (blo[j] - ahi[j]).max_of(alo[j] - bhi[j]).max_of(T::ZERO);
-        s = s + g * g;
-    }
-    s
-}
-
-/// `true` if a cell at squared distance `lb` whose smallest forest index is `min_gid` may
-/// improve a row whose worst admissible key is `(b, w)`.
-#[inline(always)]
-fn admits<T: Scalar>(lb: T, min_gid: u32, b: T, w: u32) -> bool {
-    order::precedes((lb, min_gid), (b, w))
 }
 
 /// One result set per member of a group, kept from tree to tree, and how rows are written.

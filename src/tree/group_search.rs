@@ -194,7 +194,7 @@ fn below_mask<T: Scalar>(d: &[T; BLOCK], bound: T) -> u32 {
 /// Squared distance between the boxes `[alo, ahi]` and `[blo, bhi]` (0 where they overlap):
 /// per dimension the gap `max(blo − ahi, alo − bhi, 0)`, without branches.
 #[inline(always)]
-fn box_dist<T: Scalar, const D: usize>(
+pub(crate) fn box_dist<T: Scalar, const D: usize>(
     alo: &[T; D],
     ahi: &[T; D],
     blo: &[T; D],
@@ -212,7 +212,7 @@ fn box_dist<T: Scalar, const D: usize>(
 /// improve a row whose worst admissible key is `(b, w)` (`w == u32::MAX` while the row is not
 /// full: caller indices are below it).
 #[inline(always)]
-fn admits<T: Scalar>(lb: T, min_id: u32, b: T, w: u32) -> bool {
+pub(crate) fn admits<T: Scalar>(lb: T, min_id: u32, b: T, w: u32) -> bool {
     order::precedes((lb, min_id), (b, w))
 }
 

@@ -16,7 +16,7 @@
 
 mod build;
 mod construct;
-mod group_search;
+pub(crate) mod group_search;
 mod layout;
 mod neighborhoods;
 mod node;
