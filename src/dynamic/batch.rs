@@ -28,7 +28,7 @@ use crate::query::result_set::{Key32, ResultSet, RowEntry, SortedRow, WithinRadi
 use crate::query::{order, Neighbor, NeighborHeap, NeighborSearch, Neighborhood};
 use crate::scalar::{Scalar, ScalarType};
 use crate::table::{rows_in_chunks, NeighborTable, RowsChunk, CHUNK};
-use crate::tree::group_search::{admits, box_dist};
+use crate::tree::group_search::{admits, box_dist, left_first};
 
 /// Most queries in one group (chosen by measurement, `benches/dynamic.rs`).
 pub(super) const GROUP: usize = 8;
@@ -502,15 +502,12 @@ impl<T: Scalar, const D: usize> Group<'_, T, D> {
                     // Nearer cell first; between equally near ones, the side of the split the
                     // first member is on — unless only ties at the bound can still enter:
                     // then the cell holding the smallest index first.
-                    let left_first = if lbl == lbr {
-                        if R::TIGHTENS && lbl == gb {
-                            cells.min_gid[l as usize] < cells.min_gid[r as usize]
-                        } else {
-                            q[0][nd.dim as usize] < nd.split
-                        }
-                    } else {
-                        lbl < lbr
-                    };
+                    let left_first = left_first(
+                        (lbl, cells.min_gid[l as usize]),
+                        (lbr, cells.min_gid[r as usize]),
+                        R::TIGHTENS && lbl == gb,
+                        q[0][nd.dim as usize] < nd.split,
+                    );
                     let (near, lbn, far, lbf) = if left_first {
                         (l, lbl, r, lbr)
                     } else {

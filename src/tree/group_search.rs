@@ -208,6 +208,28 @@ pub(crate) fn box_dist<T: Scalar, const D: usize>(
     s
 }
 
+/// Whether a group descends into the left child before the right one, given each child's
+/// `(lower bound, smallest index)`: the nearer first; between equally near ones the side of the
+/// split the first member is on (`on_left`) — unless only ties at the bound can still enter
+/// (`ties_only`), then the one holding the smallest index.
+#[inline(always)]
+pub(crate) fn left_first<T: Scalar>(
+    left: (T, u32),
+    right: (T, u32),
+    ties_only: bool,
+    on_left: bool,
+) -> bool {
+    if left.0 == right.0 {
+        if ties_only {
+            left.1 < right.1
+        } else {
+            on_left
+        }
+    } else {
+        left.0 < right.0
+    }
+}
+
 /// `true` if a cell at squared distance `lb` whose smallest caller index is `min_id` may
 /// improve a row whose worst admissible key is `(b, w)` (`w == u32::MAX` while the row is not
 /// full: caller indices are below it).
@@ -680,15 +702,12 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
                 // ties at the bound (e.g. copies of the members' point once every row holds k
                 // of them): then only smaller indices help, so the cell holding the smallest
                 // first, which soon leaves every other cell pruned by its smallest index.
-                let left_first = if lbl == lbr {
-                    if R::TIGHTENS && lbl == gb {
-                        boxes.min_id[l as usize] < boxes.min_id[r as usize]
-                    } else {
-                        q[0][nd.dim as usize] < nd.split
-                    }
-                } else {
-                    lbl < lbr
-                };
+                let left_first = left_first(
+                    (lbl, boxes.min_id[l as usize]),
+                    (lbr, boxes.min_id[r as usize]),
+                    R::TIGHTENS && lbl == gb,
+                    q[0][nd.dim as usize] < nd.split,
+                );
                 let (near, lbn, far, lbf) = if left_first {
                     (l, lbl, r, lbr)
                 } else {
