@@ -320,7 +320,7 @@ fn robust_finite(
     let eps = options.epsilon.resolve(h);
     // the points and their neighbour rows in tree order (rows.rs); back in input order at the end
     let mut cur: Vec<DVec3> = order.iter().map(|&o| points[o as usize]).collect();
-    rows.update(&cur, &order, eps);
+    rows.cut(&cur, &order, eps);
     if rows.max_len() + 1 < 3 {
         // no neighbourhood reaches 3 points: the same refusal as every smoothing call
         let narrow = rows.narrow_table(&cur, options.k_plane, &order);

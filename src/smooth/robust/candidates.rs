@@ -38,11 +38,13 @@ pub(super) struct Nearest {
     pub(super) order: Vec<u32>,
     /// Row length: `k`, or every other point when there are fewer.
     pub(super) width: usize,
-    /// Stored positions of each stored point's `width` nearest others, `width` per row, in no
-    /// particular order within a row.
+    /// Stored positions of each stored point's `width` nearest others, `width` per row, by
+    /// `(f64 sq_dist, caller's index)`.
     pub(super) index: Vec<u32>,
     /// Squared distance of each point (by caller index) to its nearest other point.
     pub(super) nearest: Vec<Option<f64>>,
+    /// Squared distance of each stored point to the last of its row (0 for empty rows).
+    pub(super) farthest: Vec<f64>,
 }
 
 /// The `k` nearest other points of every point: by an `f32` search proven exact row by row,
@@ -64,6 +66,7 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
     let complete = searched == n.saturating_sub(1);
     let mut index = vec![0u32; n * width];
     let mut nearest = vec![None; n];
+    let mut farthest = vec![0.0; n];
     let mut unproven = Vec::new();
     if searched == 0 {
         // a single point: no other points, empty rows
@@ -72,12 +75,13 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
             width,
             index,
             nearest,
+            farthest,
         });
     }
     let mut each = |positions: std::ops::Range<usize>, table: NeighborTable<f32>| {
         let rows =
             index[positions.start * width..positions.end * width].par_chunks_mut(width.max(1));
-        let found: Vec<Option<f64>> = rows
+        let found: Vec<Option<(f64, f64)>> = rows
             .zip(positions.clone().into_par_iter())
             .map_init(Vec::new, |scratch, (row, pos)| {
                 let o = order[pos];
@@ -90,12 +94,15 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
                 }
                 let kth = scratch.get(width.wrapping_sub(1)).map_or(0.0, |e| e.0);
                 let proven = complete || width == 0 || proves(kth, last, extent);
-                proven.then(|| scratch.first().map_or(f64::NAN, |e| e.0))
+                proven.then(|| (scratch.first().map_or(f64::NAN, |e| e.0), kth))
             })
             .collect();
         for (pos, f) in positions.zip(found) {
             match f {
-                Some(d) => nearest[order[pos] as usize] = (width > 0).then_some(d),
+                Some((d, kth)) => {
+                    nearest[order[pos] as usize] = (width > 0).then_some(d);
+                    farthest[pos] = kth;
+                }
                 None => unproven.push(pos),
             }
         }
@@ -107,23 +114,17 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
         SEARCH_BLOCK,
         &mut each,
     )?;
-    if !unproven.is_empty() {
-        search_in_f64(
-            points,
-            &order,
-            &position,
-            width,
-            &unproven,
-            &mut index,
-            &mut nearest,
-        )?;
-    }
-    Ok(Nearest {
+    let mut found = Nearest {
         order,
         width,
         index,
         nearest,
-    })
+        farthest,
+    };
+    if !unproven.is_empty() {
+        search_in_f64(points, &position, &unproven, &mut found)?;
+    }
+    Ok(found)
 }
 
 /// The candidates `ids` of the point with caller index `o`, re-measured in `f64` and sorted by
@@ -148,19 +149,18 @@ fn keep_nearest(points: &[DVec3], o: u32, ids: &[u32], width: usize, out: &mut V
     out.truncate(width);
 }
 
-/// The rows `unproven` (stored positions) searched again with an `f64` tree over the caller's
-/// points: the `width` nearest other points of each, as the proven rows hold them.
+/// The rows `unproven` (stored positions) of `found` searched again with an `f64` tree over
+/// the caller's points: the `width` nearest other points of each, as the proven rows hold them.
 fn search_in_f64(
     points: &[DVec3],
-    order: &[u32],
     position: &[u32],
-    width: usize,
     unproven: &[usize],
-    index: &mut [u32],
-    nearest: &mut [Option<f64>],
+    found: &mut Nearest,
 ) -> Result<()> {
     let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
     let tree = KdTree::<f64>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())?;
+    let width = found.width;
+    let order = &found.order;
     let rows: Vec<Vec<Neighbor<f64>>> = unproven
         .par_iter()
         .map(|&pos| {
@@ -170,11 +170,12 @@ fn search_in_f64(
         })
         .collect::<Result<_>>()?;
     for (&pos, row) in unproven.iter().zip(rows) {
-        let slots = &mut index[pos * width..(pos + 1) * width];
+        let slots = &mut found.index[pos * width..(pos + 1) * width];
         for (slot, nb) in slots.iter_mut().zip(&row) {
             *slot = position[nb.index as usize];
         }
-        nearest[order[pos] as usize] = row.first().map(|nb| nb.sq_dist);
+        found.nearest[found.order[pos] as usize] = row.first().map(|nb| nb.sq_dist);
+        found.farthest[pos] = row.last().map_or(0.0, |nb| nb.sq_dist);
     }
     Ok(())
 }

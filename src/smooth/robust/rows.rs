@@ -30,6 +30,9 @@ pub(super) struct Rows {
     candidates: Vec<u32>,
     /// How many of a row's candidates lie within ε.
     len: Vec<u32>,
+    /// Squared distance of each row's last candidate, from the search that found the rows
+    /// (sorted, on the points as searched), until the first cut at ε uses it.
+    searched_farthest: Option<Vec<f64>>,
 }
 
 impl Rows {
@@ -54,6 +57,7 @@ impl Rows {
             index,
             candidates,
             len,
+            searched_farthest: None,
         }
     }
 
@@ -61,7 +65,7 @@ impl Rows {
     /// search proven exact in `f64`), the points stored in the tree's order (returned), and each
     /// point's squared distance to its nearest (by caller index), searched in blocks of stored
     /// points, so that no table of all rows and distances is ever held (at a million points and
-    /// k = 48, 576 MB). Not yet cut at ε (see [`Rows::update`]).
+    /// k = 48, 576 MB). Sorted, but not yet cut at ε (see [`Rows::cut`]).
     pub(super) fn search(points: &[DVec3], k: usize) -> Result<(Self, Vec<u32>, Vec<Option<f64>>)> {
         let found = super::candidates::nearest_others(points, k)?;
         let candidates = vec![found.width as u32; points.len()];
@@ -72,6 +76,7 @@ impl Rows {
                 index: found.index,
                 candidates,
                 len,
+                searched_farthest: Some(found.farthest),
             },
             found.order,
             found.nearest,
@@ -105,10 +110,33 @@ impl Rows {
             .unwrap_or(0)
     }
 
+    /// The first cut of the rows at `eps`, on the points they were found for (stored order):
+    /// a row from [`Rows::search`] whose last candidate lies within ε is already sorted and
+    /// whole, and is left as it is; every other row is re-measured as [`Rows::update`] does.
+    pub(super) fn cut(&mut self, points: &[DVec3], order: &[u32], eps: f64) {
+        let settled = self.searched_farthest.take();
+        self.update_unless(points, order, eps, |s| {
+            settled.as_ref().is_some_and(|f| f[s] <= eps * eps)
+        });
+    }
+
     /// Re-measures every row on `points` (stored order), re-sorts it by `(sq_dist, index)` with
     /// the caller's indices `order`, and cuts it at `eps`. Each row is its own work, so the
     /// result does not depend on the number of threads.
     pub(super) fn update(&mut self, points: &[DVec3], order: &[u32], eps: f64) {
+        self.searched_farthest = None;
+        self.update_unless(points, order, eps, |_| false);
+    }
+
+    /// [`Rows::update`] of the rows `s` but those for which `whole(s)`: those keep all their
+    /// candidates, in their order.
+    fn update_unless(
+        &mut self,
+        points: &[DVec3],
+        order: &[u32],
+        eps: f64,
+        whole: impl Fn(usize) -> bool + Sync,
+    ) {
         let e2 = eps * eps;
         let width = self.width.max(1);
         let candidates = &self.candidates;
@@ -117,6 +145,10 @@ impl Rows {
             .zip(self.len.par_iter_mut())
             .enumerate()
             .for_each_init(Vec::new, |sq_dist, (s, (index, len))| {
+                if whole(s) {
+                    *len = candidates[s];
+                    return;
+                }
                 let index = &mut index[..candidates[s] as usize];
                 let p = points[s];
                 sq_dist.clear();
