@@ -4,12 +4,14 @@
 //! times on a busy machine are not.
 //!
 //! Run: `cargo run --release --example table_timing -- torus-77k knn10 [reps]`
-//! (operations: build, knn10, knn30, radius, epsk; radius gives about 20 neighbours, epsk is
+//! (operations: build, knn<k> for any k, radius, epsk; radius gives about 20 neighbours, epsk is
 //! k = 16 within it). `batch-knn10` answers the same points as a batch of outside queries
-//! (`neighborhoods_of`, the points in the data set's own order).
+//! (`neighborhoods_of`, the points in the data set's own order). A fourth argument `f64` builds
+//! an `f64` tree, and `noself` leaves each point out of its own row (as the normals do).
 
 use std::time::Instant;
 
+use nbhd::scalar::Scalar;
 use nbhd::shapes::datasets::Dataset;
 use nbhd::{BuildOptions, KdTree, Neighborhood, PointsView, Query, TableOptions};
 
@@ -22,8 +24,19 @@ fn main() {
         .into_iter()
         .find(|s| s.name() == set_name)
         .expect("unknown set");
-    let pts: Vec<[f32; 3]> = set.points().iter().map(|p| p.map(|c| c as f32)).collect();
-    let view = PointsView::from_rows(&pts).unwrap();
+    let flags = &args[args.len().min(4)..];
+    let exclude_self = flags.iter().any(|f| f == "noself");
+    if flags.iter().any(|f| f == "f64") {
+        let pts: Vec<[f64; 3]> = set.points();
+        run::<f64>(&pts, set_name, op, reps, exclude_self);
+    } else {
+        let pts: Vec<[f32; 3]> = set.points().iter().map(|p| p.map(|c| c as f32)).collect();
+        run::<f32>(&pts, set_name, op, reps, exclude_self);
+    }
+}
+
+fn run<T: Scalar>(pts: &[[T; 3]], set_name: &str, op: &str, reps: usize, exclude_self: bool) {
+    let view = PointsView::from_rows(pts).unwrap();
     let opts = BuildOptions {
         threads: 1,
         ..BuildOptions::default()
@@ -31,7 +44,7 @@ fn main() {
     if op == "build" {
         for _ in 0..reps {
             let s = Instant::now();
-            let tree = KdTree::<f32>::build(&view, &opts).unwrap();
+            let tree = KdTree::<T>::build(&view, &opts).unwrap();
             println!(
                 "build {:.2} ms ({} points)",
                 s.elapsed().as_secs_f64() * 1e3,
@@ -40,22 +53,23 @@ fn main() {
         }
         return;
     }
-    let tree = KdTree::<f32>::build(&view, &opts).unwrap();
+    let tree = KdTree::<T>::build(&view, &opts).unwrap();
     // The radius giving about 20 neighbours (self included), as in benches/compare.rs.
     let mut out = Vec::new();
-    let mut d20: Vec<f32> = (0..pts.len())
+    let mut d20: Vec<T> = (0..pts.len())
         .step_by((pts.len() / 2000).max(1))
         .map(|i| {
             tree.knn(Query::stored(i as u32), 21, &mut out).unwrap();
-            out.last().unwrap().sq_dist.sqrt()
+            T::from_f64(out.last().unwrap().sq_dist.to_f64().sqrt())
         })
         .collect();
-    d20.sort_by(f32::total_cmp);
+    d20.sort_by(|a, b| a.partial_cmp(b).unwrap());
     let radius = d20[d20.len() / 2];
     let batch = op.starts_with("batch-");
     let nbhd = match op.trim_start_matches("batch-") {
-        "knn10" => Neighborhood::Knn { k: 10 },
-        "knn30" => Neighborhood::Knn { k: 30 },
+        knn if knn.starts_with("knn") => Neighborhood::Knn {
+            k: knn[3..].parse().expect("knn<k>"),
+        },
         "radius" => Neighborhood::Radius {
             radius,
             sorted: true,
@@ -64,7 +78,7 @@ fn main() {
         _ => panic!("unknown operation {op}"),
     };
     let topts = TableOptions {
-        exclude_self: false,
+        exclude_self,
         threads: 1,
     };
     for _ in 0..reps {

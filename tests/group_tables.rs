@@ -61,6 +61,9 @@ fn check<T: Scalar>(coords: &[T], d: usize, leaf_sizes: &[usize]) {
                     sorted: true,
                 },
                 Neighborhood::KnnRadius { k: 5, radius },
+                // rows kept in heaps of packed keys (k above 24)
+                Neighborhood::Knn { k: 31 },
+                Neighborhood::KnnRadius { k: 40, radius },
             ];
             // Rows of every point: quadratic, so only on small sets.
             if n <= 500 {
