@@ -398,6 +398,23 @@ mod tests {
     use crate::smooth::analyze;
 
     #[test]
+    fn blocks_of_the_fused_path_equal_the_table_path() {
+        // more than two blocks of `BLOCK` tree positions, the last one partial
+        let s = sample(&Torus::new(1.0, 0.4), 2 * BLOCK + 1234, 11);
+        let opts = SmoothOptions::default();
+        let full = analyze(&s.points, &opts).unwrap();
+        for threads in [1, 2] {
+            let got = estimate_normals(&s.points, &SmoothOptions { threads, ..opts }).unwrap();
+            assert_eq!((got.spacing, got.epsilon), (full.spacing, full.epsilon));
+            for (g, f) in got.normals.iter().zip(&full.outputs) {
+                assert_eq!(g.normal, f.normal);
+                assert_eq!(g.surface_variation, f.covariance_quotient);
+                assert_eq!(g.flags, f.normal_flags);
+            }
+        }
+    }
+
+    #[test]
     fn equals_the_full_analysis_bit_for_bit_for_any_threads() {
         let torus = Torus::new(1.0, 0.4);
         let s = sample(&torus, 3000, 7);
