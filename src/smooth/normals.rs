@@ -9,7 +9,7 @@
 //! so a normal from here equals the one [`super::analyze`] reports. Every point's arithmetic
 //! depends on its row only, so the result is identical for any number of threads.
 
-use super::source::{knn_rows, Neighbors};
+use super::source::{knn_rows, Neighbors, SearchMethod};
 use super::{
     check_points, check_spacing, cut_to, finite_subset, progress_in_units, quotient_of, Length,
     SmoothOptions, Stage,
@@ -18,7 +18,10 @@ use crate::error::{NbhdError, Result};
 use crate::geometry::normals::{normal_of, FLAG_SKIPPED};
 use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
+use crate::points::PointsView;
+use crate::query::{Neighbor, Neighborhood, Query};
 use crate::table::NeighborTable;
+use crate::tree::{BuildOptions, KdTree};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -101,6 +104,13 @@ fn normals_finite(
     check_points(points)?;
     let mut report = progress_in_units(1.0, progress);
     report(0.0, Stage::Neighbors)?;
+    if neighbors == Neighbors::Search(SearchMethod::KdTree)
+        && options.orientation == Orientation::Unoriented
+    {
+        if let Some(result) = normals_in_tree_order(points, options, &mut report)? {
+            return Ok(result);
+        }
+    }
     let (knn, _) = knn_rows(points, neighbors, options.k)?;
     let h = mean_nearest(&knn);
     let relative = matches!(options.epsilon, Length::Relative(_));
@@ -191,6 +201,177 @@ fn normals_finite(
     })
 }
 
+/// Points per block of the fused search: the rows of a block are consumed while they are
+/// still in cache (about 1.4 MB of rows at k = 15), and a block has enough chunks of the
+/// grouped search to keep two threads busy.
+const BLOCK: usize = 8192;
+
+/// What the fused pass keeps of one point's row besides its estimate.
+#[derive(Clone, Copy, Debug, Default)]
+struct RowSummary {
+    /// Squared distance to the nearest neighbour (NaN for an empty row).
+    nearest: f64,
+    /// Squared distance to the farthest (the last) neighbour, 0 for an empty row.
+    farthest: f64,
+    /// Number of neighbours.
+    len: u32,
+}
+
+/// The estimate of the point `p` from its neighbours `row` (caller indices, nearest first),
+/// the arithmetic of the table path exactly.
+#[inline]
+fn estimate_of(points: &[DVec3], p: DVec3, row: &[u32], buf: &mut Vec<DVec3>) -> NormalEstimate {
+    buf.clear();
+    buf.extend(row.iter().map(|&j| points[j as usize] - p));
+    let (normal, values, flags) = normal_of(buf.iter().copied(), buf.len() + 1);
+    NormalEstimate {
+        normal,
+        surface_variation: quotient_of(values),
+        flags,
+    }
+}
+
+/// The unoriented normals of the call's own k-d tree search, bit for bit those of the table
+/// path of [`normals_finite`], without the table of every point: the rows come a block of
+/// consecutive tree positions at a time ([`KdTree::neighborhoods_by_blocks`]) and are consumed
+/// while in cache, in tree order, so that a block's neighbours are a few nearby points read
+/// again and again rather than points all over the caller's array. ε is known only once the
+/// spacing is (the mean over every row's nearest neighbour), so each row is consumed whole and
+/// the rows that ε cuts (rare for the default 6h; their last neighbour lies beyond ε) are
+/// searched again and consumed cut.
+fn normals_in_tree_order(
+    points: &[DVec3],
+    options: &SmoothOptions,
+    report: &mut dyn FnMut(f64, Stage) -> Result<()>,
+) -> Result<Option<NormalsResult>> {
+    let n = points.len();
+    let tree = {
+        let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
+        KdTree::<f64>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())?
+    };
+    let order = tree.tree_order();
+    if order.len() != n {
+        // not expected (the points are finite here, so the tree holds every one): the table
+        // path then decides
+        return Ok(None);
+    }
+    let k = options.k;
+    // estimates and row summaries in tree order, block after block
+    let mut in_tree: Vec<(NormalEstimate, RowSummary)> = Vec::with_capacity(n);
+    tree.neighborhoods_by_blocks(
+        Neighborhood::Knn { k },
+        true,
+        BLOCK,
+        &mut |positions, table| {
+            debug_assert_eq!(positions.start, in_tree.len());
+            let start = positions.start;
+            let block: Vec<(NormalEstimate, RowSummary)> = (0..positions.len())
+                .into_par_iter()
+                .with_min_len(256)
+                .map_init(Vec::new, |buf: &mut Vec<DVec3>, r| {
+                    let i = order[start + r] as usize;
+                    let d = table.sq_dists_of(r);
+                    let summary = RowSummary {
+                        nearest: d.first().copied().unwrap_or(f64::NAN),
+                        farthest: d.last().copied().unwrap_or(0.0),
+                        len: d.len() as u32,
+                    };
+                    (
+                        estimate_of(points, points[i], table.indices_of(r), buf),
+                        summary,
+                    )
+                })
+                .collect();
+            in_tree.extend(block);
+            report(0.9 * positions.end as f64 / n as f64, Stage::Neighbors)
+        },
+    )?;
+    // caller order: the position of every caller index, then a parallel gather
+    let mut position = vec![0u32; n];
+    for (pos, &i) in order.iter().enumerate() {
+        position[i as usize] = pos as u32;
+    }
+    let summary = |i: usize| in_tree[position[i] as usize].1;
+    // the mean nearest-neighbour spacing, summed in caller order as `mean_nearest`
+    let (mut sum, mut count) = (0.0, 0usize);
+    for i in 0..n {
+        let d = summary(i).nearest;
+        if !d.is_nan() {
+            sum += d.sqrt();
+            count += 1;
+        }
+    }
+    let h = if count == 0 { 0.0 } else { sum / count as f64 };
+    let relative = matches!(options.epsilon, Length::Relative(_));
+    check_spacing(h, relative)?;
+    let eps = options.epsilon.resolve(h);
+    let e2 = eps * eps;
+    let mut estimates: Vec<NormalEstimate> = position
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&pos| in_tree[pos as usize].0)
+        .collect();
+    // rows that ε cuts: searched again (the same rows as the blocks'), consumed up to ε
+    let cut: Vec<usize> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .filter(|&i| summary(i).farthest > e2)
+        .collect();
+    let recomputed: Vec<(NormalEstimate, usize)> = cut
+        .par_iter()
+        .with_min_len(64)
+        .map_init(
+            || (Vec::<Neighbor<f64>>::new(), Vec::new(), Vec::new()),
+            |(found, ids, buf), &i| {
+                tree.knn(Query::stored_excluding_self(i as u32), k, found)?;
+                let within = found.partition_point(|x| x.sq_dist <= e2);
+                ids.clear();
+                ids.extend(found[..within].iter().map(|x| x.index));
+                Ok((estimate_of(points, points[i], ids, buf), within))
+            },
+        )
+        .collect::<Result<_>>()?;
+    let mut largest = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| {
+            let s = summary(i);
+            if s.farthest > e2 {
+                0
+            } else {
+                s.len as usize
+            }
+        })
+        .max()
+        .unwrap_or(0);
+    for (&i, &(e, within)) in cut.iter().zip(&recomputed) {
+        estimates[i] = e;
+        largest = largest.max(within);
+    }
+    let degenerate = |flagged| NbhdError::Degenerate {
+        points: n,
+        largest: largest + 1,
+        flagged,
+        epsilon: eps,
+        spacing: h,
+        relative,
+    };
+    // what `super::check_not_degenerate` refuses, with the same message
+    if largest + 1 < 3 {
+        return Err(degenerate(0));
+    }
+    let flagged = estimates.iter().filter(|e| e.flags != 0).count();
+    if flagged == estimates.len() {
+        return Err(degenerate(flagged));
+    }
+    report(1.0, Stage::Done)?;
+    Ok(Some(NormalsResult {
+        normals: estimates,
+        spacing: h,
+        epsilon: eps,
+    }))
+}
+
 /// The mean distance of a point to its nearest other point, `geometry::neighbors::mean_spacing_of`'s value bit
 /// for bit (the same sum in index order) without its median.
 fn mean_nearest(knn: &NeighborTable<f64>) -> f64 {
@@ -217,6 +398,23 @@ mod tests {
     use crate::smooth::analyze;
 
     #[test]
+    fn blocks_of_the_fused_path_equal_the_table_path() {
+        // more than two blocks of `BLOCK` tree positions, the last one partial
+        let s = sample(&Torus::new(1.0, 0.4), 2 * BLOCK + 1234, 11);
+        let opts = SmoothOptions::default();
+        let full = analyze(&s.points, &opts).unwrap();
+        for threads in [1, 2] {
+            let got = estimate_normals(&s.points, &SmoothOptions { threads, ..opts }).unwrap();
+            assert_eq!((got.spacing, got.epsilon), (full.spacing, full.epsilon));
+            for (g, f) in got.normals.iter().zip(&full.outputs) {
+                assert_eq!(g.normal, f.normal);
+                assert_eq!(g.surface_variation, f.covariance_quotient);
+                assert_eq!(g.flags, f.normal_flags);
+            }
+        }
+    }
+
+    #[test]
     fn equals_the_full_analysis_bit_for_bit_for_any_threads() {
         let torus = Torus::new(1.0, 0.4);
         let s = sample(&torus, 3000, 7);
@@ -224,6 +422,8 @@ mod tests {
         assert_eq!(mean_nearest(&table), mean_spacing_of(&table));
         for (orientation, eps) in [
             (Orientation::Unoriented, Length::Relative(6.0)),
+            // the fused tree-order path with rows cut by ε (searched again)
+            (Orientation::Unoriented, Length::Relative(1.5)),
             (Orientation::Propagate, Length::Relative(6.0)),
             // rows cut by ε
             (Orientation::AwayFrom(DVec3::ZERO), Length::Relative(2.5)),
