@@ -244,13 +244,13 @@ pub(crate) struct DescentView<'a, T> {
     pub depth: usize,
 }
 
-/// A pending cell of the compact search: its step, its lower bound and its gaps (the unused
-/// fourth gap stays zero).
+/// A pending cell of the compact search: its step, its lower bound and its gaps (those above
+/// the dimension stay zero).
 #[derive(Clone, Copy)]
 struct Pending<T> {
     step: u32,
     dist: T,
-    gaps: [T; 4],
+    gaps: [T; 3],
 }
 
 /// Pending cells fit the inline array when the tree is at most this deep (a depth-first
@@ -269,7 +269,7 @@ pub(crate) fn search_compact<T: Scalar, C: ResultSet<T>>(
     let empty = Pending {
         step: 0,
         dist: T::ZERO,
-        gaps: [T::ZERO; 4],
+        gaps: [T::ZERO; 3],
     };
     if tree.depth < INLINE_DEPTH {
         let mut stack = [empty; INLINE_DEPTH + 2];
@@ -310,7 +310,7 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
     stack[0] = Pending {
         step: 0,
         dist: T::ZERO,
-        gaps: [T::ZERO; 4],
+        gaps: [T::ZERO; 3],
     };
     let mut len = 1usize;
     while len > 0 {
@@ -332,19 +332,31 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 // The leaf's points and indices as slices: no bounds test per point.
                 let (points, _) = tree.coords[a * D..b * D].as_chunks::<D>();
                 let ids = &tree.ids[a..b];
-                let bound = out.bound();
-                for (j, p) in points.iter().enumerate() {
-                    let mut d2 = T::ZERO;
-                    for (x, y) in qa.iter().zip(p) {
-                        let t = *x - *y;
-                        d2 = d2 + t * t;
+                // Blocks of up to 32 points: every squared distance first (no branch), the
+                // points within the bound as bits of a mask, then offers of those only. The
+                // test per point was the search's most mispredicted branch (README "Single
+                // queries, the floor, and copies of a point").
+                for (points, ids) in points.chunks(32).zip(ids.chunks(32)) {
+                    let bound = out.bound();
+                    let mut d = [T::ZERO; 32];
+                    let mut mask = 0u32;
+                    for ((j, p), dj) in points.iter().enumerate().zip(&mut d) {
+                        let mut d2 = T::ZERO;
+                        for (x, y) in qa.iter().zip(p) {
+                            let t = *x - *y;
+                            d2 = d2 + t * t;
+                        }
+                        *dj = d2;
+                        mask |= ((d2 <= bound) as u32) << j;
                     }
-                    // The index (another cache line) is read only for a candidate within the
-                    // bound.
-                    if d2 <= bound {
+                    while mask != 0 {
+                        let j = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        // The index (another cache line) is read only for a candidate within
+                        // the bound.
                         let id = ids[j];
                         if id != excluded {
-                            out.offer(id, d2);
+                            out.offer(id, d[j]);
                         }
                     }
                 }
