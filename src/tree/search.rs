@@ -330,17 +330,17 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 let [a, b] = tree.descent.leaves[(s.link >> 2) as usize];
                 let (a, b) = (a as usize, b as usize);
                 // The leaf's points and indices as slices: no bounds test per point.
-                let (points, _) = tree.coords[a * D..b * D].as_chunks::<D>();
+                let points = &tree.coords[a * D..b * D];
                 let ids = &tree.ids[a..b];
                 // Blocks of up to 32 points: every squared distance first (no branch), the
                 // points within the bound as bits of a mask, then offers of those only. The
                 // test per point was the search's most mispredicted branch (README "Single
                 // queries, the floor, and copies of a point").
-                for (points, ids) in points.chunks(32).zip(ids.chunks(32)) {
+                for (points, ids) in points.chunks(32 * D).zip(ids.chunks(32)) {
                     let bound = out.bound();
                     let mut d = [T::ZERO; 32];
                     let mut mask = 0u32;
-                    for ((j, p), dj) in points.iter().enumerate().zip(&mut d) {
+                    for ((j, p), dj) in points.chunks_exact(D).enumerate().zip(&mut d) {
                         let mut d2 = T::ZERO;
                         for (x, y) in qa.iter().zip(p) {
                             let t = *x - *y;
