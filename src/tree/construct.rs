@@ -9,7 +9,6 @@ use rayon::prelude::*;
 use super::build::{build_parallel, build_serial, BuildInput, Subtree};
 use super::layout::{BySlot, Inline, Layout, Record};
 use super::presorted;
-use super::search;
 use super::{BuildOptions, KdTree, MedianAlgorithm};
 use crate::cloud::{Cloud, NonFinitePolicy};
 use crate::error::{NbhdError, Result};
@@ -115,17 +114,20 @@ impl<T: Scalar> KdTree<T> {
                 (subtree, coords, ids)
             }
         };
-        Ok(Self {
+        let mut tree = Self {
             dim,
             coords,
-            min_id: search::min_ids(&subtree.nodes, &ids),
+            min_id: Vec::new(),
+            descent: None,
             ids,
             nodes: subtree.nodes,
             depth: subtree.depth,
             source_len: view.len(),
             options: *options,
             position_of: OnceLock::new(),
-        })
+        };
+        tree.derive();
+        Ok(tree)
     }
 
     /// Builds from packed coordinates `[x0, y0, z0, x1, ...]` of dimension `dim`.

@@ -34,10 +34,12 @@ use std::sync::OnceLock;
 use crate::error::Result;
 use crate::query::order;
 use crate::query::resolve_query;
-use crate::query::result_set::{Key32, KnnBuf, KnnRow, RowEntry, SortedRow, WithinRadius};
+use crate::query::result_set::{
+    Key32, KnnBuf, KnnRow, ResultSet, RowEntry, SortedRow, WithinRadius,
+};
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::{Scalar, ScalarType};
-use node::Node;
+use node::{Descent, Node};
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
 pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
 pub use range::IndexRows;
@@ -77,6 +79,8 @@ pub struct KdTree<T> {
     /// Smallest caller index of every node's subtree (derived from `nodes` and `ids`, not
     /// saved): lets a search skip cells whose points cannot win on index (`search.rs`).
     min_id: Vec<u32>,
+    /// The compact descent array of single queries (dimension ≤ 3; derived, not saved).
+    descent: Option<Descent<T>>,
     depth: usize,
     source_len: usize,
     options: BuildOptions,
@@ -156,6 +160,7 @@ impl<T: Scalar> KdTree<T> {
                 + self.ids.len() * 4
                 + self.nodes.len() * std::mem::size_of::<Node<T>>()
                 + self.min_id.len() * 4
+                + self.descent.as_ref().map_or(0, Descent::bytes)
                 + reverse,
         }
     }
@@ -167,6 +172,32 @@ impl<T: Scalar> KdTree<T> {
             ids: &self.ids,
             min_id: &self.min_id,
             dim: self.dim,
+        }
+    }
+
+    /// Makes what is derived from the nodes and not saved: the smallest indices and the
+    /// compact descent.
+    fn derive(&mut self) {
+        self.min_id = search::min_ids(&self.nodes, &self.ids);
+        self.descent = Descent::new(&self.nodes, &self.min_id, self.dim, DESCENT_BUCKET);
+    }
+
+    /// Runs a single search into `out`: over the compact descent where the tree has one.
+    #[inline(always)]
+    fn run<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, out: &mut C) {
+        match &self.descent {
+            Some(descent) => search::search_compact(
+                &search::DescentView {
+                    descent,
+                    coords: &self.coords,
+                    ids: &self.ids,
+                    depth: self.depth,
+                },
+                q,
+                exclude,
+                out,
+            ),
+            None => search::search(&self.view(), q, exclude, out),
         }
     }
 
@@ -238,10 +269,9 @@ impl<T: Scalar> KdTree<T> {
         out: &mut Vec<Neighbor<T>>,
     ) {
         let (k, sq_radius) = nbhd.limits();
-        let tree = self.view();
         if k == usize::MAX {
             out.clear();
-            search::search(&tree, q, exclude, &mut WithinRadius { out, sq_radius });
+            self.run(q, exclude, &mut WithinRadius { out, sq_radius });
             if nbhd.is_sorted() {
                 out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
             }
@@ -249,7 +279,7 @@ impl<T: Scalar> KdTree<T> {
             if k <= KNN_ROW_MAX_K {
                 let mut buf = [Key32::default(); KNN_ROW_MAX_K];
                 let mut row = KnnRow::new(&mut buf[..k], sq_radius);
-                search::search(&tree, q, exclude, &mut row);
+                self.run(q, exclude, &mut row);
                 out.clear();
                 out.extend(row.held().map(|e| {
                     let (sq_dist, index) = e.pair();
@@ -258,7 +288,7 @@ impl<T: Scalar> KdTree<T> {
             } else {
                 let mut buf = [0u64; 2 * SORTED_MAX_K];
                 let mut set = KnnBuf::new(&mut buf[..2 * k], k, sq_radius);
-                search::search(&tree, q, exclude, &mut set);
+                self.run(q, exclude, &mut set);
                 out.clear();
                 out.extend(set.finish().iter().map(|&e| {
                     let (sq_dist, index) = order::unkey32(e);
@@ -266,14 +296,19 @@ impl<T: Scalar> KdTree<T> {
                 }));
             }
         } else if k <= SORTED_MAX_K {
-            search_sorted::<T, Neighbor<T>>(&tree, q, exclude, k, sq_radius, out);
+            search_sorted::<T, Neighbor<T>>(self, q, exclude, k, sq_radius, out);
         } else {
             let mut heap = NeighborHeap::new(out, k, sq_radius);
-            search::search(&tree, q, exclude, &mut heap);
+            self.run(q, exclude, &mut heap);
             heap.finish();
         }
     }
 }
+
+/// Subtrees of at most this many points are one leaf of the compact descent (`node.rs`): on
+/// the 77k torus (README "Single queries, the floor, and copies of a point") 24, 32 and 40
+/// took the same time within the noise, all well below the build's leaves of 12.
+const DESCENT_BUCKET: usize = 32;
 
 /// Single kNN queries up to this `k` keep their candidates on the call stack (`f32`: sorted in a
 /// [`KnnRow`] up to [`KNN_ROW_MAX_K`], unsorted in a [`KnnBuf`] above; `f64`: sorted by
@@ -289,7 +324,7 @@ const KNN_ROW_MAX_K: usize = 16;
 /// packed `f32` keys of `src/query/order.rs` or neighbours — copied to `out` at the end: a
 /// candidate costs a short shift of one-integer compares, and the result needs no sort.
 fn search_sorted<T: Scalar, E: RowEntry<T> + Default>(
-    tree: &TreeView<'_, T>,
+    tree: &KdTree<T>,
     q: &[T],
     exclude: Option<u32>,
     k: usize,
@@ -303,7 +338,7 @@ fn search_sorted<T: Scalar, E: RowEntry<T> + Default>(
         len: &mut len,
         sq_radius,
     };
-    search::search(tree, q, exclude, &mut row);
+    tree.run(q, exclude, &mut row);
     out.clear();
     out.extend(buf[..len].iter().map(|&e| {
         let (sq_dist, index) = e.pair();

@@ -723,6 +723,7 @@ impl<T: Scalar> KdTree<T> {
             dim: info.dim,
             coords,
             min_id: Vec::new(),
+            descent: None,
             ids,
             nodes,
             depth: info.depth,
@@ -733,7 +734,7 @@ impl<T: Scalar> KdTree<T> {
         tree.check_points(bitmap_bytes)?;
         tree.check_nodes()?;
         // Derived, not saved: made once the nodes are known to be well formed.
-        tree.min_id = super::search::min_ids(&tree.nodes, &tree.ids);
+        tree.derive();
         Ok(tree)
     }
 

@@ -21,7 +21,7 @@
 //! enter, the side with the smaller index is taken first (the build orders identical points by
 //! caller index, `src/tree/layout.rs`), so the copies with the lowest indices are met first.
 
-use super::node::Node;
+use super::node::{Descent, Node, DESCENT_LEAF};
 use crate::query::result_set::ResultSet;
 use crate::scalar::Scalar;
 
@@ -231,6 +231,298 @@ fn search_d<T: Scalar, C: ResultSet<T>, const D: usize, const G: usize>(
             // The near side keeps the cell's bound; on a tie it may still be passed by index.
             if !may_enter(out, dist, tree.min_id, node) {
                 break;
+            }
+        }
+    }
+}
+
+/// The tree's arrays a compact search reads.
+pub(crate) struct DescentView<'a, T> {
+    pub descent: &'a Descent<T>,
+    pub coords: &'a [T],
+    pub ids: &'a [u32],
+    pub depth: usize,
+}
+
+/// A pending cell of the compact search: its step, its lower bound and its gaps (those above
+/// the dimension stay zero).
+#[derive(Clone, Copy)]
+struct Pending<T> {
+    step: u32,
+    dist: T,
+    gaps: [T; 3],
+}
+
+/// Pending cells fit the inline array when the tree is at most this deep (a depth-first
+/// search holds at most one pending cell per level, plus the root).
+const INLINE_DEPTH: usize = 38;
+
+/// [`search`] over the compact descent array (`src/tree/node.rs`, [`Descent`]) of a tree of
+/// dimension `D` ≤ 3: the same cells visited in the same order and pruned by the same exact
+/// bounds, so the same result.
+pub(crate) fn search_compact<T: Scalar, C: ResultSet<T>>(
+    tree: &DescentView<'_, T>,
+    q: &[T],
+    exclude: Option<u32>,
+    out: &mut C,
+) {
+    let empty = Pending {
+        step: 0,
+        dist: T::ZERO,
+        gaps: [T::ZERO; 3],
+    };
+    if tree.depth < INLINE_DEPTH {
+        let mut stack = [empty; INLINE_DEPTH + 2];
+        compact_d(tree, q, exclude, out, &mut stack);
+    } else {
+        let mut stack = vec![empty; tree.depth + 2];
+        compact_d(tree, q, exclude, out, &mut stack);
+    }
+}
+
+#[inline(always)]
+fn compact_d<T: Scalar, C: ResultSet<T>>(
+    tree: &DescentView<'_, T>,
+    q: &[T],
+    exclude: Option<u32>,
+    out: &mut C,
+    stack: &mut [Pending<T>],
+) {
+    match q.len() {
+        3 => compact_search::<T, C, 3>(tree, q, exclude, out, stack),
+        2 => compact_search::<T, C, 2>(tree, q, exclude, out, stack),
+        _ => compact_search::<T, C, 1>(tree, q, exclude, out, stack),
+    }
+}
+
+fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
+    tree: &DescentView<'_, T>,
+    q: &[T],
+    exclude: Option<u32>,
+    out: &mut C,
+    stack: &mut [Pending<T>],
+) {
+    let excluded = exclude.unwrap_or(u32::MAX);
+    let steps = &tree.descent.steps[..];
+    let min_id = &tree.descent.min_id[..];
+    let mut qa = [T::ZERO; 4];
+    qa[..D].copy_from_slice(&q[..D]);
+    stack[0] = Pending {
+        step: 0,
+        dist: T::ZERO,
+        gaps: [T::ZERO; 3],
+    };
+    let mut len = 1usize;
+    while len > 0 {
+        len -= 1;
+        let Pending {
+            step: mut node,
+            dist,
+            gaps,
+        } = stack[len];
+        if !may_enter(out, dist, min_id, node) {
+            continue;
+        }
+        loop {
+            let s = steps[node as usize];
+            let sd = (s.link & 3) as usize;
+            if sd == DESCENT_LEAF as usize {
+                let [a, b] = tree.descent.leaves[(s.link >> 2) as usize];
+                let (a, b) = (a as usize, b as usize);
+                // The leaf's points and indices as slices: no bounds test per point.
+                let points = &tree.coords[a * D..b * D];
+                let ids = &tree.ids[a..b];
+                // Blocks of up to 32 points: every squared distance first (no branch), the
+                // points within the bound as bits of a mask, then offers of those only. The
+                // test per point was the search's most mispredicted branch (README "Single
+                // queries, the floor, and copies of a point").
+                for (points, ids) in points.chunks(32 * D).zip(ids.chunks(32)) {
+                    let bound = out.bound();
+                    let mut d = [T::ZERO; 32];
+                    let mut mask = 0u32;
+                    for ((j, p), dj) in points.chunks_exact(D).enumerate().zip(&mut d) {
+                        let mut d2 = T::ZERO;
+                        for (x, y) in qa.iter().zip(p) {
+                            let t = *x - *y;
+                            d2 = d2 + t * t;
+                        }
+                        *dj = d2;
+                        mask |= ((d2 <= bound) as u32) << j;
+                    }
+                    while mask != 0 {
+                        let j = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        // The index (another cache line) is read only for a candidate within
+                        // the bound.
+                        let id = ids[j];
+                        if id != excluded {
+                            out.offer(id, d[j]);
+                        }
+                    }
+                }
+                break;
+            }
+            let first = s.link >> 2;
+            let diff = qa[sd] - s.split;
+            // As in `search_d`: on a tie the right side first unless only ties at the bound
+            // can still enter; then the side with the smaller index.
+            let right_first = if diff == T::ZERO {
+                !(dist == out.bound() && min_id[first as usize] < min_id[first as usize + 1])
+            } else {
+                diff > T::ZERO
+            };
+            let near = first + right_first as u32;
+            let far = first + !right_first as u32;
+            let mut g = gaps;
+            g[sd] = diff;
+            let mut fd = T::ZERO;
+            for x in &g[..D] {
+                fd = fd + *x * *x;
+            }
+            // Pushed unconditionally, kept only if it may enter (no branch on the test).
+            stack[len] = Pending {
+                step: far,
+                dist: fd,
+                gaps: g,
+            };
+            len += may_enter(out, fd, min_id, far) as usize;
+            node = near;
+            if !may_enter(out, dist, min_id, node) {
+                break;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::query::result_set::WithinRadius;
+    use crate::query::{Neighbor, NeighborHeap};
+    use crate::tree::{BuildOptions, KdTree, PivotPolicy};
+
+    /// Clouds with many ties: points on a coarse grid (queries on split values), copies of a
+    /// few positions, and a sheared line (a deep tree for closest-to-middle).
+    fn clouds(dim: usize) -> Vec<Vec<f32>> {
+        let mut grid = Vec::new();
+        for i in 0..700u32 {
+            for j in 0..dim as u32 {
+                grid.push(((i.wrapping_mul(2_654_435_761) >> (7 * j)) % 9) as f32 * 0.5);
+            }
+        }
+        let mut copies = Vec::new();
+        for i in 0..900u32 {
+            for j in 0..dim as u32 {
+                let c = if i % 2 == 0 {
+                    (i / 2) % 3
+                } else {
+                    (i * 31 + j * 7) % 101
+                };
+                copies.push(c as f32 * 0.25);
+            }
+        }
+        let mut line = Vec::new();
+        for i in 0..600u32 {
+            for j in 0..dim as u32 {
+                line.push((1.5f32).powi((i % 40) as i32) * 1e-6 + (j * i) as f32);
+            }
+        }
+        vec![grid, copies, line]
+    }
+
+    /// The compact descent gives what the preorder search gives, for every result set, on
+    /// every pivot policy, at points of the cloud (ties everywhere) and between them.
+    #[test]
+    fn the_compact_descent_finds_what_the_preorder_search_finds() {
+        for dim in 1..=3 {
+            for coords in clouds(dim) {
+                for pivot in PivotPolicy::ALL {
+                    for leaf_size in [1, 5, 12] {
+                        let opts = BuildOptions {
+                            pivot,
+                            leaf_size,
+                            threads: 1,
+                            ..BuildOptions::default()
+                        };
+                        let tree = KdTree::from_flat(&coords, dim, &opts).unwrap();
+                        let descent = tree.descent.as_ref().expect("dimension ≤ 3");
+                        let compact = DescentView {
+                            descent,
+                            coords: &tree.coords,
+                            ids: &tree.ids,
+                            depth: tree.depth,
+                        };
+                        let n = coords.len() / dim;
+                        for qi in (0..n).step_by(7) {
+                            let mut q: Vec<f32> = coords[qi * dim..(qi + 1) * dim].to_vec();
+                            if qi % 3 == 1 {
+                                q[0] += 0.125;
+                            }
+                            let exclude = (qi % 2 == 0).then_some(qi as u32);
+                            for (k, r2) in [(1, f32::INFINITY), (7, f32::INFINITY), (40, 0.3)] {
+                                let (mut a, mut b) = (Vec::new(), Vec::new());
+                                let mut ha = NeighborHeap::new(&mut a, k, r2);
+                                search(&tree.view(), &q, exclude, &mut ha);
+                                ha.finish();
+                                let mut hb = NeighborHeap::new(&mut b, k, r2);
+                                search_compact(&compact, &q, exclude, &mut hb);
+                                hb.finish();
+                                assert_eq!(
+                                    a, b,
+                                    "dim {dim} {pivot:?} leaf {leaf_size} q {qi} k {k}"
+                                );
+                            }
+                            let (mut a, mut b): (Vec<Neighbor<f32>>, Vec<Neighbor<f32>>) =
+                                (Vec::new(), Vec::new());
+                            search(
+                                &tree.view(),
+                                &q,
+                                exclude,
+                                &mut WithinRadius {
+                                    out: &mut a,
+                                    sq_radius: 0.6,
+                                },
+                            );
+                            search_compact(
+                                &compact,
+                                &q,
+                                exclude,
+                                &mut WithinRadius {
+                                    out: &mut b,
+                                    sq_radius: 0.6,
+                                },
+                            );
+                            a.sort_by(|x, y| x.cmp_by_distance(y));
+                            b.sort_by(|x, y| x.cmp_by_distance(y));
+                            assert_eq!(a, b, "radius: dim {dim} {pivot:?} leaf {leaf_size} q {qi}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Every point of the tree is in exactly one leaf of the descent, the leaves in tree
+    /// order cover the points, and the smallest indices agree with the leaves'.
+    #[test]
+    fn the_descent_covers_every_point_once() {
+        for coords in clouds(3) {
+            let tree = KdTree::from_flat(&coords, 3, &BuildOptions::default()).unwrap();
+            let d = tree.descent.as_ref().unwrap();
+            let mut leaves = d.leaves.clone();
+            leaves.sort();
+            let mut next = 0;
+            for [a, b] in leaves {
+                assert_eq!(a, next);
+                assert!(b > a);
+                next = b;
+            }
+            assert_eq!(next as usize, tree.len());
+            for (s, m) in d.steps.iter().zip(&d.min_id) {
+                if s.link & 3 == DESCENT_LEAF {
+                    let [a, b] = d.leaves[(s.link >> 2) as usize];
+                    assert_eq!(*m, *tree.ids[a as usize..b as usize].iter().min().unwrap());
+                }
             }
         }
     }
