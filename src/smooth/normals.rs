@@ -132,18 +132,14 @@ fn normals_finite(
         .map(within)
         .max()
         .unwrap_or(0);
-    let degenerate = |flagged| NbhdError::Degenerate {
+    let refusal = Refusal {
         points: knn.len(),
-        largest: largest + 1,
-        flagged,
+        largest,
         epsilon: eps,
         spacing: h,
         relative,
     };
-    // what `super::check_not_degenerate` refuses, with the same message
-    if largest + 1 < 3 {
-        return Err(degenerate(0));
-    }
+    refusal.too_few()?;
     report(0.5, Stage::Outputs)?;
     // in the caller's order: the rows are read in the order the table stores them, and the
     // neighbours' reads, independent of one another, overlap (measured faster than the tree's
@@ -168,10 +164,7 @@ fn normals_finite(
             }
         })
         .collect();
-    let flagged = estimates.iter().filter(|e| e.flags != 0).count();
-    if flagged == estimates.len() {
-        return Err(degenerate(flagged));
-    }
+    refusal.all_flagged(&estimates)?;
     report(0.6, Stage::Outputs)?;
     if options.orientation == Orientation::Unoriented {
         report(1.0, Stage::Done)?;
@@ -215,6 +208,47 @@ struct RowSummary {
     farthest: f64,
     /// Number of neighbours.
     len: u32,
+}
+
+/// What `super::check_not_degenerate` refuses, with the same message: no neighbourhood reaches
+/// 3 points, or every estimate is flagged.
+struct Refusal {
+    points: usize,
+    /// The most neighbours any point has within ε.
+    largest: usize,
+    epsilon: f64,
+    spacing: f64,
+    relative: bool,
+}
+
+impl Refusal {
+    fn error(&self, flagged: usize) -> NbhdError {
+        NbhdError::Degenerate {
+            points: self.points,
+            largest: self.largest + 1,
+            flagged,
+            epsilon: self.epsilon,
+            spacing: self.spacing,
+            relative: self.relative,
+        }
+    }
+
+    /// No neighbourhood reaches 3 points (the point and two neighbours).
+    fn too_few(&self) -> Result<()> {
+        if self.largest + 1 < 3 {
+            return Err(self.error(0));
+        }
+        Ok(())
+    }
+
+    /// Every estimate is flagged.
+    fn all_flagged(&self, estimates: &[NormalEstimate]) -> Result<()> {
+        let flagged = estimates.iter().filter(|e| e.flags != 0).count();
+        if flagged == estimates.len() {
+            return Err(self.error(flagged));
+        }
+        Ok(())
+    }
 }
 
 /// The estimate of the point `p` from its neighbours `row` (caller indices, nearest first),
@@ -348,22 +382,15 @@ fn normals_in_tree_order(
         estimates[i] = e;
         largest = largest.max(within);
     }
-    let degenerate = |flagged| NbhdError::Degenerate {
+    let refusal = Refusal {
         points: n,
-        largest: largest + 1,
-        flagged,
+        largest,
         epsilon: eps,
         spacing: h,
         relative,
     };
-    // what `super::check_not_degenerate` refuses, with the same message
-    if largest + 1 < 3 {
-        return Err(degenerate(0));
-    }
-    let flagged = estimates.iter().filter(|e| e.flags != 0).count();
-    if flagged == estimates.len() {
-        return Err(degenerate(flagged));
-    }
+    refusal.too_few()?;
+    refusal.all_flagged(&estimates)?;
     report(1.0, Stage::Done)?;
     Ok(Some(NormalsResult {
         normals: estimates,
