@@ -20,7 +20,6 @@ use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
 use crate::points::PointsView;
 use crate::query::{Neighbor, Neighborhood, Query};
-use crate::table::NeighborTable;
 use crate::tree::{BuildOptions, KdTree};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -112,7 +111,7 @@ fn normals_finite(
         }
     }
     let (knn, _) = knn_rows(points, neighbors, options.k)?;
-    let h = mean_nearest(&knn);
+    let h = mean_nearest((0..knn.len()).map(|i| knn.sq_dists_of(i).first().copied()));
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
@@ -151,17 +150,9 @@ fn normals_finite(
         .enumerate()
         .with_min_len(1024)
         .map_init(Vec::new, |buf: &mut Vec<DVec3>, (i, normal)| {
-            let p = points[i];
-            let row = &knn.indices_of(i)[..within(i)];
-            buf.clear();
-            buf.extend(row.iter().map(|&j| points[j as usize] - p));
-            let (n, values, flags) = normal_of(buf.iter().copied(), buf.len() + 1);
-            *normal = n;
-            NormalEstimate {
-                normal: n,
-                surface_variation: quotient_of(values),
-                flags,
-            }
+            let e = estimate_of(points, points[i], &knn.indices_of(i)[..within(i)], buf);
+            *normal = e.normal;
+            e
         })
         .collect();
     refusal.all_flagged(&estimates)?;
@@ -202,8 +193,8 @@ const BLOCK: usize = 8192;
 /// What the fused pass keeps of one point's row besides its estimate.
 #[derive(Clone, Copy, Debug, Default)]
 struct RowSummary {
-    /// Squared distance to the nearest neighbour (NaN for an empty row).
-    nearest: f64,
+    /// Squared distance to the nearest neighbour (`None` for an empty row).
+    nearest: Option<f64>,
     /// Squared distance to the farthest (the last) neighbour, 0 for an empty row.
     farthest: f64,
     /// Number of neighbours.
@@ -306,7 +297,7 @@ fn normals_in_tree_order(
                     let i = order[start + r] as usize;
                     let d = table.sq_dists_of(r);
                     let summary = RowSummary {
-                        nearest: d.first().copied().unwrap_or(f64::NAN),
+                        nearest: d.first().copied(),
                         farthest: d.last().copied().unwrap_or(0.0),
                         len: d.len() as u32,
                     };
@@ -321,21 +312,10 @@ fn normals_in_tree_order(
         },
     )?;
     // caller order: the position of every caller index, then a parallel gather
-    let mut position = vec![0u32; n];
-    for (pos, &i) in order.iter().enumerate() {
-        position[i as usize] = pos as u32;
-    }
+    let position = super::positions_of(order);
     let summary = |i: usize| in_tree[position[i] as usize].1;
-    // the mean nearest-neighbour spacing, summed in caller order as `mean_nearest`
-    let (mut sum, mut count) = (0.0, 0usize);
-    for i in 0..n {
-        let d = summary(i).nearest;
-        if !d.is_nan() {
-            sum += d.sqrt();
-            count += 1;
-        }
-    }
-    let h = if count == 0 { 0.0 } else { sum / count as f64 };
+    // the mean nearest-neighbour spacing, summed in caller order as on the table path
+    let h = mean_nearest((0..n).map(|i| summary(i).nearest));
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
@@ -399,15 +379,15 @@ fn normals_in_tree_order(
     }))
 }
 
-/// The mean distance of a point to its nearest other point, `geometry::neighbors::mean_spacing_of`'s value bit
-/// for bit (the same sum in index order) without its median.
-fn mean_nearest(knn: &NeighborTable<f64>) -> f64 {
+/// The mean distance of a point to its nearest other point from each point's squared distance
+/// to it, in index order (`None` for a point without neighbours):
+/// `geometry::neighbors::mean_spacing_of`'s value bit for bit (the same sum in index order)
+/// without its median.
+fn mean_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
-    for i in 0..knn.len() {
-        if let Some(&d) = knn.sq_dists_of(i).first() {
-            sum += d.sqrt();
-            n += 1;
-        }
+    for d in nearest_sq_dist.flatten() {
+        sum += d.sqrt();
+        n += 1;
     }
     if n == 0 {
         0.0
@@ -432,12 +412,18 @@ mod tests {
         let full = analyze(&s.points, &opts).unwrap();
         for threads in [1, 2] {
             let got = estimate_normals(&s.points, &SmoothOptions { threads, ..opts }).unwrap();
-            assert_eq!((got.spacing, got.epsilon), (full.spacing, full.epsilon));
-            for (g, f) in got.normals.iter().zip(&full.outputs) {
-                assert_eq!(g.normal, f.normal);
-                assert_eq!(g.surface_variation, f.covariance_quotient);
-                assert_eq!(g.flags, f.normal_flags);
-            }
+            assert_same_as_analysis(&got, &full);
+        }
+    }
+
+    /// `got` holds the spacing, ε and per-point normals, surface variations and flags of `full`.
+    fn assert_same_as_analysis(got: &NormalsResult, full: &crate::smooth::SmoothResult) {
+        assert_eq!((got.spacing, got.epsilon), (full.spacing, full.epsilon));
+        assert_eq!(got.normals.len(), full.outputs.len());
+        for (g, f) in got.normals.iter().zip(&full.outputs) {
+            assert_eq!(g.normal, f.normal);
+            assert_eq!(g.surface_variation, f.covariance_quotient);
+            assert_eq!(g.flags, f.normal_flags);
         }
     }
 
@@ -446,7 +432,10 @@ mod tests {
         let torus = Torus::new(1.0, 0.4);
         let s = sample(&torus, 3000, 7);
         let table = neighbor_table(&s.points, Neighborhood::Knn { k: 15 }, true).unwrap();
-        assert_eq!(mean_nearest(&table), mean_spacing_of(&table));
+        assert_eq!(
+            mean_nearest((0..table.len()).map(|i| table.sq_dists_of(i).first().copied())),
+            mean_spacing_of(&table)
+        );
         for (orientation, eps) in [
             (Orientation::Unoriented, Length::Relative(6.0)),
             // the fused tree-order path with rows cut by ε (searched again)
@@ -463,12 +452,7 @@ mod tests {
             let full = analyze(&s.points, &opts).unwrap();
             for threads in [1, 2, 3] {
                 let got = estimate_normals(&s.points, &SmoothOptions { threads, ..opts }).unwrap();
-                assert_eq!((got.spacing, got.epsilon), (full.spacing, full.epsilon));
-                for (g, f) in got.normals.iter().zip(&full.outputs) {
-                    assert_eq!(g.normal, f.normal);
-                    assert_eq!(g.surface_variation, f.covariance_quotient);
-                    assert_eq!(g.flags, f.normal_flags);
-                }
+                assert_same_as_analysis(&got, &full);
             }
             if orientation == Orientation::Propagate {
                 // consistent on the closed torus: every normal outward
