@@ -189,12 +189,18 @@ impl Rows {
 
 /// Insertion sort of one row by `(sq_dist, caller's index)`: rows are nearly sorted already
 /// (points move a fraction of a spacing per iteration), so this is about one pass.
+/// The caller's indices are looked up only where two distances tie.
 fn sort_row(index: &mut [u32], sq_dist: &mut [f64], order: &[u32]) {
     let before = |a: (f64, u32), b: (f64, u32)| {
-        crate::query::order::precedes((a.0, order[a.1 as usize]), (b.0, order[b.1 as usize]))
+        a.0 < b.0 || (a.0 == b.0 && order[a.1 as usize] < order[b.1 as usize])
     };
-    for i in 1..index.len() {
+    let n = index.len().min(sq_dist.len());
+    for i in 1..n {
         let item = (sq_dist[i], index[i]);
+        // in place already (the common case): nothing to move
+        if !before(item, (sq_dist[i - 1], index[i - 1])) {
+            continue;
+        }
         let mut j = i;
         while j > 0 && before(item, (sq_dist[j - 1], index[j - 1])) {
             sq_dist[j] = sq_dist[j - 1];
