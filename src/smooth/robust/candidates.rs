@@ -139,6 +139,10 @@ fn keep_nearest(points: &[DVec3], o: u32, ids: &[u32], width: usize, out: &mut V
     // nearly sorted already (the f32 order): an insertion sort is about one pass
     for i in 1..out.len() {
         let item = out[i];
+        // in place already (the common case): nothing to move
+        if !crate::query::order::precedes(item, out[i - 1]) {
+            continue;
+        }
         let mut j = i;
         while j > 0 && crate::query::order::precedes(item, out[j - 1]) {
             out[j] = out[j - 1];
