@@ -14,10 +14,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let set_name = args.get(1).map_or("torus-77k", String::as_str);
     let m: usize = args.get(2).and_then(|r| r.parse().ok()).unwrap_or(1000);
-    let set = Dataset::ALL
-        .into_iter()
-        .find(|s| s.name() == set_name)
-        .expect("unknown set");
+    let set: Dataset = set_name.parse().unwrap_or_else(|e| panic!("{e}"));
     let pts: Vec<[f32; 3]> = set.points().iter().map(|p| p.map(|c| c as f32)).collect();
     let view = PointsView::from_rows(&pts).unwrap();
     let tree = KdTree::<f32>::build(&view, &BuildOptions::default()).unwrap();

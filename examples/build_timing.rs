@@ -12,10 +12,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let name = args.get(1).map_or("torus-77k", String::as_str);
     let reps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(31);
-    let set = Dataset::ALL
-        .into_iter()
-        .find(|s| s.name() == name)
-        .expect("unknown set");
+    let set: Dataset = name.parse().unwrap_or_else(|e| panic!("{e}"));
     let pts: Vec<[f32; 3]> = set.points().iter().map(|p| p.map(|c| c as f32)).collect();
     let view = PointsView::from_rows(&pts).unwrap();
     let (mut ours, mut peer) = (Vec::new(), Vec::new());

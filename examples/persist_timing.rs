@@ -69,10 +69,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let name = args.get(1).map_or("torus-1M", String::as_str);
     let reps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(7);
-    let set = Dataset::ALL
-        .into_iter()
-        .find(|s| s.name() == name)
-        .expect("unknown set");
+    let set: Dataset = name.parse().unwrap_or_else(|e| panic!("{e}"));
     let pts: Vec<[f64; 3]> = set.points();
     let view = PointsView::from_rows(&pts).unwrap();
     match args.get(3).map(String::as_str) {

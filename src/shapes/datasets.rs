@@ -44,6 +44,12 @@ impl Dataset {
         }
     }
 
+    /// The set named `name` (as [`Dataset::name`] spells it), if there is one; `"x".parse()`
+    /// does the same with an error that lists the names.
+    pub fn from_name(name: &str) -> Option<Dataset> {
+        Dataset::ALL.into_iter().find(|d| d.name() == name)
+    }
+
     /// The points, in a random (scan-like) order.
     pub fn points(self) -> Vec<[f64; 3]> {
         let torus = Torus::new(1.0, 0.35);
@@ -74,5 +80,51 @@ impl Dataset {
                 pts
             }
         }
+    }
+}
+
+/// A name that is no [`Dataset`]'s; its message lists the names.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownDataset(pub String);
+
+impl std::fmt::Display for UnknownDataset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let known: Vec<&str> = Dataset::ALL.iter().map(|d| d.name()).collect();
+        write!(
+            f,
+            "'{}' is not a benchmark set ({})",
+            self.0,
+            known.join(", ")
+        )
+    }
+}
+
+impl std::error::Error for UnknownDataset {}
+
+impl std::str::FromStr for Dataset {
+    type Err = UnknownDataset;
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        Dataset::from_name(name).ok_or_else(|| UnknownDataset(name.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_name_parses_back_and_an_unknown_one_lists_them() {
+        for d in Dataset::ALL {
+            assert_eq!(d.name().parse::<Dataset>(), Ok(d));
+            assert_eq!(Dataset::from_name(d.name()), Some(d));
+        }
+        let e = "torus-78k".parse::<Dataset>().unwrap_err();
+        assert_eq!(e, UnknownDataset("torus-78k".into()));
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with("'torus-78k' is not a benchmark set ("),
+            "{msg}"
+        );
+        assert!(Dataset::ALL.iter().all(|d| msg.contains(d.name())), "{msg}");
     }
 }

@@ -275,7 +275,7 @@ fn load_sets(names: &[String], quick: bool) -> Result<Vec<BenchSet>> {
                     sets.push(generated(d));
                 }
             }
-        } else if let Some(d) = Dataset::ALL.into_iter().find(|d| d.name() == name) {
+        } else if let Some(d) = Dataset::from_name(name) {
             if quick && d.len_hint() > QUICK_MAX_POINTS {
                 return Err(format!(
                     "--quick runs small sets only (at most {QUICK_MAX_POINTS} points); {name} is not"
