@@ -349,16 +349,7 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                         *dj = d2;
                         mask |= ((d2 <= bound) as u32) << j;
                     }
-                    while mask != 0 {
-                        let j = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        // The index (another cache line) is read only for a candidate within
-                        // the bound.
-                        let id = ids[j];
-                        if id != excluded {
-                            out.offer(id, d[j]);
-                        }
-                    }
+                    out.offer_block(ids, &d, mask, excluded);
                 }
                 break;
             }
@@ -397,7 +388,7 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::query::result_set::WithinRadius;
+    use crate::query::result_set::{Key32, KnnRow, RowEntry, WithinRadius};
     use crate::query::{Neighbor, NeighborHeap};
     use crate::tree::{BuildOptions, KdTree, PivotPolicy};
 
@@ -470,6 +461,22 @@ mod tests {
                                 assert_eq!(
                                     a, b,
                                     "dim {dim} {pivot:?} leaf {leaf_size} q {qi} k {k}"
+                                );
+                                // The single query's sorted row of packed keys (its first
+                                // leaf taken as one sorted block) keeps the same.
+                                let mut keys = vec![Key32::default(); k];
+                                let mut row = KnnRow::new(&mut keys[..], r2);
+                                search_compact(&compact, &q, exclude, &mut row);
+                                let c: Vec<Neighbor<f32>> = row
+                                    .held()
+                                    .map(|e| {
+                                        let (sq_dist, index) = e.pair();
+                                        Neighbor { index, sq_dist }
+                                    })
+                                    .collect();
+                                assert_eq!(
+                                    a, c,
+                                    "row: dim {dim} {pivot:?} leaf {leaf_size} q {qi} k {k}"
                                 );
                             }
                             let (mut a, mut b): (Vec<Neighbor<f32>>, Vec<Neighbor<f32>>) =
