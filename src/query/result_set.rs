@@ -6,7 +6,8 @@
 //!
 //! - [`NeighborHeap`] (`src/query/heap.rs`): the k nearest within a radius, any `k`;
 //! - [`SortedRow`]: the same for small `k`, kept sorted by insertion;
-//! - [`KnnRow`]: the same for one single `f32` query, sorted by branch-free insertion;
+//! - [`KnnRow`]: the same for one single `f32` query, sorted by insertion (its first leaf
+//!   as one sorted block);
 //! - [`WithinRadius`]: every point within a radius.
 //!
 //! All of them order by `(sq_dist, index)` (`src/query/order.rs`).
@@ -210,7 +211,8 @@ const LONG_ROW: usize = 24;
 /// of a set that is not yet full (caller indices are below `u32::MAX`), so the worst key is
 /// always the last entry and no count is tested on every offer (cachegrind's branch simulation
 /// counted that test among the most mispredicted of a single query, README "Single queries, the
-/// floor, and copies of a point"); an insertion shifts the entries that follow the candidate.
+/// floor, and copies of a point"); an insertion shifts the entries that follow the candidate,
+/// and the query's first leaf enters as one sorted block ([`ResultSet::offer_block`]).
 pub(crate) struct KnnRow<'a> {
     /// Storage of `k ≥ 1` entries, sorted, sentinels last.
     row: &'a mut [Key32],

@@ -333,9 +333,10 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 let points = &tree.coords[a * D..b * D];
                 let ids = &tree.ids[a..b];
                 // Blocks of up to 32 points: every squared distance first (no branch), the
-                // points within the bound as bits of a mask, then offers of those only. The
-                // test per point was the search's most mispredicted branch (README "Single
-                // queries, the floor, and copies of a point").
+                // points within the bound as bits of a mask, then offers of those only, as one
+                // block (a single query's empty row sorts its first block at once). The test
+                // per point was the search's most mispredicted branch (README "Single queries,
+                // the floor, and copies of a point").
                 for (points, ids) in points.chunks(32 * D).zip(ids.chunks(32)) {
                     let bound = out.bound();
                     let mut d = [T::ZERO; 32];
