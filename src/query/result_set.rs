@@ -6,7 +6,8 @@
 //!
 //! - [`NeighborHeap`] (`src/query/heap.rs`): the k nearest within a radius, any `k`;
 //! - [`SortedRow`]: the same for small `k`, kept sorted by insertion;
-//! - [`KnnRow`]: the same for one single `f32` query, sorted by branch-free insertion;
+//! - [`KnnRow`]: the same for one single `f32` query, sorted by insertion (its first leaf
+//!   as one sorted block);
 //! - [`WithinRadius`]: every point within a radius.
 //!
 //! All of them order by `(sq_dist, index)` (`src/query/order.rs`).
@@ -37,6 +38,22 @@ pub(crate) trait ResultSet<T: Scalar> {
     fn offer(&mut self, index: u32, sq_dist: T) {
         if order::precedes((sq_dist, index), self.worst_key()) {
             self.insert(index, sq_dist);
+        }
+    }
+
+    /// Offers the points of a leaf block (`src/tree/search.rs`): for every bit `j` of `mask`
+    /// (set where `sq_dists[j]` is within [`Self::bound`] at the block's start), the point
+    /// `ids[j]` at `sq_dists[j]` unless its index is `excluded`, in increasing `j`.
+    #[inline(always)]
+    fn offer_block(&mut self, ids: &[u32], sq_dists: &[T], mut mask: u32, excluded: u32) {
+        while mask != 0 {
+            let j = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            // The index (another cache line) is read only for a candidate within the bound.
+            let id = ids[j];
+            if id != excluded {
+                self.offer(id, sq_dists[j]);
+            }
         }
     }
 }
@@ -194,7 +211,8 @@ const LONG_ROW: usize = 24;
 /// of a set that is not yet full (caller indices are below `u32::MAX`), so the worst key is
 /// always the last entry and no count is tested on every offer (cachegrind's branch simulation
 /// counted that test among the most mispredicted of a single query, README "Single queries, the
-/// floor, and copies of a point"); an insertion shifts the entries that follow the candidate.
+/// floor, and copies of a point"); an insertion shifts the entries that follow the candidate,
+/// and the query's first leaf enters as one sorted block ([`ResultSet::offer_block`]).
 pub(crate) struct KnnRow<'a> {
     /// Storage of `k ≥ 1` entries, sorted, sentinels last.
     row: &'a mut [Key32],
@@ -238,6 +256,42 @@ impl<T: Scalar> ResultSet<T> for KnnRow<'_> {
     fn offer(&mut self, index: u32, sq_dist: T) {
         if order::key32(sq_dist, index) < self.row[self.row.len() - 1].0 {
             <Self as ResultSet<T>>::insert(self, index, sq_dist);
+        }
+    }
+
+    /// An empty row (the query's first leaf) takes the block's candidates at once: their keys
+    /// sorted (a branch-light small sort) and the first `k` copied in, instead of one insertion
+    /// each. Most of a single query's insertions come from its first leaf (every point of it is
+    /// within the sentinel bound), each shifting the sentinels behind it; the kept keys are the
+    /// same `k` smallest, so the row, its bound and all later pruning are unchanged.
+    #[inline(always)]
+    fn offer_block(&mut self, ids: &[u32], sq_dists: &[T], mut mask: u32, excluded: u32) {
+        if self.row[0].0 as u32 != u32::MAX {
+            while mask != 0 {
+                let j = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let id = ids[j];
+                if id != excluded {
+                    <Self as ResultSet<T>>::offer(self, id, sq_dists[j]);
+                }
+            }
+            return;
+        }
+        // Every candidate within the bound precedes the sentinel `(sq_radius, u32::MAX)`.
+        let mut keys = [0u64; 32];
+        let mut n = 0;
+        while mask != 0 {
+            let j = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let id = ids[j];
+            keys[n] = order::key32(sq_dists[j], id);
+            n += (id != excluded) as usize;
+        }
+        let keys = &mut keys[..n];
+        keys.sort_unstable();
+        let m = n.min(self.row.len());
+        for (e, &key) in self.row[..m].iter_mut().zip(&keys[..m]) {
+            *e = Key32(key);
         }
     }
 }

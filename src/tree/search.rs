@@ -333,9 +333,10 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 let points = &tree.coords[a * D..b * D];
                 let ids = &tree.ids[a..b];
                 // Blocks of up to 32 points: every squared distance first (no branch), the
-                // points within the bound as bits of a mask, then offers of those only. The
-                // test per point was the search's most mispredicted branch (README "Single
-                // queries, the floor, and copies of a point").
+                // points within the bound as bits of a mask, then offers of those only, as one
+                // block (a single query's empty row sorts its first block at once). The test
+                // per point was the search's most mispredicted branch (README "Single queries,
+                // the floor, and copies of a point").
                 for (points, ids) in points.chunks(32 * D).zip(ids.chunks(32)) {
                     let bound = out.bound();
                     let mut d = [T::ZERO; 32];
@@ -349,16 +350,7 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                         *dj = d2;
                         mask |= ((d2 <= bound) as u32) << j;
                     }
-                    while mask != 0 {
-                        let j = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        // The index (another cache line) is read only for a candidate within
-                        // the bound.
-                        let id = ids[j];
-                        if id != excluded {
-                            out.offer(id, d[j]);
-                        }
-                    }
+                    out.offer_block(ids, &d, mask, excluded);
                 }
                 break;
             }
@@ -397,7 +389,7 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::query::result_set::WithinRadius;
+    use crate::query::result_set::{Key32, KnnRow, RowEntry, WithinRadius};
     use crate::query::{Neighbor, NeighborHeap};
     use crate::tree::{BuildOptions, KdTree, PivotPolicy};
 
@@ -470,6 +462,22 @@ mod tests {
                                 assert_eq!(
                                     a, b,
                                     "dim {dim} {pivot:?} leaf {leaf_size} q {qi} k {k}"
+                                );
+                                // The single query's sorted row of packed keys (its first
+                                // leaf taken as one sorted block) keeps the same.
+                                let mut keys = vec![Key32::default(); k];
+                                let mut row = KnnRow::new(&mut keys[..], r2);
+                                search_compact(&compact, &q, exclude, &mut row);
+                                let c: Vec<Neighbor<f32>> = row
+                                    .held()
+                                    .map(|e| {
+                                        let (sq_dist, index) = e.pair();
+                                        Neighbor { index, sq_dist }
+                                    })
+                                    .collect();
+                                assert_eq!(
+                                    a, c,
+                                    "row: dim {dim} {pivot:?} leaf {leaf_size} q {qi} k {k}"
                                 );
                             }
                             let (mut a, mut b): (Vec<Neighbor<f32>>, Vec<Neighbor<f32>>) =
