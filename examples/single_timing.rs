@@ -29,10 +29,7 @@ fn main() {
     let k: usize = args.get(2).and_then(|r| r.parse().ok()).unwrap_or(10);
     let reps: usize = args.get(3).and_then(|r| r.parse().ok()).unwrap_or(1);
     let which = args.get(4).map_or("both", String::as_str);
-    let set = Dataset::ALL
-        .into_iter()
-        .find(|s| s.name() == set_name)
-        .expect("unknown set");
+    let set: Dataset = set_name.parse().unwrap_or_else(|e| panic!("{e}"));
     let pts: Vec<[f32; 3]> = set.points().iter().map(|p| p.map(|c| c as f32)).collect();
     let view = PointsView::from_rows(&pts).unwrap();
     let opts = BuildOptions {

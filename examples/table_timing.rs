@@ -20,10 +20,7 @@ fn main() {
     let set_name = args.get(1).map_or("torus-77k", String::as_str);
     let op = args.get(2).map_or("knn10", String::as_str);
     let reps: usize = args.get(3).and_then(|r| r.parse().ok()).unwrap_or(1);
-    let set = Dataset::ALL
-        .into_iter()
-        .find(|s| s.name() == set_name)
-        .expect("unknown set");
+    let set: Dataset = set_name.parse().unwrap_or_else(|e| panic!("{e}"));
     let flags = &args[args.len().min(4)..];
     let exclude_self = flags.iter().any(|f| f == "noself");
     if flags.iter().any(|f| f == "f64") {
