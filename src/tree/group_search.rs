@@ -268,8 +268,9 @@ trait RowSets<T: Scalar> {
     }
 }
 
-/// Small `k`: each row sorted by insertion in a fixed slice of `k + 1` entries of a flat buffer,
-/// so a candidate costs a short shift and the row needs no final sort. Entries `E` are
+/// `k` up to [`SORTED_MAX_K`]: each row sorted by insertion in a fixed slice of `k + 1` entries
+/// of a flat buffer, so a candidate costs a short shift and the row needs no final sort. Entries
+/// `E` are
 /// [`Neighbor`]s, or for `f32` the packed keys [`Key32`], so the insertion compares one integer
 /// instead of two floats and an index. Slot 0 of each row is a guard that no candidate precedes
 /// (`(0, 0)`: distances are never negative), so the shift stops there without testing the
@@ -294,9 +295,10 @@ impl<T: Scalar, E: RowEntry<T>> SortedRows<T, E> {
 
 /// Rows up to this `k` are kept sorted by insertion; larger ones in heaps of packed keys
 /// ([`KeyHeapRows`]) up to [`KEY_HEAP_MAX_K`], in growing heaps of neighbours beyond. Measured
-/// on the 77k torus (README "Single queries, the floor, and copies of a point"): the key heap
-/// is 7–12 % faster than sorted insertion for k = 30 and k = 52, 5–60 % slower for k ≤ 16.
-const SORTED_MAX_K: usize = 24;
+/// on the 77k torus (README "Single queries, the floor, and copies of a point", round 4): with
+/// the guard slot, sorted rows take 17 % fewer instructions than the key heaps for k = 30 and
+/// 11 % fewer for k = 52 (each point left out), and 10–20 % less time.
+const SORTED_MAX_K: usize = 64;
 
 /// Rows up to this `k` are heaps of packed keys: `GROUP · k` keys of scratch per thread.
 const KEY_HEAP_MAX_K: usize = 4096;
