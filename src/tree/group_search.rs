@@ -270,9 +270,8 @@ trait RowSets<T: Scalar> {
 
 /// `k` up to [`SORTED_MAX_K`]: each row sorted by insertion in a fixed slice of `k + 1` entries
 /// of a flat buffer, so a candidate costs a short shift and the row needs no final sort. Entries
-/// `E` are
-/// [`Neighbor`]s, or for `f32` the packed keys [`Key32`], so the insertion compares one integer
-/// instead of two floats and an index. Slot 0 of each row is a guard that no candidate precedes
+/// `E` are [`Neighbor`]s, or for `f32` the packed keys [`Key32`], so the insertion compares one
+/// integer instead of two floats and an index. Slot 0 of each row is a guard that no candidate precedes
 /// (`(0, 0)`: distances are never negative), so the shift stops there without testing the
 /// position; the row's entries are slots `1..=len`.
 struct SortedRows<T, E> {
