@@ -61,9 +61,12 @@ fn check<T: Scalar>(coords: &[T], d: usize, leaf_sizes: &[usize]) {
                     sorted: true,
                 },
                 Neighborhood::KnnRadius { k: 5, radius },
-                // rows kept in heaps of packed keys (k above 24)
+                // long rows sorted by insertion (k up to 64)
                 Neighborhood::Knn { k: 31 },
                 Neighborhood::KnnRadius { k: 40, radius },
+                // rows kept in heaps of packed keys (k above 64)
+                Neighborhood::Knn { k: 70 },
+                Neighborhood::KnnRadius { k: 90, radius },
             ];
             // Rows of every point: quadratic, so only on small sets.
             if n <= 500 {

@@ -25,7 +25,7 @@ use std::ops::Range;
 use super::node::Node;
 use super::search::TreeView;
 use crate::error::Result;
-use crate::query::result_set::{Key32, ResultSet, RowEntry, SortedRow, WithinRadius};
+use crate::query::result_set::{Key32, ResultSet, RowEntry, WithinRadius};
 use crate::query::{order, Neighbor, NeighborHeap, Neighborhood};
 use crate::scalar::{Scalar, ScalarType};
 use crate::table::{rows_in_chunks, NeighborTable, RowsChunk, CHUNK};
@@ -268,10 +268,12 @@ trait RowSets<T: Scalar> {
     }
 }
 
-/// Small `k`: each row a [`SortedRow`] in a fixed slice of a flat buffer, so a candidate costs
-/// a short shift and the row needs no final sort. Entries `E` are [`Neighbor`]s, or for `f32`
-/// the packed keys [`Key32`], so the insertion compares one integer instead of two floats and
-/// an index.
+/// `k` up to [`SORTED_MAX_K`]: each row sorted by insertion in a fixed slice of `k + 1` entries
+/// of a flat buffer, so a candidate costs a short shift and the row needs no final sort. Entries
+/// `E` are [`Neighbor`]s, or for `f32` the packed keys [`Key32`], so the insertion compares one
+/// integer instead of two floats and an index. Slot 0 of each row is a guard that no candidate precedes
+/// (`(0, 0)`: distances are never negative), so the shift stops there without testing the
+/// position; the row's entries are slots `1..=len`.
 struct SortedRows<T, E> {
     k: usize,
     sq_radius: T,
@@ -279,18 +281,30 @@ struct SortedRows<T, E> {
     buf: Vec<E>,
 }
 
+impl<T: Scalar, E: RowEntry<T>> SortedRows<T, E> {
+    fn new(k: usize, sq_radius: T) -> Self {
+        Self {
+            k,
+            sq_radius,
+            len: [0; GROUP],
+            buf: vec![E::of(0, T::ZERO); GROUP * (k + 1)],
+        }
+    }
+}
+
 /// Rows up to this `k` are kept sorted by insertion; larger ones in heaps of packed keys
 /// ([`KeyHeapRows`]) up to [`KEY_HEAP_MAX_K`], in growing heaps of neighbours beyond. Measured
-/// on the 77k torus (README "Single queries, the floor, and copies of a point"): the key heap
-/// is 7–12 % faster than sorted insertion for k = 30 and k = 52, 5–60 % slower for k ≤ 16.
-const SORTED_MAX_K: usize = 24;
+/// on the 77k torus (README "Single queries, the floor, and copies of a point", round 4): with
+/// the guard slot, sorted rows take 17 % fewer instructions than the key heaps for k = 30 and
+/// 11 % fewer for k = 52 (each point left out), and 10–20 % less time.
+const SORTED_MAX_K: usize = 64;
 
 /// Rows up to this `k` are heaps of packed keys: `GROUP · k` keys of scratch per thread.
 const KEY_HEAP_MAX_K: usize = 4096;
 
 impl<T: Scalar, E: RowEntry<T>> RowSets<T> for SortedRows<T, E> {
     type Set<'a>
-        = SortedRow<'a, T, E>
+        = NoSet
     where
         Self: 'a;
     const TIGHTENS: bool = true;
@@ -298,18 +312,42 @@ impl<T: Scalar, E: RowEntry<T>> RowSets<T> for SortedRows<T, E> {
     fn clear(&mut self, m: usize) {
         self.len[..m].fill(0);
     }
+    fn set(&mut self, _i: usize) -> NoSet {
+        NoSet
+    }
     #[inline(always)]
-    fn set(&mut self, i: usize) -> SortedRow<'_, T, E> {
+    fn insert(&mut self, i: usize, index: u32, sq_dist: T) -> (T, u32) {
         let k = self.k;
-        SortedRow {
-            row: &mut self.buf[i * k..i * k + k],
-            len: &mut self.len[i],
-            sq_radius: self.sq_radius,
+        let row = &mut self.buf[i * (k + 1)..(i + 1) * (k + 1)];
+        let cand = E::of(index, sq_dist);
+        let held = self.len[i];
+        // the slot the candidate's entry ends in; the worst entry falls off a full row
+        let mut j = if held < k {
+            self.len[i] = held + 1;
+            held + 1
+        } else {
+            k
+        };
+        // SAFETY: `1 ≤ j ≤ k < row.len()` on entry, and no candidate precedes the guard
+        // `row[0]`, so the loop leaves at `j = 1` at the latest: `j - 1` and `j` stay in
+        // `row`.
+        unsafe {
+            while cand.precedes(*row.get_unchecked(j - 1)) {
+                *row.get_unchecked_mut(j) = *row.get_unchecked(j - 1);
+                j -= 1;
+            }
+            *row.get_unchecked_mut(j) = cand;
+        }
+        if held + 1 < k {
+            (self.sq_radius, u32::MAX)
+        } else {
+            row[k].pair()
         }
     }
     fn write(&mut self, m: usize, out: &mut RowsChunk<'_, T>) {
+        let k = self.k;
         for i in 0..m {
-            let row = &self.buf[i * self.k..i * self.k + self.len[i]];
+            let row = &self.buf[i * (k + 1) + 1..i * (k + 1) + 1 + self.len[i]];
             out.push_row(row.len(), row.iter().map(|&e| e.pair()));
         }
     }
@@ -679,24 +717,14 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
                         }
                     });
                 } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
-                    let mut rows = SortedRows {
-                        k,
-                        sq_radius,
-                        len: [0; GROUP],
-                        buf: vec![Key32::default(); GROUP * k],
-                    };
+                    let mut rows = SortedRows::<T, Key32>::new(k, sq_radius);
                     run(c, &mut |s, g| {
                         if !out.is_done() {
                             s.group(g, &mut rows, &mut stack, out)
                         }
                     });
                 } else if k <= SORTED_MAX_K {
-                    let mut rows = SortedRows {
-                        k,
-                        sq_radius,
-                        len: [0; GROUP],
-                        buf: vec![Neighbor::default(); GROUP * k],
-                    };
+                    let mut rows = SortedRows::<T, Neighbor<T>>::new(k, sq_radius);
                     run(c, &mut |s, g| {
                         if !out.is_done() {
                             s.group(g, &mut rows, &mut stack, out)
