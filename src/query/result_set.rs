@@ -45,15 +45,28 @@ pub(crate) trait ResultSet<T: Scalar> {
     /// (set where `sq_dists[j]` is within [`Self::bound`] at the block's start), the point
     /// `ids[j]` at `sq_dists[j]` unless its index is `excluded`, in increasing `j`.
     #[inline(always)]
-    fn offer_block(&mut self, ids: &[u32], sq_dists: &[T], mut mask: u32, excluded: u32) {
-        while mask != 0 {
-            let j = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            // The index (another cache line) is read only for a candidate within the bound.
-            let id = ids[j];
-            if id != excluded {
-                self.offer(id, sq_dists[j]);
-            }
+    fn offer_block(&mut self, ids: &[u32], sq_dists: &[T], mask: u32, excluded: u32) {
+        offer_each(self, ids, sq_dists, mask, excluded);
+    }
+}
+
+/// [`ResultSet::offer_block`] as one [`ResultSet::offer`] per candidate: the default, and what
+/// a set that takes some blocks at once does with the others.
+#[inline(always)]
+fn offer_each<T: Scalar, R: ResultSet<T> + ?Sized>(
+    set: &mut R,
+    ids: &[u32],
+    sq_dists: &[T],
+    mut mask: u32,
+    excluded: u32,
+) {
+    while mask != 0 {
+        let j = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        // The index (another cache line) is read only for a candidate within the bound.
+        let id = ids[j];
+        if id != excluded {
+            set.offer(id, sq_dists[j]);
         }
     }
 }
@@ -267,15 +280,7 @@ impl<T: Scalar> ResultSet<T> for KnnRow<'_> {
     #[inline(always)]
     fn offer_block(&mut self, ids: &[u32], sq_dists: &[T], mut mask: u32, excluded: u32) {
         if self.row[0].0 as u32 != u32::MAX {
-            while mask != 0 {
-                let j = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let id = ids[j];
-                if id != excluded {
-                    <Self as ResultSet<T>>::offer(self, id, sq_dists[j]);
-                }
-            }
-            return;
+            return offer_each(self, ids, sq_dists, mask, excluded);
         }
         // Every candidate within the bound precedes the sentinel `(sq_radius, u32::MAX)`.
         let mut keys = [0u64; 32];
