@@ -16,11 +16,20 @@
 //! is `(b, w)`, a cell at distance exactly `b` whose smallest caller index is ≥ `w` cannot
 //! improve it. This stops duplicate-heavy sets from scanning every copy of a point.
 //!
+//! k-nearest rows up to [`SORTED_MAX_K`] take a faster path first (`group_search/gather.rs`):
+//! the group gathers every point within a guessed radius once, and each member orders its
+//! candidates within it once instead of inserting them one by one; where the guess does not
+//! settle a row, the group is searched as above. The rows are the same either way.
+//!
 //! Lower bounds are exact in floating point: the gaps, squares and sums are evaluated in the
 //! order of the point distance, and rounding is monotone, so a cell's bound never exceeds the
 //! computed squared distance of any of its points to any member.
 
+mod gather;
+
 use std::ops::Range;
+
+use gather::Gather;
 
 use super::node::Node;
 use super::search::TreeView;
@@ -259,6 +268,7 @@ trait RowSets<T: Scalar> {
     }
     /// Whether keys change as candidates arrive (k-nearest) or stay the radius (radius).
     const TIGHTENS: bool;
+
     /// Appends the first `m` rows, in `(sq_dist, index)` order where asked, to `out`.
     fn write(&mut self, m: usize, out: &mut RowsChunk<'_, T>);
     /// Appends, for every id of `self_ids`, row 0 without that id: the rows of a group of
@@ -357,6 +367,9 @@ impl<T: Scalar, E: RowEntry<T>> RowSets<T> for SortedRows<T, E> {
 /// (`src/query/order.rs`): a `u64` for `f32` ([`order::key32`]), a `u128` for any scalar
 /// ([`order::key64`]).
 trait PackedKey<T>: Copy + Ord + Default {
+    /// Whether a few keys are best sorted by rank (see `gather.rs`): for keys that SIMD
+    /// compares whole.
+    const RANKS: bool;
     /// The key of a candidate.
     fn of(index: u32, sq_dist: T) -> Self;
     /// Its `(sq_dist, index)`.
@@ -364,6 +377,7 @@ trait PackedKey<T>: Copy + Ord + Default {
 }
 
 impl<T: Scalar> PackedKey<T> for u64 {
+    const RANKS: bool = true;
     #[inline(always)]
     fn of(index: u32, sq_dist: T) -> Self {
         order::key32(sq_dist, index)
@@ -375,6 +389,7 @@ impl<T: Scalar> PackedKey<T> for u64 {
 }
 
 impl<T: Scalar> PackedKey<T> for u128 {
+    const RANKS: bool = false;
     #[inline(always)]
     fn of(index: u32, sq_dist: T) -> Self {
         order::key64(sq_dist, index)
@@ -718,16 +733,18 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
                     });
                 } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
                     let mut rows = SortedRows::<T, Key32>::new(k, sq_radius);
+                    let mut gather = Gather::<T, u64, D>::new(k);
                     run(c, &mut |s, g| {
                         if !out.is_done() {
-                            s.group(g, &mut rows, &mut stack, out)
+                            s.knn_group(g, &mut gather, &mut rows, &mut stack, out)
                         }
                     });
                 } else if k <= SORTED_MAX_K {
                     let mut rows = SortedRows::<T, Neighbor<T>>::new(k, sq_radius);
+                    let mut gather = Gather::<T, u128, D>::new(k);
                     run(c, &mut |s, g| {
                         if !out.is_done() {
-                            s.group(g, &mut rows, &mut stack, out)
+                            s.knn_group(g, &mut gather, &mut rows, &mut stack, out)
                         }
                     });
                 } else if k <= KEY_HEAP_MAX_K && T::TYPE == ScalarType::F32 {
@@ -772,7 +789,56 @@ struct Search<'a, T, const D: usize> {
     exclude_self: bool,
 }
 
+/// The members of a group: their coordinates, the ids their rows leave out (`u32::MAX` for
+/// none) and their bounding box.
+struct Members<T, const D: usize> {
+    q: [[T; D]; GROUP],
+    self_id: [u32; GROUP],
+    lo: [T; D],
+    hi: [T; D],
+}
+
 impl<T: Scalar, const D: usize> Search<'_, T, D> {
+    /// The members of the group of tree positions `g`.
+    fn members(&self, g: Range<usize>) -> Members<T, D> {
+        let tree = self.tree;
+        let mut m = Members {
+            q: [[T::ZERO; D]; GROUP],
+            self_id: [u32::MAX; GROUP],
+            lo: [T::INFINITY; D],
+            hi: [T::ZERO - T::INFINITY; D],
+        };
+        for (i, p) in g.enumerate() {
+            for j in 0..D {
+                let c = tree.coords[p * D + j];
+                m.q[i][j] = c;
+                m.lo[j] = m.lo[j].min_of(c);
+                m.hi[j] = m.hi[j].max_of(c);
+            }
+            if self.exclude_self {
+                m.self_id[i] = tree.ids[p];
+            }
+        }
+        m
+    }
+
+    /// Answers the k-nearest group of tree positions `g` from one gathered block (`gather`),
+    /// or by [`Search::group`] with the sorted rows `rows` where the gather's guess does not
+    /// settle it; appends its rows, in position order, to `out`.
+    fn knn_group<R: RowSets<T>, K: PackedKey<T>>(
+        &self,
+        g: Range<usize>,
+        gather: &mut Gather<T, K, D>,
+        rows: &mut R,
+        stack: &mut Vec<(u32, T)>,
+        out: &mut RowsChunk<'_, T>,
+    ) {
+        let mb = self.members(g.clone());
+        if !gather.group(self, &mb, g.len(), out) {
+            gather.learn(self.group_of(g, mb, rows, stack, out), self.sq_radius);
+        }
+    }
+
     /// Answers the group of tree positions `g` and appends its rows, in position order, to
     /// `out`.
     fn group<R: RowSets<T>>(
@@ -782,26 +848,31 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         stack: &mut Vec<(u32, T)>,
         out: &mut RowsChunk<'_, T>,
     ) {
+        let mb = self.members(g.clone());
+        self.group_of(g, mb, rows, stack, out);
+    }
+
+    /// [`Search::group`] of the group's members `mb`; returns the group's bound, the largest
+    /// worst distance of its rows (the search's limit where a row is not full).
+    fn group_of<R: RowSets<T>>(
+        &self,
+        g: Range<usize>,
+        mb: Members<T, D>,
+        rows: &mut R,
+        stack: &mut Vec<(u32, T)>,
+        out: &mut RowsChunk<'_, T>,
+    ) -> T {
         let (tree, boxes) = (self.tree, self.boxes);
         let m = g.len();
-        let mut q = [[T::ZERO; D]; GROUP];
-        let mut self_id = [u32::MAX; GROUP];
+        let Members {
+            q,
+            mut self_id,
+            lo: glo,
+            hi: ghi,
+        } = mb;
         // Worst admissible key of each row.
         let mut bound = [self.sq_radius; GROUP];
         let mut worst = [u32::MAX; GROUP];
-        let mut glo = [T::INFINITY; D];
-        let mut ghi = [T::ZERO - T::INFINITY; D];
-        for (i, p) in g.clone().enumerate() {
-            for j in 0..D {
-                let c = tree.coords[p * D + j];
-                q[i][j] = c;
-                glo[j] = glo[j].min_of(c);
-                ghi[j] = ghi[j].max_of(c);
-            }
-            if self.exclude_self {
-                self_id[i] = tree.ids[p];
-            }
-        }
         // Radius rows of a group of copies of one point (duplicate-heavy sets) are one row,
         // less each member itself: searched and sorted once. (`u32::MAX` excludes nothing.)
         let copies = !R::TIGHTENS && m > 1 && glo == ghi;
@@ -906,6 +977,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         } else {
             rows.write(m, out);
         }
+        gb
     }
 }
 

@@ -1,0 +1,309 @@
+//! k-nearest rows of a group from one gathered block of candidates: the grouped search's fast
+//! path for `k` up to [`super::SORTED_MAX_K`].
+//!
+//! The parent's search offers every candidate to a member's row as it is found, nearest cells
+//! first, and a row that is not yet full takes whatever comes: the first leaves fill it with
+//! points that later ones push out again (about two insertions per neighbour kept, each a
+//! shift of a sorted row whose length the branch predictor cannot guess). Here the group first
+//! *gathers* every point within a squared radius `r²` of its bounding box — one traversal with
+//! a fixed bound, the leaves' points copied into one contiguous block — and each member then
+//! computes its squared distances to the whole block in straight-line code, keeps the keys
+//! within `r²` and orders them once (by rank, without branches, when there are few).
+//!
+//! `r²` is a guess: the previous group's largest k-th squared distance with a margin (groups
+//! follow each other in tree order, so the next one lies close by and its points' k-th
+//! neighbours are about as far). A member's row is exact as soon as it holds `k` keys within
+//! `r²`: every point left out lies in a cell whose lower bound to the group's box — and so to
+//! the member — exceeds `r²` (the bounds are exact in floating point, see the parent module),
+//! so it cannot precede the k-th key. When a member falls short, or the block grows past a cap
+//! (clusters of copies of a point, where the parent's tie pruning is the right tool), the group
+//! is answered by the parent's search instead. The rows are the same either way, byte for byte:
+//! the guess only decides the speed.
+
+use super::{below_mask, box_dist, Members, PackedKey, Search, BLOCK, GROUP};
+use crate::scalar::Scalar;
+use crate::table::RowsChunk;
+
+/// The margin of the guess, on squared distances, is `1 + GUESS_SPREAD / √k`: the k-th squared
+/// distance of a point of a surface varies from point to point by about `1/√k` of itself (it
+/// counts about k points of a random sample). Measured on the 77k torus (k = 10, 15, 52; wall
+/// time, one thread): 1.5–2 take the same time within the noise, 3 is 5–10 % slower (larger
+/// blocks); a fixed margin of 1.25 left a fifth of the k = 10 groups to the parent's search.
+const GUESS_SPREAD: f64 = 2.0;
+
+/// Most candidates a group gathers, per neighbour asked for (and at least [`MIN_CAP`]): a
+/// larger block means copies of a point or a guess far too wide, and the parent's search
+/// answers the group.
+const CAP_PER_NEIGHBOUR: usize = 12;
+
+/// The smallest cap of a gathered block.
+const MIN_CAP: usize = 256;
+
+/// A member's keys are ordered by rank, without branches, up to this many (and where the keys
+/// are compared whole by SIMD, see [`PackedKey::RANKS`]): `n²` compares, four at a time.
+const RANK_MAX: usize = 32;
+
+/// More keys than this many times `k` are first cut to the `k` smallest, then sorted; fewer
+/// are sorted whole.
+const SELECT_FROM: usize = 4;
+
+/// The scratch of one worker: the gathered block, the members' rows and the guess.
+pub(super) struct Gather<T, K, const D: usize> {
+    k: usize,
+    /// Squared radius of the next gather; `None` until a group of this run was answered.
+    guess: Option<T>,
+    /// Factor from a group's largest k-th squared distance to the next guess.
+    margin: T,
+    /// The gathered points by dimension, padded to a multiple of [`BLOCK`] with infinite
+    /// coordinates.
+    coords: [Vec<T>; D],
+    /// Their caller indices.
+    ids: Vec<u32>,
+    /// Each member's sorted row, `k` slots apart, and its length.
+    rows: Vec<K>,
+    len: [usize; GROUP],
+    /// Scratch: a member's keys within `r²`, and the `k + 1` slots of a ranking.
+    keys: Vec<K>,
+    ranked: Vec<K>,
+    stack: Vec<(u32, T)>,
+}
+
+impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
+    pub(super) fn new(k: usize) -> Self {
+        Self {
+            k,
+            guess: None,
+            margin: T::from_f64(1.0 + GUESS_SPREAD / (k as f64).sqrt()),
+            coords: std::array::from_fn(|_| Vec::new()),
+            ids: Vec::new(),
+            rows: vec![K::default(); GROUP * k],
+            len: [0; GROUP],
+            keys: Vec::new(),
+            ranked: vec![K::default(); k + 1],
+            stack: Vec::new(),
+        }
+    }
+
+    /// Sets the guess from a group the parent's search answered: `bound` is the largest squared
+    /// distance of its rows' last neighbours (the search's limit where a row is not full).
+    pub(super) fn learn(&mut self, bound: T, limit: T) {
+        self.guess = Some((bound * self.margin).min_of(limit));
+    }
+
+    /// Answers the group `mb` of `m` members from one gathered block and appends its rows, in
+    /// member order, to `out`; `false` (nothing written) when there is no guess yet or it does
+    /// not settle every row.
+    pub(super) fn group(
+        &mut self,
+        search: &Search<'_, T, D>,
+        mb: &Members<T, D>,
+        m: usize,
+        out: &mut RowsChunk<'_, T>,
+    ) -> bool {
+        let Some(guess) = self.guess else {
+            return false;
+        };
+        let limit = search.sq_radius;
+        let r2 = guess.min_of(limit);
+        // gathered within the search's own limit, a row of fewer than k is whole
+        let whole = r2 == limit;
+        if !self.collect(search, &mb.lo, &mb.hi, r2) {
+            return false;
+        }
+        let mut largest = T::ZERO;
+        for i in 0..m {
+            let held = self.member(i, &mb.q[i], mb.self_id[i], r2);
+            if held < self.k && !whole {
+                return false;
+            }
+            if let Some(last) = self.rows[i * self.k..i * self.k + held].last() {
+                largest = largest.max_of(last.pair().0);
+            }
+        }
+        for i in 0..m {
+            let row = &self.rows[i * self.k..i * self.k + self.len[i]];
+            out.push_row(row.len(), row.iter().map(|&e| e.pair()));
+        }
+        self.learn(largest, limit);
+        true
+    }
+
+    /// Copies every point of the leaves within `r2` of the box `glo..ghi` into the block;
+    /// `false` when more than the cap would be gathered.
+    fn collect(&mut self, search: &Search<'_, T, D>, glo: &[T; D], ghi: &[T; D], r2: T) -> bool {
+        let (tree, boxes, soa) = (search.tree, search.boxes, search.soa);
+        let cap = (CAP_PER_NEIGHBOUR * self.k).max(MIN_CAP);
+        for c in &mut self.coords {
+            c.clear();
+        }
+        self.ids.clear();
+        let stack = &mut self.stack;
+        stack.clear();
+        stack.push((0, box_dist(glo, ghi, &boxes.lo[0], &boxes.hi[0])));
+        while let Some((mut node, lb)) = stack.pop() {
+            if lb > r2 {
+                continue;
+            }
+            loop {
+                let nd = &tree.nodes[node as usize];
+                if nd.is_leaf() {
+                    let (a, b) = (nd.a as usize, nd.b as usize);
+                    if self.ids.len() + (b - a) > cap {
+                        return false;
+                    }
+                    for (j, c) in self.coords.iter_mut().enumerate() {
+                        c.extend_from_slice(&soa.v[j * soa.stride + a..j * soa.stride + b]);
+                    }
+                    self.ids.extend_from_slice(&tree.ids[a..b]);
+                    break;
+                }
+                let (l, r) = (node + 1, nd.a);
+                let lbl = box_dist(glo, ghi, &boxes.lo[l as usize], &boxes.hi[l as usize]);
+                let lbr = box_dist(glo, ghi, &boxes.lo[r as usize], &boxes.hi[r as usize]);
+                if lbr <= r2 {
+                    stack.push((r, lbr));
+                }
+                if lbl > r2 {
+                    break;
+                }
+                node = l;
+            }
+        }
+        let padded = self.ids.len().div_ceil(BLOCK) * BLOCK;
+        for c in &mut self.coords {
+            c.resize(padded, T::INFINITY);
+        }
+        true
+    }
+
+    /// Member `i`'s row: the first `k` keys, in `(sq_dist, index)` order, of the gathered points
+    /// within `r2` of `qi` other than `self_id`; returns how many it holds.
+    fn member(&mut self, i: usize, qi: &[T; D], self_id: u32, r2: T) -> usize {
+        // room for every gathered point: the keys are written without a capacity test
+        self.keys.resize(self.ids.len(), K::default());
+        let (mut n, count) = (0, self.ids.len());
+        for start in (0..count).step_by(BLOCK) {
+            let d = block_sq_dists(&self.coords, qi, start);
+            let mut hits = below_mask(&d, r2);
+            if count - start < BLOCK {
+                // the padding is infinitely far, yet within an infinite r²
+                hits &= (1 << (count - start)) - 1;
+            }
+            while hits != 0 {
+                let p = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let id = self.ids[start + p];
+                self.keys[n] = K::of(id, d[p]);
+                n += usize::from(id != self_id);
+            }
+        }
+        let k = self.k;
+        let held = n.min(k);
+        let row = &mut self.rows[i * k..i * k + held];
+        first_in_order::<T, K>(&mut self.keys[..n], &mut self.ranked, row);
+        self.len[i] = held;
+        held
+    }
+}
+
+/// The first `row.len()` of the distinct `keys` in order into `row` (`keys` may be reordered;
+/// `ranked` is scratch of at least `row.len() + 1` slots).
+fn first_in_order<T, K: PackedKey<T>>(keys: &mut [K], ranked: &mut [K], row: &mut [K]) {
+    let held = row.len();
+    if K::RANKS && keys.len() <= RANK_MAX {
+        let slots = &mut ranked[..held + 1];
+        rank(keys, slots);
+        row.copy_from_slice(&slots[..held]);
+        return;
+    }
+    if keys.len() > SELECT_FROM * held && held > 0 {
+        keys.select_nth_unstable(held - 1);
+        keys[..held].sort_unstable();
+    } else {
+        keys.sort_unstable();
+    }
+    row.copy_from_slice(&keys[..held]);
+}
+
+/// Each of the distinct `keys` into `slots` at its rank, the number of keys below it, the
+/// ranks from the last slot on sharing it: the first `slots.len() - 1` keys in order, without
+/// a data-dependent branch (a sort of a few keys mispredicts about once per key).
+fn rank<K: Copy + Ord>(keys: &[K], slots: &mut [K]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor supports AVX2 (checked just above).
+        return unsafe { rank_avx2(keys, slots) };
+    }
+    rank_portable(keys, slots)
+}
+
+/// [`rank`] compiled for AVX2: the count of smaller keys, four 64-bit compares at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn rank_avx2<K: Copy + Ord>(keys: &[K], slots: &mut [K]) {
+    rank_portable(keys, slots)
+}
+
+/// The loop of [`rank`], inlined into each instruction set's version.
+#[inline(always)]
+fn rank_portable<K: Copy + Ord>(keys: &[K], slots: &mut [K]) {
+    let last = slots.len() - 1;
+    for &a in keys {
+        let below = keys.iter().map(|&b| usize::from(b < a)).sum::<usize>();
+        slots[below.min(last)] = a;
+    }
+}
+
+/// Squared distances from `q` to the gathered points `start..start + BLOCK`, summed over the
+/// dimensions in order as the single-query search does (see [`super::Soa::block_sq_dists`]):
+/// the same bits.
+#[inline(always)]
+fn block_sq_dists<T: Scalar, const D: usize>(
+    coords: &[Vec<T>; D],
+    q: &[T; D],
+    start: usize,
+) -> [T; BLOCK] {
+    let mut d = [T::ZERO; BLOCK];
+    for (c, &qj) in coords.iter().zip(q) {
+        let c: &[T; BLOCK] = c[start..start + BLOCK].try_into().unwrap();
+        for p in 0..BLOCK {
+            let t = qj - c[p];
+            d[p] = d[p] + t * t;
+        }
+    }
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ranking gives the sorted order, whichever instruction set runs it, for every count of
+    /// keys up to [`RANK_MAX`] and rows shorter and longer than the keys.
+    #[test]
+    fn ranks_order_the_first_keys() {
+        let mut state = 99u64;
+        for n in 0..=RANK_MAX {
+            for held in [0, 1, 5, 10, 16, 40] {
+                let keys: Vec<u64> = (0..n)
+                    .map(|i| {
+                        state = state
+                            .wrapping_mul(6_364_136_223_846_793_005)
+                            .wrapping_add(1);
+                        // few distinct distances: ties broken by the index in the low bits
+                        ((state >> 60) << 32) | i as u64
+                    })
+                    .collect();
+                let mut want = keys.clone();
+                want.sort_unstable();
+                want.truncate(held);
+                let mut slots = vec![0u64; held + 1];
+                rank(&keys, &mut slots);
+                assert_eq!(&slots[..want.len()], &want[..], "n {n} held {held}");
+                let mut portable = vec![0u64; held + 1];
+                rank_portable(&keys, &mut portable);
+                assert_eq!(portable, slots);
+            }
+        }
+    }
+}
