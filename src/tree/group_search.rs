@@ -366,10 +366,7 @@ impl<T: Scalar, E: RowEntry<T>> RowSets<T> for SortedRows<T, E> {
 /// A neighbour packed into one integer key that orders as `(sq_dist, index)`
 /// (`src/query/order.rs`): a `u64` for `f32` ([`order::key32`]), a `u128` for any scalar
 /// ([`order::key64`]).
-trait PackedKey<T>: Copy + Ord + Default {
-    /// Whether a few keys are best sorted by rank (see `gather.rs`): for keys that SIMD
-    /// compares whole.
-    const RANKS: bool;
+trait PackedKey<T>: Copy + Ord + Default + gather::Rank {
     /// The key of a candidate.
     fn of(index: u32, sq_dist: T) -> Self;
     /// Its `(sq_dist, index)`.
@@ -377,7 +374,6 @@ trait PackedKey<T>: Copy + Ord + Default {
 }
 
 impl<T: Scalar> PackedKey<T> for u64 {
-    const RANKS: bool = true;
     #[inline(always)]
     fn of(index: u32, sq_dist: T) -> Self {
         order::key32(sq_dist, index)
@@ -389,7 +385,6 @@ impl<T: Scalar> PackedKey<T> for u64 {
 }
 
 impl<T: Scalar> PackedKey<T> for u128 {
-    const RANKS: bool = false;
     #[inline(always)]
     fn of(index: u32, sq_dist: T) -> Self {
         order::key64(sq_dist, index)

@@ -39,8 +39,8 @@ const CAP_PER_NEIGHBOUR: usize = 12;
 /// The smallest cap of a gathered block.
 const MIN_CAP: usize = 256;
 
-/// A member's keys are ordered by rank, without branches, up to this many (and where the keys
-/// are compared whole by SIMD, see [`PackedKey::RANKS`]): `n²` compares, four at a time.
+/// A member's keys are ordered by rank, without branches, up to this many: `n²` compares, four
+/// at a time.
 const RANK_MAX: usize = 32;
 
 /// More keys than this many times `k` are first cut to the `k` smallest, then sorted; fewer
@@ -210,7 +210,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
 /// `ranked` is scratch of at least `row.len() + 1` slots).
 fn first_in_order<T, K: PackedKey<T>>(keys: &mut [K], ranked: &mut [K], row: &mut [K]) {
     let held = row.len();
-    if K::RANKS && keys.len() <= RANK_MAX {
+    if keys.len() <= RANK_MAX {
         let slots = &mut ranked[..held + 1];
         rank(keys, slots);
         row.copy_from_slice(&slots[..held]);
@@ -228,7 +228,7 @@ fn first_in_order<T, K: PackedKey<T>>(keys: &mut [K], ranked: &mut [K], row: &mu
 /// Each of the distinct `keys` into `slots` at its rank, the number of keys below it, the
 /// ranks from the last slot on sharing it: the first `slots.len() - 1` keys in order, without
 /// a data-dependent branch (a sort of a few keys mispredicts about once per key).
-fn rank<K: Copy + Ord>(keys: &[K], slots: &mut [K]) {
+fn rank<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor supports AVX2 (checked just above).
@@ -237,20 +237,56 @@ fn rank<K: Copy + Ord>(keys: &[K], slots: &mut [K]) {
     rank_portable(keys, slots)
 }
 
-/// [`rank`] compiled for AVX2: the count of smaller keys, four 64-bit compares at a time.
+/// [`rank`] compiled for AVX2: the counts of smaller keys four 64-bit compares at a time.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn rank_avx2<K: Copy + Ord>(keys: &[K], slots: &mut [K]) {
+fn rank_avx2<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
     rank_portable(keys, slots)
 }
 
 /// The loop of [`rank`], inlined into each instruction set's version.
 #[inline(always)]
-fn rank_portable<K: Copy + Ord>(keys: &[K], slots: &mut [K]) {
+fn rank_portable<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
     let last = slots.len() - 1;
-    for &a in keys {
-        let below = keys.iter().map(|&b| usize::from(b < a)).sum::<usize>();
-        slots[below.min(last)] = a;
+    let mut below = [0u32; RANK_MAX];
+    K::count_below(keys, &mut below[..keys.len()]);
+    for (&a, &b) in keys.iter().zip(&below) {
+        slots[(b as usize).min(last)] = a;
+    }
+}
+
+/// Counting, for each key, the keys below it, in a form that vectorises.
+pub(super) trait Rank: Sized {
+    /// `below[i]` = how many of `keys` are less than `keys[i]`.
+    fn count_below(keys: &[Self], below: &mut [u32]);
+}
+
+impl Rank for u64 {
+    #[inline(always)]
+    fn count_below(keys: &[u64], below: &mut [u32]) {
+        for (c, &a) in below.iter_mut().zip(keys) {
+            *c = keys.iter().map(|&b| u32::from(b < a)).sum();
+        }
+    }
+}
+
+impl Rank for u128 {
+    /// Compared as two 64-bit halves (`(hi, lo)` in lexicographic order), which SIMD compares
+    /// where it has no 128-bit compare.
+    #[inline(always)]
+    fn count_below(keys: &[u128], below: &mut [u32]) {
+        let (mut hi, mut lo) = ([0u64; RANK_MAX], [0u64; RANK_MAX]);
+        for ((h, l), &k) in hi.iter_mut().zip(&mut lo).zip(keys) {
+            (*h, *l) = ((k >> 64) as u64, k as u64);
+        }
+        let (hi, lo) = (&hi[..keys.len()], &lo[..keys.len()]);
+        for ((c, &ha), &la) in below.iter_mut().zip(hi).zip(lo) {
+            *c = hi
+                .iter()
+                .zip(lo)
+                .map(|(&hb, &lb)| u32::from((hb < ha) | ((hb == ha) & (lb < la))))
+                .sum();
+        }
     }
 }
 
@@ -279,7 +315,7 @@ mod tests {
     use super::*;
 
     /// Ranking gives the sorted order, whichever instruction set runs it, for every count of
-    /// keys up to [`RANK_MAX`] and rows shorter and longer than the keys.
+    /// keys up to [`RANK_MAX`], rows shorter and longer than the keys, and both key widths.
     #[test]
     fn ranks_order_the_first_keys() {
         let mut state = 99u64;
@@ -294,16 +330,31 @@ mod tests {
                         ((state >> 60) << 32) | i as u64
                     })
                     .collect();
-                let mut want = keys.clone();
-                want.sort_unstable();
-                want.truncate(held);
-                let mut slots = vec![0u64; held + 1];
-                rank(&keys, &mut slots);
-                assert_eq!(&slots[..want.len()], &want[..], "n {n} held {held}");
-                let mut portable = vec![0u64; held + 1];
-                rank_portable(&keys, &mut portable);
-                assert_eq!(portable, slots);
+                check_ranks(&keys, held);
+                // wide keys: the halves tie, or differ only in the low one
+                let wide: Vec<u128> = keys
+                    .iter()
+                    .map(|&k| (u128::from(k >> 40) << 64) | u128::from(k) << 20)
+                    .collect();
+                check_ranks(&wide, held);
             }
         }
+    }
+
+    fn check_ranks<K: Copy + Ord + Default + Rank + std::fmt::Debug>(keys: &[K], held: usize) {
+        let mut want = keys.to_vec();
+        want.sort_unstable();
+        want.truncate(held);
+        let mut slots = vec![K::default(); held + 1];
+        rank(keys, &mut slots);
+        assert_eq!(
+            &slots[..want.len()],
+            &want[..],
+            "n {} held {held}",
+            keys.len()
+        );
+        let mut portable = vec![K::default(); held + 1];
+        rank_portable(keys, &mut portable);
+        assert_eq!(portable, slots);
     }
 }
