@@ -33,6 +33,7 @@ use rayon::prelude::*;
 use source::knn_rows;
 pub use source::{Neighbors, SearchMethod};
 
+mod nearest;
 mod normals;
 pub mod robust;
 pub mod source;

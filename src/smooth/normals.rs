@@ -18,9 +18,6 @@ use crate::error::{NbhdError, Result};
 use crate::geometry::normals::{normal_of, FLAG_SKIPPED};
 use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
-use crate::points::PointsView;
-use crate::query::{Neighbor, Neighborhood, Query};
-use crate::tree::{BuildOptions, KdTree};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -106,9 +103,7 @@ fn normals_finite(
     if neighbors == Neighbors::Search(SearchMethod::KdTree)
         && options.orientation == Orientation::Unoriented
     {
-        if let Some(result) = normals_in_tree_order(points, options, &mut report)? {
-            return Ok(result);
-        }
+        return normals_in_tree_order(points, options, &mut report);
     }
     let (knn, _) = knn_rows(points, neighbors, options.k)?;
     let h = mean_nearest((0..knn.len()).map(|i| knn.sq_dists_of(i).first().copied()));
@@ -258,61 +253,41 @@ fn estimate_of(points: &[DVec3], p: DVec3, row: &[u32], buf: &mut Vec<DVec3>) ->
 
 /// The unoriented normals of the call's own k-d tree search, bit for bit those of the table
 /// path of [`normals_finite`], without the table of every point: the rows come a block of
-/// consecutive tree positions at a time ([`KdTree::neighborhoods_by_blocks`]) and are consumed
-/// while in cache, in tree order, so that a block's neighbours are a few nearby points read
-/// again and again rather than points all over the caller's array. ε is known only once the
-/// spacing is (the mean over every row's nearest neighbour), so each row is consumed whole and
-/// the rows that ε cuts (rare for the default 6h; their last neighbour lies beyond ε) are
-/// searched again and consumed cut.
+/// consecutive tree positions at a time (`nearest.rs`: an `f32` search proven exact in `f64`)
+/// and are consumed while in cache, in tree order, so that a block's neighbours are a few
+/// nearby points read again and again rather than points all over the caller's array. ε is
+/// known only once the spacing is (the mean over every row's nearest neighbour), so each row
+/// is consumed whole and the rows that ε cuts (rare for the default 6h; their last neighbour
+/// lies beyond ε) are searched again and consumed cut.
 fn normals_in_tree_order(
     points: &[DVec3],
     options: &SmoothOptions,
     report: &mut dyn FnMut(f64, Stage) -> Result<()>,
-) -> Result<Option<NormalsResult>> {
+) -> Result<NormalsResult> {
     let n = points.len();
-    let tree = {
-        let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
-        KdTree::<f64>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())?
-    };
-    let order = tree.tree_order();
-    if order.len() != n {
-        // not expected (the points are finite here, so the tree holds every one): the table
-        // path then decides
-        return Ok(None);
-    }
     let k = options.k;
     // estimates and row summaries in tree order, block after block
     let mut in_tree: Vec<(NormalEstimate, RowSummary)> = Vec::with_capacity(n);
-    tree.neighborhoods_by_blocks(
-        Neighborhood::Knn { k },
-        true,
-        BLOCK,
-        &mut |positions, table| {
-            debug_assert_eq!(positions.start, in_tree.len());
-            let start = positions.start;
-            let block: Vec<(NormalEstimate, RowSummary)> = (0..positions.len())
-                .into_par_iter()
-                .with_min_len(256)
-                .map_init(Vec::new, |buf: &mut Vec<DVec3>, r| {
-                    let i = order[start + r] as usize;
-                    let d = table.sq_dists_of(r);
-                    let summary = RowSummary {
-                        nearest: d.first().copied(),
-                        farthest: d.last().copied().unwrap_or(0.0),
-                        len: d.len() as u32,
-                    };
-                    (
-                        estimate_of(points, points[i], table.indices_of(r), buf),
-                        summary,
-                    )
-                })
-                .collect();
-            in_tree.extend(block);
-            report(0.9 * positions.end as f64 / n as f64, Stage::Neighbors)
-        },
-    )?;
+    let order = super::nearest::by_blocks(points, k, BLOCK, &mut |b| {
+        debug_assert_eq!(b.positions.start, in_tree.len());
+        let block: Vec<(NormalEstimate, RowSummary)> = (0..b.positions.len())
+            .into_par_iter()
+            .with_min_len(256)
+            .map_init(Vec::new, |buf: &mut Vec<DVec3>, r| {
+                let i = b.order[b.positions.start + r] as usize;
+                let summary = RowSummary {
+                    nearest: b.nearest[r],
+                    farthest: b.farthest[r],
+                    len: b.width as u32,
+                };
+                (estimate_of(points, points[i], b.row(r), buf), summary)
+            })
+            .collect();
+        in_tree.extend(block);
+        report(0.9 * b.positions.end as f64 / n as f64, Stage::Neighbors)
+    })?;
     // caller order: the position of every caller index, then a parallel gather
-    let position = super::positions_of(order);
+    let position = super::positions_of(&order);
     let summary = |i: usize| in_tree[position[i] as usize].1;
     // the mean nearest-neighbour spacing, summed in caller order as on the table path
     let h = mean_nearest((0..n).map(|i| summary(i).nearest));
@@ -331,20 +306,18 @@ fn normals_in_tree_order(
         .with_min_len(4096)
         .filter(|&i| summary(i).farthest > e2)
         .collect();
+    let callers: Vec<u32> = cut.iter().map(|&i| i as u32).collect();
+    let rows = super::nearest::exact_rows(points, &callers, k.min(n - 1))?;
     let recomputed: Vec<(NormalEstimate, usize)> = cut
         .par_iter()
+        .zip(&rows)
         .with_min_len(64)
-        .map_init(
-            || (Vec::<Neighbor<f64>>::new(), Vec::new(), Vec::new()),
-            |(found, ids, buf), &i| {
-                tree.knn(Query::stored_excluding_self(i as u32), k, found)?;
-                let within = found.partition_point(|x| x.sq_dist <= e2);
-                ids.clear();
-                ids.extend(found[..within].iter().map(|x| x.index));
-                Ok((estimate_of(points, points[i], ids, buf), within))
-            },
-        )
-        .collect::<Result<_>>()?;
+        .map_init(Vec::new, |buf, (&i, found)| {
+            let within = found.partition_point(|x| x.sq_dist <= e2);
+            let ids: Vec<u32> = found[..within].iter().map(|x| x.index).collect();
+            (estimate_of(points, points[i], &ids, buf), within)
+        })
+        .collect();
     let mut largest = (0..n)
         .into_par_iter()
         .with_min_len(4096)
@@ -372,11 +345,11 @@ fn normals_in_tree_order(
     refusal.too_few()?;
     refusal.all_flagged(&estimates)?;
     report(1.0, Stage::Done)?;
-    Ok(Some(NormalsResult {
+    Ok(NormalsResult {
         normals: estimates,
         spacing: h,
         epsilon: eps,
-    }))
+    })
 }
 
 /// The mean distance of a point to its nearest other point from each point's squared distance
@@ -424,6 +397,24 @@ mod tests {
             assert_eq!(g.normal, f.normal);
             assert_eq!(g.surface_variation, f.covariance_quotient);
             assert_eq!(g.flags, f.normal_flags);
+        }
+    }
+
+    /// Far from the origin (coordinates large against the spacing: many rows the `f32` search
+    /// does not prove) and beyond what the `f32` search takes (rows from an `f64` search
+    /// throughout), the normals are those of the table path.
+    #[test]
+    fn far_from_the_origin_and_huge_equal_the_table_path() {
+        let s = sample(&Torus::new(1.0, 0.4), 2000, 5);
+        for (offset, scale) in [(1e6, 1.0), (0.0, 1e19)] {
+            let far: Vec<DVec3> = s.points.iter().map(|&p| p * scale + offset).collect();
+            let opts = SmoothOptions {
+                epsilon: Length::Absolute(0.2 * scale),
+                ..SmoothOptions::default()
+            };
+            let full = analyze(&far, &opts).unwrap();
+            let got = estimate_normals(&far, &opts).unwrap();
+            assert_same_as_analysis(&got, &full);
         }
     }
 

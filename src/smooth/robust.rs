@@ -75,7 +75,6 @@
 //! nine tenths of its wide neighbourhood skips the other candidates (73–98 % of the points of
 //! the analytic shapes; quality within 0.002h).
 
-mod candidates;
 mod planes;
 mod rows;
 mod step;

@@ -61,13 +61,13 @@ impl Rows {
         }
     }
 
-    /// The `k` nearest other points of every point by the k-d tree (`candidates.rs`: an `f32`
+    /// The `k` nearest other points of every point by the k-d tree (`smooth/nearest.rs`: an `f32`
     /// search proven exact in `f64`), the points stored in the tree's order (returned), and each
     /// point's squared distance to its nearest (by caller index), searched in blocks of stored
     /// points, so that no table of all rows and distances is ever held (at a million points and
     /// k = 48, 576 MB). Sorted, but not yet cut at ε (see [`Rows::cut`]).
     pub(super) fn search(points: &[DVec3], k: usize) -> Result<(Self, Vec<u32>, Vec<Option<f64>>)> {
-        let found = super::candidates::nearest_others(points, k)?;
+        let found = super::super::nearest::nearest_others(points, k)?;
         let candidates = vec![found.width as u32; points.len()];
         let len = candidates.clone();
         Ok((

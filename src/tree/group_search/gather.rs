@@ -40,8 +40,10 @@ const CAP_PER_NEIGHBOUR: usize = 12;
 const MIN_CAP: usize = 256;
 
 /// A member's keys are ordered by rank, without branches, up to this many: `n²` compares, four
-/// at a time.
-const RANK_MAX: usize = 32;
+/// at a time. Measured (CPU time, 77k torus): 24, 32 and 48 take the same time for `f32`
+/// tables, 48 is 5–10 % faster than 32 for `f64` ones (k = 15); 128 is slower than sorting
+/// for k = 52 (about 80 keys).
+const RANK_MAX: usize = 48;
 
 /// More keys than this many times `k` are first cut to the `k` smallest, then sorted; fewer
 /// are sorted whole.
