@@ -68,6 +68,9 @@ pub(crate) fn sym_eigen3_fast(a: DMat3) -> (DVec3, [DVec3; 3]) {
 /// (round-off of `λ0`)/(`λ1 − λ0`).
 const CLOSED_FORM_MIN_GAP: f64 = 1e-2;
 
+/// Upper bound on the Newton steps of [`sym_eigen3_smallest`] (about five are taken).
+const NEWTON_STEPS: usize = 100;
+
 /// Eigenvalues (ascending) and the unit eigenvector of the smallest one of the symmetric matrix
 /// `a` (read from its upper triangle), in closed form: the smallest root of the characteristic
 /// cubic of `a − (tr a/3) I` by a monotone Newton iteration, the two others from the deflated
@@ -76,69 +79,146 @@ const CLOSED_FORM_MIN_GAP: f64 = 1e-2;
 /// eigenvalues coincide; the caller then uses [`sym_eigen3_fast`]. About five times faster
 /// than the Jacobi iteration; the normal agrees with it to round-off.
 pub(crate) fn sym_eigen3_smallest(a: DMat3) -> Option<(DVec3, DVec3)> {
-    let (a00, a01, a02) = (a.x_axis.x, a.y_axis.x, a.z_axis.x);
-    let (a11, a12, a22) = (a.y_axis.y, a.z_axis.y, a.z_axis.z);
-    let q = (a00 + a11 + a22) / 3.0;
-    let (b00, b11, b22) = (a00 - q, a11 - q, a22 - q);
-    let off = a01 * a01 + a02 * a02 + a12 * a12;
-    let p2 = (b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0;
-    if !(p2 > 0.0 && p2.is_finite()) {
+    let c = Cubic::of(a);
+    if !c.solvable() {
         return None;
     }
-    let p = p2.sqrt();
-    let det = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02)
-        + a02 * (a01 * a12 - b11 * a02);
-    // the eigenvalues μ of b = a − qI are the roots of f(μ) = μ³ − 3p²μ − det b, all in
-    // [−2p, 2p]; f is concave and f(−2p) ≤ 0 left of 0, so Newton's method from −2p rises
-    // monotonically to the smallest root μ0 (no arc cosine, no cosine): stop when it no longer
-    // rises, or after a step below 1e-9 p (the error left is about step²·3|μ0|/(gap·spread),
-    // below 3e-16 p for the gaps accepted here)
-    let j2 = 3.0 * p2;
-    let mut m0 = -2.0 * p;
-    for _ in 0..100 {
-        let f = (m0 * m0 - j2) * m0 - det;
+    let mut m0 = c.start();
+    for _ in 0..NEWTON_STEPS {
+        let step = c.newton(m0);
+        if !step.rises {
+            break;
+        }
+        m0 = step.next;
+        if step.converged {
+            break;
+        }
+    }
+    c.eigen(m0)
+}
+
+/// The characteristic cubic of a symmetric 3 × 3 matrix shifted by its mean eigenvalue: the
+/// eigenvalues μ of `b = a − qI` (`q = tr a/3`) are the roots of `f(μ) = μ³ − 3p²μ − det b`,
+/// all in `[−2p, 2p]`.
+#[derive(Clone, Copy)]
+struct Cubic {
+    q: f64,
+    b00: f64,
+    b11: f64,
+    b22: f64,
+    a01: f64,
+    a02: f64,
+    a12: f64,
+    p: f64,
+    p2: f64,
+    /// `3p²`.
+    j2: f64,
+    det: f64,
+}
+
+/// One Newton step of [`Cubic::newton`].
+struct NewtonStep {
+    next: f64,
+    /// Whether the step rose (false for NaN): the iteration stops, keeping the root, when not.
+    rises: bool,
+    /// Whether the step was below `1e-9 p`: the iteration stops after taking it.
+    converged: bool,
+}
+
+impl Cubic {
+    /// The cubic of `a`, read from its upper triangle.
+    #[inline(always)]
+    fn of(a: DMat3) -> Self {
+        let (a00, a01, a02) = (a.x_axis.x, a.y_axis.x, a.z_axis.x);
+        let (a11, a12, a22) = (a.y_axis.y, a.z_axis.y, a.z_axis.z);
+        let q = (a00 + a11 + a22) / 3.0;
+        let (b00, b11, b22) = (a00 - q, a11 - q, a22 - q);
+        let off = a01 * a01 + a02 * a02 + a12 * a12;
+        let p2 = (b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0;
+        let det = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02)
+            + a02 * (a01 * a12 - b11 * a02);
+        Self {
+            q,
+            b00,
+            b11,
+            b22,
+            a01,
+            a02,
+            a12,
+            p: p2.sqrt(),
+            p2,
+            j2: 3.0 * p2,
+            det,
+        }
+    }
+
+    /// Whether the eigenvalues are finite and not all equal: `0 < p² < ∞` (false for NaN).
+    #[inline(always)]
+    fn solvable(&self) -> bool {
+        self.p2 > 0.0 && self.p2 < f64::INFINITY
+    }
+
+    /// Where the Newton iteration starts: `−2p`. `f` is concave and `f(−2p) ≤ 0` left of 0, so
+    /// Newton's method from there rises monotonically to the smallest root μ0 (no arc cosine,
+    /// no cosine): it stops when it no longer rises, or after a step below 1e-9 p (the error
+    /// left is about step²·3|μ0|/(gap·spread), below 3e-16 p for the gaps accepted here).
+    #[inline(always)]
+    fn start(&self) -> f64 {
+        -2.0 * self.p
+    }
+
+    /// The Newton step from `m0`.
+    #[inline(always)]
+    fn newton(&self, m0: f64) -> NewtonStep {
+        let j2 = self.j2;
+        let f = (m0 * m0 - j2) * m0 - self.det;
         let next = m0 - f / (3.0 * m0 * m0 - j2);
-        let rises = next > m0; // false for NaN as well
-        if !rises {
-            break;
-        }
-        let converged = next - m0 <= 1e-9 * p;
-        m0 = next;
-        if converged {
-            break;
+        NewtonStep {
+            next,
+            rises: next > m0,
+            converged: next - m0 <= 1e-9 * self.p,
         }
     }
-    // the other two roots: f(μ) = (μ − μ0)(μ² + μ0 μ + μ0² − 3p²)
-    let root = (4.0 * j2 - 3.0 * m0 * m0).max(0.0).sqrt();
-    let (m1, m2) = (0.5 * (-m0 - root), 0.5 * (root - m0));
-    let separated = m1 - m0 >= CLOSED_FORM_MIN_GAP * (m2 - m0); // false for NaN
-    if !separated {
-        return None;
+
+    /// The eigenvalues and the smallest eigenvector from the smallest root `m0`, or `None`
+    /// where [`sym_eigen3_smallest`] declines.
+    #[inline(always)]
+    fn eigen(&self, m0: f64) -> Option<(DVec3, DVec3)> {
+        let (q, b00, b11, b22) = (self.q, self.b00, self.b11, self.b22);
+        let (a01, a02, a12) = (self.a01, self.a02, self.a12);
+        // the other two roots: f(μ) = (μ − μ0)(μ² + μ0 μ + μ0² − 3p²)
+        let root = (4.0 * self.j2 - 3.0 * m0 * m0).max(0.0).sqrt();
+        let (m1, m2) = (0.5 * (-m0 - root), 0.5 * (root - m0));
+        let separated = m1 - m0 >= CLOSED_FORM_MIN_GAP * (m2 - m0); // false for NaN
+        if !separated {
+            return None;
+        }
+        let r0 = DVec3::new(b00 - m0, a01, a02);
+        let r1 = DVec3::new(a01, b11 - m0, a12);
+        let r2 = DVec3::new(a02, a12, b22 - m0);
+        let (c01, c02, c12) = (r0.cross(r1), r0.cross(r2), r1.cross(r2));
+        let (l01, l02, l12) = (
+            c01.length_squared(),
+            c02.length_squared(),
+            c12.length_squared(),
+        );
+        let (v, l) = if l01 >= l02 && l01 >= l12 {
+            (c01, l01)
+        } else if l02 >= l12 {
+            (c02, l02)
+        } else {
+            (c12, l12)
+        };
+        // the longest cross product is at least (λ1 − λ0)(λ2 − λ0)/√3 in exact arithmetic
+        let spread = m2 - m0;
+        let floor =
+            1e-6 * spread * spread * spread * spread * CLOSED_FORM_MIN_GAP * CLOSED_FORM_MIN_GAP;
+        let long = l > floor;
+        if !long {
+            return None;
+        }
+        Some((DVec3::new(q + m0, q + m1, q + m2), v / l.sqrt()))
     }
-    let r0 = DVec3::new(b00 - m0, a01, a02);
-    let r1 = DVec3::new(a01, b11 - m0, a12);
-    let r2 = DVec3::new(a02, a12, b22 - m0);
-    let (c01, c02, c12) = (r0.cross(r1), r0.cross(r2), r1.cross(r2));
-    let (l01, l02, l12) = (
-        c01.length_squared(),
-        c02.length_squared(),
-        c12.length_squared(),
-    );
-    let (v, l) = if l01 >= l02 && l01 >= l12 {
-        (c01, l01)
-    } else if l02 >= l12 {
-        (c02, l02)
-    } else {
-        (c12, l12)
-    };
-    // the longest cross product is at least (λ1 − λ0)(λ2 − λ0)/√3 in exact arithmetic
-    let spread = m2 - m0;
-    let long =
-        l > 1e-6 * spread * spread * spread * spread * CLOSED_FORM_MIN_GAP * CLOSED_FORM_MIN_GAP;
-    if !long {
-        return None;
-    }
-    Some((DVec3::new(q + m0, q + m1, q + m2), v / l.sqrt()))
 }
 
 #[cfg(test)]
