@@ -97,10 +97,72 @@ pub(crate) fn sym_eigen3_smallest(a: DMat3) -> Option<(DVec3, DVec3)> {
     c.eigen(m0)
 }
 
+/// [`sym_eigen3_smallest`] of `N` matrices at once, each lane bit for bit the scalar result:
+/// the same operations in the same order per lane (no fused multiply-add), a lane that has
+/// stopped keeps its root while the others go on, until all have stopped. The Newton iteration
+/// is a chain of dependent divisions: one solve alone waits on each division in turn, and where
+/// the callers fill a neighbourhood between two solves, nothing overlaps the wait; `N`
+/// independent chains interleaved (with AVX, four lanes' divisions in one instruction) hide it.
+pub(crate) fn sym_eigen3_smallest_lanes<const N: usize>(
+    a: &[DMat3; N],
+) -> [Option<(DVec3, DVec3)>; N] {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the processor supports AVX (checked just above).
+        return unsafe { lanes_avx(a) };
+    }
+    lanes(a)
+}
+
+/// [`sym_eigen3_smallest_lanes`] compiled for AVX: the same operations on the same lanes, so
+/// the same bits (no FMA, which would round differently).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn lanes_avx<const N: usize>(a: &[DMat3; N]) -> [Option<(DVec3, DVec3)>; N] {
+    lanes(a)
+}
+
+/// The loops of [`sym_eigen3_smallest_lanes`], inlined into each instruction set's version.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // lane `l` of several arrays at once
+fn lanes<const N: usize>(a: &[DMat3; N]) -> [Option<(DVec3, DVec3)>; N] {
+    // plain loops over the lanes (`array::from_fn` and `map` are not always inlined, and would
+    // leave their part outside this instruction set's version)
+    let mut c = [Cubic::default(); N];
+    let (mut solvable, mut m0) = ([false; N], [0.0; N]);
+    for l in 0..N {
+        c[l] = Cubic::of(a[l]);
+        solvable[l] = c[l].solvable();
+        m0[l] = c[l].start();
+    }
+    let mut active = solvable;
+    for _ in 0..NEWTON_STEPS {
+        if !active.contains(&true) {
+            break;
+        }
+        for l in 0..N {
+            let step = c[l].newton(m0[l]);
+            // the scalar loop's two exits, as masks: no rise keeps the root, a converged
+            // step keeps the new one
+            let take = active[l] && step.rises;
+            m0[l] = if take { step.next } else { m0[l] };
+            active[l] = take && !step.converged;
+        }
+    }
+    let mut solved = [None; N];
+    for l in 0..N {
+        if solvable[l] {
+            solved[l] = c[l].eigen(m0[l]);
+        }
+    }
+    solved
+}
+
 /// The characteristic cubic of a symmetric 3 × 3 matrix shifted by its mean eigenvalue: the
 /// eigenvalues μ of `b = a − qI` (`q = tr a/3`) are the roots of `f(μ) = μ³ − 3p²μ − det b`,
-/// all in `[−2p, 2p]`.
-#[derive(Clone, Copy)]
+/// all in `[−2p, 2p]`. One value per matrix, so that [`sym_eigen3_smallest`] and its lanes
+/// share every operation.
+#[derive(Clone, Copy, Default)]
 struct Cubic {
     q: f64,
     b00: f64,
@@ -291,5 +353,75 @@ mod tests {
         }
         // random matrices have close eigenvalues now and then (3,859 of 4,006 accepted)
         assert!(accepted > 3700, "{accepted}");
+    }
+
+    /// The bits of an answer of the closed form.
+    fn bits(r: Option<(DVec3, DVec3)>) -> Option<[u64; 6]> {
+        r.map(|(vals, n)| {
+            let [a, b, c] = vals.to_array();
+            let [x, y, z] = n.to_array();
+            [a, b, c, x, y, z].map(f64::to_bits)
+        })
+    }
+
+    /// Every `N` consecutive matrices of `mats` (cycled) as lanes, against the scalar solver:
+    /// the instruction set's version (AVX where the processor has it) and the portable one.
+    fn check_lanes<const N: usize>(mats: &[DMat3]) -> (usize, usize) {
+        let (mut mixed, mut declined) = (0, 0);
+        for start in 0..mats.len() {
+            let a: [DMat3; N] = std::array::from_fn(|l| mats[(start + l) % mats.len()]);
+            let (lanes, portable) = (sym_eigen3_smallest_lanes(&a), super::lanes(&a));
+            for l in 0..N {
+                let scalar = bits(sym_eigen3_smallest(a[l]));
+                assert_eq!(bits(lanes[l]), scalar, "{:?}", a[l]);
+                assert_eq!(bits(portable[l]), scalar, "{:?}", a[l]);
+            }
+            let n = lanes.iter().filter(|r| r.is_none()).count();
+            declined += n;
+            mixed += usize::from(n > 0 && n < N);
+        }
+        (mixed, declined)
+    }
+
+    #[test]
+    fn lanes_give_the_scalar_bits() {
+        let mut rng = Rng::new(3);
+        let diagonal = |x, y, z| DMat3::from_diagonal(DVec3::new(x, y, z));
+        let mut mats = vec![
+            DMat3::ZERO,
+            DMat3::IDENTITY,
+            diagonal(1.0, 1.0, 2.0),
+            diagonal(1.0, 2.0, 2.0),
+            diagonal(0.0, 1.0, 5.0),
+            diagonal(1e300, 2e300, 3e300), // p² overflows
+            diagonal(1e-300, 2e-300, 0.0), // p² underflows
+            DMat3::from_cols_array(&[1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0]),
+        ];
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for i in [0, 3, 4, 8] {
+                let mut c = diagonal(0.1, 1.0, 2.0).to_cols_array();
+                c[i] = bad;
+                mats.push(DMat3::from_cols_array(&c));
+            }
+        }
+        for _ in 0..500 {
+            let b = DMat3::from_cols_array(&std::array::from_fn(|_| rng.gaussian()));
+            // flattened like a covariance of surface points: small third axis
+            let s = DMat3::from_diagonal(DVec3::new(1.0, 0.5, 1e-3 * rng.gaussian().abs()));
+            // close smallest eigenvalues: declined, or many Newton steps
+            let t = DMat3::from_diagonal(DVec3::new(1.0, 1e-2 * rng.unit(), 1e-2 * rng.unit()));
+            mats.extend([
+                b * b.transpose(),
+                b * s * s * b.transpose(),
+                b * t * b.transpose(),
+            ]);
+            // not symmetric, not positive: only the upper triangle is read
+            mats.push(b * 1e3);
+        }
+        let (mixed, declined) = check_lanes::<4>(&mats);
+        assert!(mixed > 100 && declined > 100, "{mixed} {declined}");
+        check_lanes::<1>(&mats);
+        check_lanes::<3>(&mats);
+        check_lanes::<8>(&mats);
     }
 }
