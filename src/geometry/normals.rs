@@ -87,8 +87,8 @@ fn frame_of(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> Local
     let (m, f) = scaled_covariance(offsets, count);
     let (values, vectors) = super::eigen::sym_eigen3_fast(m);
     // the normal and the eigenvalues of the closed form where it is exact, so that a frame and
-    // [`normal_of`] agree bit for bit; the tangent vectors from the Jacobi iteration, the
-    // major one made orthogonal to that normal
+    // [`NormalCovariance::normal`] agree bit for bit; the tangent vectors from the Jacobi
+    // iteration, the major one made orthogonal to that normal
     let closed = super::eigen::sym_eigen3_smallest(m).and_then(|(values, normal)| {
         let major = (vectors[2] - normal * vectors[2].dot(normal)).try_normalize()?;
         Some((values, normal, major, normal.cross(major)))
@@ -114,22 +114,56 @@ fn scaled_covariance(offsets: impl Iterator<Item = DVec3> + Clone, count: usize)
     (covariance(offsets.map(|d| d * f), count), f)
 }
 
-/// The normal, the eigenvalues and the `FLAG_*` bits of [`local_frame`] — the same values bit
-/// for bit — without the tangent vectors: the smallest eigenvector in closed form, the Jacobi
-/// iteration only where the closed form declines (close eigenvalues, which include every
-/// flagged case). What normal estimation needs.
-#[inline]
-pub(crate) fn normal_of(
-    offsets: impl Iterator<Item = DVec3> + Clone,
+/// The covariance of a neighbourhood that normal estimation solves: eq. 2.8 in the frame scaled
+/// by [`unit_scale`], the scale and the count. Its normal, eigenvalues and `FLAG_*` bits are those
+/// of [`local_frame`] — the same values bit for bit — without the tangent vectors: the smallest
+/// eigenvector in closed form, the Jacobi iteration only where the closed form declines (close
+/// eigenvalues, which include every flagged case).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct NormalCovariance {
+    matrix: DMat3,
+    scale: f64,
     count: usize,
-) -> (DVec3, DVec3, u8) {
-    let (m, f) = scaled_covariance(offsets, count);
-    let (values, normal) = super::eigen::sym_eigen3_smallest(m).unwrap_or_else(|| {
-        let (values, vectors) = super::eigen::sym_eigen3_fast(m);
-        (values, vectors[0])
-    });
-    let (values, flags) = checked_eigenvalues(values, count);
-    (normal, values / (f * f), flags)
+}
+
+impl NormalCovariance {
+    /// The covariance of `count` points, the neighbours at `offsets` from the point.
+    #[inline]
+    pub(crate) fn of(offsets: impl Iterator<Item = DVec3> + Clone, count: usize) -> Self {
+        let (matrix, scale) = scaled_covariance(offsets, count);
+        Self {
+            matrix,
+            scale,
+            count,
+        }
+    }
+
+    /// The normal, the eigenvalues and the `FLAG_*` bits.
+    #[inline]
+    pub(crate) fn normal(&self) -> (DVec3, DVec3, u8) {
+        self.finish(super::eigen::sym_eigen3_smallest(self.matrix))
+    }
+
+    /// [`NormalCovariance::normal`] of `N` covariances at once, the same bits: the closed forms
+    /// in lanes (`eigen::sym_eigen3_smallest_lanes`), whose Newton iterations overlap where one
+    /// alone waits on its divisions. A lane without a neighbourhood is best given the default
+    /// (zero) covariance, which both solvers finish at once; its answer means nothing.
+    pub(crate) fn normals<const N: usize>(c: &[Self; N]) -> [(DVec3, DVec3, u8); N] {
+        let closed = super::eigen::sym_eigen3_smallest_lanes(&c.map(|c| c.matrix));
+        std::array::from_fn(|l| c[l].finish(closed[l]))
+    }
+
+    /// The normal, the eigenvalues and the flags from the closed form's answer `closed` (the
+    /// Jacobi iteration's where it declined).
+    #[inline]
+    fn finish(&self, closed: Option<(DVec3, DVec3)>) -> (DVec3, DVec3, u8) {
+        let (values, normal) = closed.unwrap_or_else(|| {
+            let (values, vectors) = super::eigen::sym_eigen3_fast(self.matrix);
+            (values, vectors[0])
+        });
+        let (values, flags) = checked_eigenvalues(values, self.count);
+        (normal, values / (self.scale * self.scale), flags)
+    }
 }
 
 /// The normal (eq. 2.10), the eigenvalues and the `FLAG_*` bits of the covariance of
@@ -264,6 +298,52 @@ mod tests {
             -DVec3::Z,
         ];
         assert_eq!(local_frame(DVec3::ZERO, &oct).flags, FLAG_AMBIGUOUS);
+    }
+
+    /// The solves in lanes give each neighbourhood's single solve, bit for bit: regular,
+    /// degenerate (the Jacobi iteration's) and the default lanes mixed.
+    #[test]
+    fn lanes_give_the_single_normals() {
+        let grid: Vec<DVec3> = (0..25)
+            .map(|i| DVec3::new((i % 5) as f64, (i / 5) as f64, 0.1 * (i % 3) as f64))
+            .collect();
+        let line: Vec<DVec3> = (1..6).map(|i| DVec3::splat(i as f64)).collect();
+        let oct = [
+            DVec3::X,
+            -DVec3::X,
+            DVec3::Y,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ];
+        let sets: [&[DVec3]; 7] = [
+            &grid,
+            &[DVec3::ONE; 4],
+            &[DVec3::X],
+            &line,
+            &[],
+            &oct,
+            &grid[3..9],
+        ];
+        let mut c: Vec<NormalCovariance> = sets
+            .iter()
+            .map(|s| NormalCovariance::of(s.iter().copied(), s.len() + 1))
+            .collect();
+        c.push(NormalCovariance::default());
+        let bits = |(n, v, f): (DVec3, DVec3, u8)| {
+            (
+                n.to_array().map(f64::to_bits),
+                v.to_array().map(f64::to_bits),
+                f,
+            )
+        };
+        for start in 0..c.len() {
+            let lanes: [NormalCovariance; 4] = std::array::from_fn(|l| c[(start + l) % c.len()]);
+            let normals = NormalCovariance::normals(&lanes);
+            for l in 0..4 {
+                assert_eq!(bits(normals[l]), bits(lanes[l].normal()));
+            }
+        }
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! instruction (AVX, chosen at run time) or into scalar ones. No fused multiply-add is used,
 //! which would round differently.
 
-use super::eigen::{sym_eigen3_fast, sym_eigen3_smallest};
+use super::eigen::{sym_eigen3_fast, sym_eigen3_smallest, sym_eigen3_smallest_lanes};
 use super::normals::unit_scale;
 use glam::{DMat3, DVec3};
 
@@ -38,11 +38,12 @@ pub(crate) struct Neighborhood {
     w: Vec<f64>,
 }
 
-/// The covariance plane of a neighbourhood: its unit normal (eq. 2.10) and the sum of its
-/// points (the barycentre times the count, eq. 2.3), relative to the origin.
+/// What the covariance plane of a neighbourhood is made of: the covariance matrix whose smallest
+/// eigenvector is the plane's normal (eq. 2.8–2.10, see [`Neighborhood::covariance`]) and the
+/// sum of its points (the barycentre times the count, eq. 2.3), relative to the origin.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct CovariancePlane {
-    pub(crate) normal: DVec3,
+pub(crate) struct Covariance {
+    pub(crate) matrix: DMat3,
     pub(crate) sum: DVec3,
 }
 
@@ -82,12 +83,12 @@ impl Neighborhood {
         self.len == 0
     }
 
-    /// The covariance plane of the points (eq. 2.8–2.10): the smallest eigenvector of
-    /// `Σ (d − b)(d − b)ᵀ` about the barycentre `b`, summed in a frame scaled by a power of two
-    /// (exact) so that no square under- or overflows, over the whole finite range of f64. The
-    /// eigenvector in closed form, from the Jacobi iteration where the closed form declines
-    /// (close eigenvalues). `None` for an empty neighbourhood.
-    pub(crate) fn covariance_plane(&mut self) -> Option<CovariancePlane> {
+    /// The covariance of the points (eq. 2.8) whose smallest eigenvector is their covariance
+    /// plane's normal (eq. 2.10): `Σ (d − b)(d − b)ᵀ` about the barycentre `b`, summed in a
+    /// frame scaled by a power of two (exact) so that no square under- or overflows, over the
+    /// whole finite range of f64; the eigenvector comes from [`smallest_eigenvectors`], several
+    /// neighbourhoods at a time. `None` for an empty neighbourhood.
+    pub(crate) fn covariance(&mut self) -> Option<Covariance> {
         if self.is_empty() {
             return None;
         }
@@ -98,14 +99,11 @@ impl Neighborhood {
         for (v, c) in [(&mut self.x, b.x), (&mut self.y, b.y), (&mut self.z, b.z)] {
             v[self.len..].fill(c);
         }
-        let m = lanes::centred_outer(self, b, f);
+        let matrix = lanes::centred_outer(self, b, f);
         for v in [&mut self.x, &mut self.y, &mut self.z] {
             v[self.len..].fill(0.0);
         }
-        Some(CovariancePlane {
-            normal: smallest_eigenvector(m),
-            sum,
-        })
+        Some(Covariance { matrix, sum })
     }
 
     /// Unit normal of the covariance of the points weighted by the biweight of their distance
@@ -143,15 +141,21 @@ impl WeightedSums {
     /// The smallest eigenvector of `Σ w (d − c)(d − c)ᵀ` about the weighted barycentre `c`;
     /// `None` when no point has weight.
     pub(crate) fn normal(&self) -> Option<DVec3> {
+        let normal = smallest_eigenvector(self.centred()?);
+        normal.is_finite().then_some(normal)
+    }
+
+    /// `Σ w (d − c)(d − c)ᵀ` about the weighted barycentre `c`, the matrix of
+    /// [`WeightedSums::normal`] (for [`smallest_eigenvectors`]); `None` when no point has
+    /// weight.
+    pub(crate) fn centred(&self) -> Option<DMat3> {
         let ws = self.weight;
         if !(ws > 0.0 && ws.is_finite()) {
             return None;
         }
         // Σ w (d − c)(d − c)ᵀ = Σ w d dᵀ − ws c cᵀ with c = sum/ws
         let c = self.sum / ws;
-        let m = self.outer - DMat3::from_cols(c * c.x, c * c.y, c * c.z) * ws;
-        let normal = smallest_eigenvector(m);
-        normal.is_finite().then_some(normal)
+        Some(self.outer - DMat3::from_cols(c * c.x, c * c.y, c * c.z) * ws)
     }
 }
 
@@ -159,6 +163,19 @@ impl WeightedSums {
 /// Jacobi iteration where the two smallest eigenvalues are close.
 fn smallest_eigenvector(m: DMat3) -> DVec3 {
     sym_eigen3_smallest(m).map_or_else(|| sym_eigen3_fast(m).1[0], |(_, n)| n)
+}
+
+/// [`smallest_eigenvector`] of `N` matrices at once, the same bits: the closed forms run in
+/// lanes, whose Newton iterations overlap where one alone waits on its divisions
+/// ([`sym_eigen3_smallest_lanes`]); the Jacobi iteration where a lane declines. A lane without
+/// a matrix is best given the zero matrix: the closed form declines it at once, and the Jacobi
+/// iteration has nothing to rotate.
+pub(crate) fn smallest_eigenvectors<const N: usize>(m: &[DMat3; N]) -> [DVec3; N] {
+    let closed = sym_eigen3_smallest_lanes(m);
+    std::array::from_fn(|l| match closed[l] {
+        Some((_, n)) => n,
+        None => sym_eigen3_fast(m[l]).1[0],
+    })
 }
 
 /// The lane loops. Each public function runs the AVX version of its loop where the processor
@@ -598,14 +615,48 @@ mod tests {
                 })
                 .collect();
             let mut h = neighborhood(&pts);
-            let c = h.covariance_plane().unwrap();
+            let c = h.covariance().unwrap();
+            let [normal] = smallest_eigenvectors(&[c.matrix]);
             let expect = DVec3::new(0.5, -0.25, -1.0).normalize();
-            assert!((c.normal.dot(expect).abs() - 1.0).abs() < 1e-12, "{scale}");
+            assert!((normal.dot(expect).abs() - 1.0).abs() < 1e-12, "{scale}");
             let sum: DVec3 = pts.iter().sum();
             assert!((c.sum - sum).length() <= 1e-12 * sum.length(), "{scale}");
             // the padding is zero again (the sums after it are unchanged)
             assert!(h.x[35..].iter().all(|&v| v == 0.0));
         }
-        assert!(Neighborhood::default().covariance_plane().is_none());
+        assert!(Neighborhood::default().covariance().is_none());
+    }
+
+    /// The solves in lanes against one at a time: the same bits, whether the closed form
+    /// solves a lane or declines it (the Jacobi iteration's).
+    #[test]
+    fn lanes_give_the_bits_of_single_solves() {
+        let mut rng = crate::shapes::Rng::new(4);
+        let mut matrices = vec![DMat3::ZERO];
+        for i in 0..40 {
+            let mut pts: Vec<DVec3> = (0..13)
+                .map(|_| DVec3::new(rng.gaussian(), rng.gaussian(), 0.1 * rng.gaussian()))
+                .collect();
+            if i % 4 == 0 {
+                // a needle: its two smallest eigenvalues close, which the closed form declines
+                let e = 1.0 + 1e-4 * rng.gaussian();
+                pts = vec![DVec3::X * (0.1 * e), DVec3::Y * 0.1, DVec3::Z];
+                pts.extend(pts.clone().iter().map(|&p| -p));
+            }
+            let mut h = neighborhood(&pts);
+            let sums = h.weighted_sums(DVec3::Z, 0.0, 100.0);
+            matrices.push(sums.centred().unwrap());
+            matrices.push(h.covariance().unwrap().matrix);
+        }
+        let declined = |m: &&DMat3| sym_eigen3_smallest(**m).is_none();
+        assert!(matrices.iter().filter(declined).count() > 10);
+        let bits = |n: DVec3| n.to_array().map(f64::to_bits);
+        for start in 0..matrices.len() {
+            let lanes: [DMat3; 4] = std::array::from_fn(|l| matrices[(start + l) % matrices.len()]);
+            let normals = smallest_eigenvectors(&lanes);
+            for l in 0..4 {
+                assert_eq!(bits(normals[l]), bits(smallest_eigenvector(lanes[l])));
+            }
+        }
     }
 }

@@ -15,7 +15,7 @@ use super::{
     SmoothOptions, Stage,
 };
 use crate::error::{NbhdError, Result};
-use crate::geometry::normals::{normal_of, FLAG_SKIPPED};
+use crate::geometry::normals::{NormalCovariance, FLAG_SKIPPED};
 use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
 use glam::DVec3;
@@ -139,17 +139,9 @@ fn normals_finite(
     // neighbours' reads, independent of one another, overlap (measured faster than the tree's
     // order, which reads nearby points from cache but each row from afar, on random-order
     // clouds); each offset is read once into the worker's buffer
-    let mut normals = vec![DVec3::ZERO; points.len()];
-    let mut estimates: Vec<NormalEstimate> = normals
-        .par_iter_mut()
-        .enumerate()
-        .with_min_len(1024)
-        .map_init(Vec::new, |buf: &mut Vec<DVec3>, (i, normal)| {
-            let e = estimate_of(points, points[i], &knn.indices_of(i)[..within(i)], buf);
-            *normal = e.normal;
-            e
-        })
-        .collect();
+    let mut estimates = estimates_of_rows(points, points.len(), 1024, |i| {
+        (points[i], &knn.indices_of(i)[..within(i)])
+    });
     refusal.all_flagged(&estimates)?;
     report(0.6, Stage::Outputs)?;
     if options.orientation == Orientation::Unoriented {
@@ -162,6 +154,7 @@ fn normals_finite(
     }
     // the orientation's graph is the ε-k-neighbourhoods themselves
     let table = cut_to(knn, eps);
+    let mut normals: Vec<DVec3> = estimates.iter().map(|e| e.normal).collect();
     orient_normals_with_progress(
         points,
         &table,
@@ -238,12 +231,60 @@ impl Refusal {
 }
 
 /// The estimate of the point `p` from its neighbours `row` (caller indices, nearest first),
-/// the arithmetic of the table path exactly.
-#[inline]
+/// the arithmetic of [`estimates_of_rows`] exactly.
 fn estimate_of(points: &[DVec3], p: DVec3, row: &[u32], buf: &mut Vec<DVec3>) -> NormalEstimate {
+    estimate(covariance_of(points, p, row, buf).normal())
+}
+
+/// Points whose eigen-solves run together in [`estimates_of_rows`] (as in the robust smoothing,
+/// `smooth/robust/planes.rs`).
+const BATCH: usize = 16;
+
+/// The estimates of `n` points, point `r` at `p` with its neighbours `row` (caller indices,
+/// nearest first) as `point(r)` gives them, in parallel over batches of [`BATCH`] points of at
+/// least `min_len` points a task: the covariances of a batch, then their eigenvectors together
+/// (`NormalCovariance::normals`). Each estimate depends on its own row only: [`estimate_of`]'s
+/// bits, for any number of threads.
+fn estimates_of_rows<'a>(
+    points: &[DVec3],
+    n: usize,
+    min_len: usize,
+    point: impl Fn(usize) -> (DVec3, &'a [u32]) + Sync,
+) -> Vec<NormalEstimate> {
+    let mut out = vec![NormalEstimate::skipped(); n];
+    out.par_chunks_mut(BATCH)
+        .enumerate()
+        .with_min_len(min_len.div_ceil(BATCH))
+        .for_each_init(Vec::new, |buf: &mut Vec<DVec3>, (b, batch)| {
+            // the lanes past the last point (of the last batch only) stay zero
+            let mut c = [NormalCovariance::default(); BATCH];
+            for (l, c) in c.iter_mut().enumerate().take(batch.len()) {
+                let (p, row) = point(b * BATCH + l);
+                *c = covariance_of(points, p, row, buf);
+            }
+            for (e, normal) in batch.iter_mut().zip(NormalCovariance::normals(&c)) {
+                *e = estimate(normal);
+            }
+        });
+    out
+}
+
+/// The covariance of the point `p` and its neighbours `row`, their offsets read into `buf`.
+#[inline]
+fn covariance_of(
+    points: &[DVec3],
+    p: DVec3,
+    row: &[u32],
+    buf: &mut Vec<DVec3>,
+) -> NormalCovariance {
     buf.clear();
     buf.extend(row.iter().map(|&j| points[j as usize] - p));
-    let (normal, values, flags) = normal_of(buf.iter().copied(), buf.len() + 1);
+    NormalCovariance::of(buf.iter().copied(), buf.len() + 1)
+}
+
+/// The estimate of a normal, eigenvalues and flags.
+#[inline]
+fn estimate((normal, values, flags): (DVec3, DVec3, u8)) -> NormalEstimate {
     NormalEstimate {
         normal,
         surface_variation: quotient_of(values),
@@ -270,20 +311,18 @@ fn normals_in_tree_order(
     let mut in_tree: Vec<(NormalEstimate, RowSummary)> = Vec::with_capacity(n);
     let order = super::nearest::by_blocks(points, k, BLOCK, &mut |b| {
         debug_assert_eq!(b.positions.start, in_tree.len());
-        let block: Vec<(NormalEstimate, RowSummary)> = (0..b.positions.len())
-            .into_par_iter()
-            .with_min_len(256)
-            .map_init(Vec::new, |buf: &mut Vec<DVec3>, r| {
-                let i = b.order[b.positions.start + r] as usize;
-                let summary = RowSummary {
-                    nearest: b.nearest[r],
-                    farthest: b.farthest[r],
-                    len: b.width as u32,
-                };
-                (estimate_of(points, points[i], b.row(r), buf), summary)
-            })
-            .collect();
-        in_tree.extend(block);
+        let start = b.positions.start;
+        let block = estimates_of_rows(points, b.positions.len(), 256, |r| {
+            (points[b.order[start + r] as usize], b.row(r))
+        });
+        in_tree.extend(block.into_iter().enumerate().map(|(r, e)| {
+            let summary = RowSummary {
+                nearest: b.nearest[r],
+                farthest: b.farthest[r],
+                len: b.width as u32,
+            };
+            (e, summary)
+        }));
         report(0.9 * b.positions.end as f64 / n as f64, Stage::Neighbors)
     })?;
     // caller order: the position of every caller index, then a parallel gather
