@@ -665,6 +665,16 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
         }
     }
 
+    /// Empty radius rows of a group, within `sq_radius`.
+    fn radius_rows(&self, sq_radius: T) -> RadiusRows<T> {
+        RadiusRows {
+            sq_radius,
+            sorted: self.nbhd.is_sorted(),
+            rows: (0..GROUP).map(|_| Vec::new()).collect(),
+            keys: Keys::default(),
+        }
+    }
+
     /// How many chunks the tree's positions are cut into.
     pub(crate) fn chunks(&self) -> usize {
         self.work_bounds.len() - 1
@@ -713,33 +723,37 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
             row_len,
             |c, out| {
                 let mut stack = Vec::new();
-                if k == usize::MAX {
-                    let mut rows = RadiusRows {
-                        sq_radius,
-                        sorted: self.nbhd.is_sorted(),
-                        rows: (0..GROUP).map(|_| Vec::new()).collect(),
-                        keys: Keys::default(),
-                    };
+                if k == usize::MAX && T::TYPE == ScalarType::F32 {
+                    let mut rows = self.radius_rows(sq_radius);
+                    let mut gather = Gather::<T, u64, D>::within(self.nbhd.is_sorted());
                     run(c, &mut |s, g| {
                         // a chunk whose rows did not fit takes no more (see `RowsChunk`)
                         if !out.is_done() {
-                            s.group(g, &mut rows, &mut stack, out)
+                            s.gathered_group(g, &mut gather, &mut rows, &mut stack, out)
+                        }
+                    });
+                } else if k == usize::MAX {
+                    let mut rows = self.radius_rows(sq_radius);
+                    let mut gather = Gather::<T, u128, D>::within(self.nbhd.is_sorted());
+                    run(c, &mut |s, g| {
+                        if !out.is_done() {
+                            s.gathered_group(g, &mut gather, &mut rows, &mut stack, out)
                         }
                     });
                 } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
                     let mut rows = SortedRows::<T, Key32>::new(k, sq_radius);
-                    let mut gather = Gather::<T, u64, D>::new(k);
+                    let mut gather = Gather::<T, u64, D>::nearest(k);
                     run(c, &mut |s, g| {
                         if !out.is_done() {
-                            s.knn_group(g, &mut gather, &mut rows, &mut stack, out)
+                            s.gathered_group(g, &mut gather, &mut rows, &mut stack, out)
                         }
                     });
                 } else if k <= SORTED_MAX_K {
                     let mut rows = SortedRows::<T, Neighbor<T>>::new(k, sq_radius);
-                    let mut gather = Gather::<T, u128, D>::new(k);
+                    let mut gather = Gather::<T, u128, D>::nearest(k);
                     run(c, &mut |s, g| {
                         if !out.is_done() {
-                            s.knn_group(g, &mut gather, &mut rows, &mut stack, out)
+                            s.gathered_group(g, &mut gather, &mut rows, &mut stack, out)
                         }
                     });
                 } else if k <= KEY_HEAP_MAX_K && T::TYPE == ScalarType::F32 {
@@ -817,10 +831,10 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         m
     }
 
-    /// Answers the k-nearest group of tree positions `g` from one gathered block (`gather`),
-    /// or by [`Search::group`] with the sorted rows `rows` where the gather's guess does not
-    /// settle it; appends its rows, in position order, to `out`.
-    fn knn_group<R: RowSets<T>, K: PackedKey<T>>(
+    /// Answers the group of tree positions `g` from one gathered block (`gather`), or by
+    /// [`Search::group`] with the rows `rows` where the gather does not settle it; appends its
+    /// rows, in position order, to `out`.
+    fn gathered_group<R: RowSets<T>, K: PackedKey<T>>(
         &self,
         g: Range<usize>,
         gather: &mut Gather<T, K, D>,
@@ -830,7 +844,10 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
     ) {
         let mb = self.members(g.clone());
         if !gather.group(self, &mb, g.len(), out) {
-            gather.learn(self.group_of(g, mb, rows, stack, out), self.sq_radius);
+            let bound = self.group_of(g, mb, rows, stack, out);
+            if R::TIGHTENS {
+                gather.learn(bound, self.sq_radius);
+            }
         }
     }
 

@@ -1,5 +1,5 @@
-//! k-nearest rows of a group from one gathered block of candidates: the grouped search's fast
-//! path for `k` up to [`super::SORTED_MAX_K`].
+//! Rows of a group from one gathered block of candidates: the grouped search's fast path for
+//! k-nearest rows up to [`super::SORTED_MAX_K`] and for radius rows.
 //!
 //! The parent's search offers every candidate to a member's row as it is found, nearest cells
 //! first, and a row that is not yet full takes whatever comes: the first leaves fill it with
@@ -10,7 +10,8 @@
 //! computes its squared distances to the whole block in straight-line code, keeps the keys
 //! within `r²` and orders them once (by rank, without branches, when there are few).
 //!
-//! `r²` is a guess: the previous group's largest k-th squared distance with a margin (groups
+//! Radius rows gather within the radius itself. For k-nearest rows `r²` is a guess: the
+//! previous group's largest k-th squared distance with a margin (groups
 //! follow each other in tree order, so the next one lies close by and its points' k-th
 //! neighbours are about as far). A member's row is exact as soon as it holds `k` keys within
 //! `r²`: every point left out lies in a cell whose lower bound to the group's box — and so to
@@ -51,50 +52,73 @@ const SELECT_FROM: usize = 4;
 
 /// The scratch of one worker: the gathered block, the members' rows and the guess.
 pub(super) struct Gather<T, K, const D: usize> {
+    /// Neighbours per row: `k`, or `usize::MAX` for every point within the radius.
     k: usize,
-    /// Squared radius of the next gather; `None` until a group of this run was answered.
+    /// Whether rows are ordered (radius rows may be asked for unordered).
+    sorted: bool,
+    /// Squared radius of the next gather (k-nearest rows); `None` until a group of this run
+    /// was answered.
     guess: Option<T>,
     /// Factor from a group's largest k-th squared distance to the next guess.
     margin: T,
+    /// Most points a block may hold: fixed for k-nearest rows, doubled for radius rows each
+    /// time a group's block would pass it.
+    cap: usize,
     /// The gathered points by dimension, padded to a multiple of [`BLOCK`] with infinite
     /// coordinates.
     coords: [Vec<T>; D],
     /// Their caller indices.
     ids: Vec<u32>,
-    /// Each member's sorted row, `k` slots apart, and its length.
+    /// The members' rows one after the other, member `i`'s at `starts[i]..starts[i + 1]`.
     rows: Vec<K>,
-    len: [usize; GROUP],
-    /// Scratch: a member's keys within `r²`, and the `k + 1` slots of a ranking.
+    starts: [usize; GROUP + 1],
+    /// Scratch: a member's keys within `r²`, and the slots of a ranking.
     keys: Vec<K>,
     ranked: Vec<K>,
     stack: Vec<(u32, T)>,
 }
 
 impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
-    pub(super) fn new(k: usize) -> Self {
+    /// The scratch of rows of the `k` nearest (k-nearest rows, with or without a radius).
+    pub(super) fn nearest(k: usize) -> Self {
+        let mut g = Self::new(k, true);
+        g.margin = T::from_f64(1.0 + GUESS_SPREAD / (k as f64).sqrt());
+        g.cap = (CAP_PER_NEIGHBOUR * k).max(MIN_CAP);
+        g
+    }
+
+    /// The scratch of rows of every point within the search's radius, `sorted` or not.
+    pub(super) fn within(sorted: bool) -> Self {
+        Self::new(usize::MAX, sorted)
+    }
+
+    fn new(k: usize, sorted: bool) -> Self {
         Self {
             k,
+            sorted,
             guess: None,
-            margin: T::from_f64(1.0 + GUESS_SPREAD / (k as f64).sqrt()),
+            margin: T::ZERO,
+            cap: MIN_CAP,
             coords: std::array::from_fn(|_| Vec::new()),
             ids: Vec::new(),
-            rows: vec![K::default(); GROUP * k],
-            len: [0; GROUP],
+            rows: Vec::new(),
+            starts: [0; GROUP + 1],
             keys: Vec::new(),
-            ranked: vec![K::default(); k + 1],
+            ranked: vec![K::default(); RANK_MAX + 1],
             stack: Vec::new(),
         }
     }
 
-    /// Sets the guess from a group the parent's search answered: `bound` is the largest squared
-    /// distance of its rows' last neighbours (the search's limit where a row is not full).
+    /// Sets the k-nearest guess from a group: `bound` is the largest squared distance of its
+    /// rows' last neighbours (the search's `limit` where a row is not full).
     pub(super) fn learn(&mut self, bound: T, limit: T) {
         self.guess = Some((bound * self.margin).min_of(limit));
     }
 
     /// Answers the group `mb` of `m` members from one gathered block and appends its rows, in
-    /// member order, to `out`; `false` (nothing written) when there is no guess yet or it does
-    /// not settle every row.
+    /// member order, to `out`; `false` (nothing written) when a k-nearest guess is not there yet
+    /// or does not settle every row, the block would pass its cap, or the group is copies of
+    /// one point with radius rows (the parent's search shares their row).
     pub(super) fn group(
         &mut self,
         search: &Search<'_, T, D>,
@@ -102,31 +126,46 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
         m: usize,
         out: &mut RowsChunk<'_, T>,
     ) -> bool {
-        let Some(guess) = self.guess else {
-            return false;
-        };
         let limit = search.sq_radius;
-        let r2 = guess.min_of(limit);
+        let r2 = if self.k == usize::MAX {
+            if m > 1 && mb.lo == mb.hi {
+                return false;
+            }
+            limit
+        } else {
+            match self.guess {
+                Some(guess) => guess.min_of(limit),
+                None => return false,
+            }
+        };
         // gathered within the search's own limit, a row of fewer than k is whole
         let whole = r2 == limit;
         if !self.collect(search, &mb.lo, &mb.hi, r2) {
+            if self.k == usize::MAX {
+                // radius rows hold every point the block would: room for more next time
+                self.cap = self.cap.saturating_mul(2);
+            }
             return false;
         }
+        self.rows.clear();
         let mut largest = T::ZERO;
         for i in 0..m {
-            let held = self.member(i, &mb.q[i], mb.self_id[i], r2);
+            let held = self.member(&mb.q[i], mb.self_id[i], r2);
             if held < self.k && !whole {
                 return false;
             }
-            if let Some(last) = self.rows[i * self.k..i * self.k + held].last() {
+            if let Some(last) = self.rows.last().filter(|_| held > 0) {
                 largest = largest.max_of(last.pair().0);
             }
+            self.starts[i + 1] = self.rows.len();
         }
         for i in 0..m {
-            let row = &self.rows[i * self.k..i * self.k + self.len[i]];
+            let row = &self.rows[self.starts[i]..self.starts[i + 1]];
             out.push_row(row.len(), row.iter().map(|&e| e.pair()));
         }
-        self.learn(largest, limit);
+        if self.k != usize::MAX {
+            self.learn(largest, limit);
+        }
         true
     }
 
@@ -134,7 +173,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
     /// `false` when more than the cap would be gathered.
     fn collect(&mut self, search: &Search<'_, T, D>, glo: &[T; D], ghi: &[T; D], r2: T) -> bool {
         let (tree, boxes, soa) = (search.tree, search.boxes, search.soa);
-        let cap = (CAP_PER_NEIGHBOUR * self.k).max(MIN_CAP);
+        let cap = self.cap;
         for c in &mut self.coords {
             c.clear();
         }
@@ -178,9 +217,10 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
         true
     }
 
-    /// Member `i`'s row: the first `k` keys, in `(sq_dist, index)` order, of the gathered points
-    /// within `r2` of `qi` other than `self_id`; returns how many it holds.
-    fn member(&mut self, i: usize, qi: &[T; D], self_id: u32, r2: T) -> usize {
+    /// Appends the row of the member at `qi`: the first `k` keys (all for radius rows), in
+    /// `(sq_dist, index)` order unless unsorted rows are asked for, of the gathered points within
+    /// `r2` of `qi` other than `self_id`; returns how many it holds.
+    fn member(&mut self, qi: &[T; D], self_id: u32, r2: T) -> usize {
         // room for every gathered point: the keys are written without a capacity test
         self.keys.resize(self.ids.len(), K::default());
         let (mut n, count) = (0, self.ids.len());
@@ -199,21 +239,25 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
                 n += usize::from(id != self_id);
             }
         }
-        let k = self.k;
-        let held = n.min(k);
-        let row = &mut self.rows[i * k..i * k + held];
-        first_in_order::<T, K>(&mut self.keys[..n], &mut self.ranked, row);
-        self.len[i] = held;
+        let held = n.min(self.k);
+        let at = self.rows.len();
+        self.rows.resize(at + held, K::default());
+        let (keys, row) = (&mut self.keys[..n], &mut self.rows[at..]);
+        if self.sorted {
+            first_in_order::<T, K>(keys, &mut self.ranked, row);
+        } else {
+            row.copy_from_slice(keys);
+        }
         held
     }
 }
 
 /// The first `row.len()` of the distinct `keys` in order into `row` (`keys` may be reordered;
-/// `ranked` is scratch of at least `row.len() + 1` slots).
+/// `ranked` is scratch of [`RANK_MAX`] + 1 slots).
 fn first_in_order<T, K: PackedKey<T>>(keys: &mut [K], ranked: &mut [K], row: &mut [K]) {
     let held = row.len();
     if keys.len() <= RANK_MAX {
-        let slots = &mut ranked[..held + 1];
+        let slots = &mut ranked[..keys.len().min(held) + 1];
         rank(keys, slots);
         row.copy_from_slice(&slots[..held]);
         return;
