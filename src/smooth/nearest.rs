@@ -18,9 +18,9 @@
 
 use std::ops::Range;
 
-use crate::error::Result;
+use crate::error::{NbhdError, Result};
 use crate::query::{Neighbor, Neighborhood, Query};
-use crate::table::NeighborTable;
+use crate::table::{try_zeroed, NeighborTable};
 use crate::{BuildOptions, KdTree, PointsView};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -55,7 +55,7 @@ const SEARCH_BLOCK: usize = 1 << 16;
 pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
     let n = points.len();
     let width = k.min(n.saturating_sub(1));
-    let mut index = vec![0u32; n * width];
+    let mut index = try_zeroed(entries(n, width)?, WHAT)?;
     let mut nearest = vec![None; n];
     let mut farthest = vec![0.0; n];
     let mut position: Option<Vec<u32>> = None;
@@ -81,6 +81,28 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
     })
 }
 
+/// The `k` nearest other points of every point as a table over the caller's indices (row `i`
+/// for point `i`, by `(f64 sq_dist, index)`): exactly the table of an `f64` tree. Also returns
+/// the search tree's order (the caller's index of the point stored at each position).
+pub(crate) fn nearest_table(points: &[DVec3], k: usize) -> Result<(NeighborTable<f64>, Vec<u32>)> {
+    let n = points.len();
+    let width = k.min(n.saturating_sub(1));
+    let entries = entries(n, width)?;
+    let (mut index, mut sq_dist) = (try_zeroed(entries, WHAT)?, try_zeroed(entries, WHAT)?);
+    let order = by_blocks(points, k, SEARCH_BLOCK, &mut |block| {
+        for (r, pos) in block.positions.clone().enumerate() {
+            let at = block.order[pos] as usize * width;
+            index[at..at + width].copy_from_slice(block.row(r));
+            sq_dist[at..at + width].copy_from_slice(block.dists_of(r));
+        }
+        Ok(())
+    })?;
+    let offsets = (0..=n).map(|i| i * width).collect();
+    // one row of `width` per point: the parts always fit
+    let table = NeighborTable::from_parts(offsets, index, sq_dist).unwrap_or_default();
+    Ok((table, order))
+}
+
 /// The exact rows of a run of consecutive tree positions.
 pub(super) struct Block<'a> {
     /// The caller's index of the point stored at each position (the whole tree's order).
@@ -89,8 +111,10 @@ pub(super) struct Block<'a> {
     pub(super) positions: Range<usize>,
     /// Row length: `k`, or every other point when there are fewer.
     pub(super) width: usize,
-    /// Each point's `width` nearest others, caller indices by `(f64 sq_dist, index)`.
+    /// Each point's `width` nearest others, caller indices by `(f64 sq_dist, index)`, and
+    /// their squared distances.
     pub(super) rows: &'a [u32],
+    pub(super) dists: &'a [f64],
     /// Each point's squared distance to its first and its last neighbour (`None` and 0 for
     /// an empty row).
     pub(super) nearest: &'a [Option<f64>],
@@ -101,6 +125,11 @@ impl Block<'_> {
     /// The row of the block's `r`-th point.
     pub(super) fn row(&self, r: usize) -> &[u32] {
         &self.rows[r * self.width..(r + 1) * self.width]
+    }
+
+    /// The squared distances of [`Block::row`].
+    pub(super) fn dists_of(&self, r: usize) -> &[f64] {
+        &self.dists[r * self.width..(r + 1) * self.width]
     }
 }
 
@@ -135,9 +164,11 @@ pub(super) fn by_blocks(
     let complete = searched == n.saturating_sub(1);
     // the f64 tree of the rows the proof does not settle, built when the first one needs it
     let mut exact: Option<KdTree<f64>> = None;
-    let mut rows = Vec::new();
+    let (mut rows, mut dists) = (Vec::new(), Vec::new());
     let mut each = |positions: Range<usize>, table: NeighborTable<f32>| {
-        rows.resize(positions.len() * width, 0u32);
+        let len = entries(positions.len(), width)?;
+        try_resize(&mut rows, len)?;
+        try_resize(&mut dists, len)?;
         if width == 0 {
             // no other point: empty rows, exact
             let none = vec![None; positions.len()];
@@ -147,19 +178,22 @@ pub(super) fn by_blocks(
                 positions,
                 width,
                 rows: &rows,
+                dists: &dists,
                 nearest: &none,
                 farthest: &zero,
             });
         }
         let found: Vec<(Option<f64>, f64, bool)> = rows
             .par_chunks_mut(width)
+            .zip(dists.par_chunks_mut(width))
             .enumerate()
-            .map_init(Vec::new, |scratch, (r, row)| {
+            .map_init(Vec::new, |scratch, (r, (row, dist))| {
                 let o = order[positions.start + r];
                 let last = table.sq_dists_of(r).last().map_or(0.0, |&d| f64::from(d));
                 keep_nearest(points, o, table.indices_of(r), width, scratch);
-                for (slot, &(_, j)) in row.iter_mut().zip(scratch.iter()) {
-                    *slot = j;
+                for ((slot, d), &(e, j)) in row.iter_mut().zip(dist.iter_mut()).zip(scratch.iter())
+                {
+                    (*slot, *d) = (j, e);
                 }
                 let kth = scratch.get(width.wrapping_sub(1)).map_or(0.0, |e| e.0);
                 let proven = complete || proves(kth, last, extent);
@@ -176,8 +210,9 @@ pub(super) fn by_blocks(
             };
             let searched = search_in_f64(tree, &order[positions.clone()], &unproven, width)?;
             for (&r, row) in unproven.iter().zip(searched) {
-                for (slot, nb) in rows[r * width..(r + 1) * width].iter_mut().zip(&row) {
-                    *slot = nb.index;
+                let slots = rows[r * width..(r + 1) * width].iter_mut();
+                for ((slot, d), nb) in slots.zip(&mut dists[r * width..]).zip(&row) {
+                    (*slot, *d) = (nb.index, nb.sq_dist);
                 }
                 nearest[r] = row.first().map(|nb| nb.sq_dist);
                 farthest[r] = row.last().map_or(0.0, |nb| nb.sq_dist);
@@ -188,6 +223,7 @@ pub(super) fn by_blocks(
             positions,
             width,
             rows: &rows,
+            dists: &dists,
             nearest: &nearest,
             farthest: &farthest,
         })
@@ -199,6 +235,31 @@ pub(super) fn by_blocks(
         tree.neighborhoods_by_blocks(Neighborhood::Knn { k: searched }, true, block, &mut each)?;
     }
     Ok(order)
+}
+
+/// What the rows' memory is, in an [`NbhdError::OutOfMemory`].
+const WHAT: &str = "the nearest-neighbour rows (points × min(k, points − 1) entries)";
+
+/// `rows × width` entries, or [`NbhdError::OutOfMemory`] where the count overflows.
+fn entries(rows: usize, width: usize) -> Result<usize> {
+    rows.checked_mul(width).ok_or(NbhdError::OutOfMemory {
+        what: WHAT,
+        bytes: rows as u128 * width as u128 * 12,
+    })
+}
+
+/// `v` resized to `n` elements, refused with [`NbhdError::OutOfMemory`] rather than aborting
+/// where the memory is not there.
+fn try_resize<V: Clone + Default>(v: &mut Vec<V>, n: usize) -> Result<()> {
+    if let Some(more) = n.checked_sub(v.len()).filter(|&m| m > 0) {
+        v.try_reserve_exact(more)
+            .map_err(|_| NbhdError::OutOfMemory {
+                what: WHAT,
+                bytes: n as u128 * std::mem::size_of::<V>() as u128,
+            })?;
+    }
+    v.resize(n, V::default());
+    Ok(())
 }
 
 /// Largest coordinate (relative to the centre) searched in `f32`: far below `f32::MAX`, so
@@ -216,18 +277,19 @@ fn by_blocks_in_f64(
     let order = tree.tree_order().to_vec();
     let width = k.min(points.len().saturating_sub(1));
     let mut each = |positions: Range<usize>, table: NeighborTable<f64>| {
-        let rows = table.indices().to_vec();
         let (nearest, farthest): (Vec<Option<f64>>, Vec<f64>) = (0..positions.len())
             .map(|r| {
                 let d = table.sq_dists_of(r);
                 (d.first().copied(), d.last().copied().unwrap_or(0.0))
             })
             .unzip();
+        let (_, rows, dists) = table.into_parts();
         consume(&Block {
             order: &order,
             positions,
             width,
             rows: &rows,
+            dists: &dists,
             nearest: &nearest,
             farthest: &farthest,
         })

@@ -7,7 +7,6 @@
 //! `(sq_dist, index)`), so the smoothing's result does not depend on the source.
 
 use crate::error::{NbhdError, Result};
-use crate::geometry::neighbors::neighbor_table_and_order;
 use crate::query::Neighborhood;
 use crate::table::{neighborhoods_of_all, NeighborTable};
 use crate::{BruteForce, KdTree, NeighborSearch, NonFinitePolicy, PcaSweep, PointsView};
@@ -56,7 +55,12 @@ pub(crate) fn knn_rows(
     let identity = || (0..points.len() as u32).collect::<Vec<u32>>();
     let nbhd = Neighborhood::Knn { k };
     match neighbors {
-        Neighbors::Search(SearchMethod::KdTree) => neighbor_table_and_order(points, nbhd, true),
+        Neighbors::Search(SearchMethod::KdTree) => {
+            if points.is_empty() {
+                return Err(NbhdError::EmptyInput);
+            }
+            super::nearest::nearest_table(points, k)
+        }
         Neighbors::Search(method) => {
             let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
             let view = PointsView::from_flat(&flat, 3)?;
