@@ -44,6 +44,12 @@ const CAP_PER_NEIGHBOUR: usize = 64;
 /// The smallest cap of a gathered block.
 const MIN_CAP: usize = 256;
 
+/// The largest cap of a gathered block: radius rows double their cap up to this many points
+/// (rows of more neighbours are the parent's search's, whose chunk reserves fallibly; the
+/// block's scratch — its points, a member's keys and the group's rows, up to [`GROUP`] times
+/// the block — stays a few megabytes).
+const MAX_CAP: usize = 1 << 16;
+
 /// A member's keys are ordered by rank, without branches, up to this many: `n²` compares, four
 /// at a time. Measured (CPU time, 77k torus): 24, 32 and 48 take the same time for `f32`
 /// tables, 48 is 5–10 % faster than 32 for `f64` ones (k = 15); 128 is slower than sorting
@@ -65,8 +71,8 @@ pub(super) struct Gather<T, K, const D: usize> {
     guess: Option<T>,
     /// Factor from a group's largest k-th squared distance to the next guess.
     margin: T,
-    /// Most points a block may hold: fixed for k-nearest rows, doubled for radius rows each
-    /// time a group's block would pass it.
+    /// Most points a block may hold: fixed for k-nearest rows, doubled for radius rows (up to
+    /// [`MAX_CAP`]) each time a group's block would pass it.
     cap: usize,
     /// The gathered points by dimension, padded to a multiple of [`BLOCK`] with infinite
     /// coordinates.
@@ -147,11 +153,13 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
         if !self.collect(search, &mb.lo, &mb.hi, r2) {
             if self.k == usize::MAX {
                 // radius rows hold every point the block would: room for more next time
-                self.cap = self.cap.saturating_mul(2);
+                self.cap = (self.cap * 2).min(MAX_CAP);
             }
             return false;
         }
-        self.rows.clear();
+        if !self.reserve_rows(m) {
+            return false;
+        }
         let mut largest = T::ZERO;
         for i in 0..m {
             let held = self.member(&mb.q[i], mb.self_id[i], r2);
@@ -171,6 +179,17 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
             self.learn(largest, limit);
         }
         true
+    }
+
+    /// Empties the rows and reserves, fallibly, room for `m` members' rows and one member's keys
+    /// from the gathered block; `false` when the memory is not there (the parent's search then
+    /// answers the group, and reports the failure through its chunk).
+    fn reserve_rows(&mut self, m: usize) -> bool {
+        let count = self.ids.len();
+        self.rows.clear();
+        let keys_more = count.saturating_sub(self.keys.len());
+        self.rows.try_reserve(m * count.min(self.k)).is_ok()
+            && self.keys.try_reserve(keys_more).is_ok()
     }
 
     /// Copies every point of the leaves within `r2` of the box `glo..ghi` into the block;
