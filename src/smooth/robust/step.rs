@@ -13,7 +13,8 @@ const CHORD_WIDTH: f64 = 0.25;
 
 /// The points after one step `p_i + τ Σ_j g_ij m_ij m_ijᵀ (x_j − p_i) / Σ_j g_ij` over the
 /// umbrella neighbourhoods (the first `k` of each row). Every point reads `points` only and sums
-/// its neighbours in row order: the result does not depend on the number of threads.
+/// its neighbours in a fixed order (see [`Sums`]): the result does not depend on the number of
+/// threads.
 pub(super) fn step(
     points: &[DVec3],
     rows: &Rows,
@@ -42,12 +43,22 @@ struct Kernel {
     tau: f64,
 }
 
-/// What a block of neighbours adds: the weight `g_ij`, the step term `g_ij m_ij m_ijᵀ (x_j −
-/// p_i)`, and whether the direction `m_ij` exists (`‖v‖ > 0`).
-struct Terms {
-    g: [f64; LANES],
-    term: [[f64; LANES]; 3],
-    has_direction: [bool; LANES],
+/// [`LANES`] neighbours of `p_i`, coordinate by coordinate: the offsets `e = x_j − p_i` and the
+/// normals `n_j`.
+struct Block {
+    e: [[f64; LANES]; 3],
+    n: [[f64; LANES]; 3],
+}
+
+/// The sums of a row's step, lane by lane: lane `l` adds the neighbours `l`, `l + 4`, `l + 8`,
+/// ... of the row in that order, and [`Sums::total`] adds the lanes in one fixed order. Four
+/// independent chains of additions instead of one, and the same order on every machine.
+#[derive(Default)]
+struct Sums {
+    /// `Σ g_ij m_ij m_ijᵀ (x_j − p_i)`, coordinate by coordinate.
+    step: [[f64; LANES]; 3],
+    /// `Σ g_ij`.
+    weight: [f64; LANES],
 }
 
 impl Kernel {
@@ -67,62 +78,72 @@ impl Kernel {
             // SAFETY: the processor supports AVX (checked just above).
             return unsafe { self.moved_avx(points, normals, s, row) };
         }
-        self.moved_lanes(points, normals, s, row)
+        self.moved_with(points, normals, s, row, Block::gather)
     }
 
-    /// [`Kernel::moved`] compiled for AVX: the same operations on the same lanes, so the same
-    /// bits (no FMA, which would round differently).
+    /// [`Kernel::moved`] compiled for AVX, with the neighbours gathered in AVX registers: the
+    /// same operations on the same lanes, so the same bits (no FMA, which would round
+    /// differently).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     fn moved_avx(&self, points: &[DVec3], normals: &[DVec3], s: usize, row: &[u32]) -> DVec3 {
-        self.moved_lanes(points, normals, s, row)
+        self.moved_with(points, normals, s, row, |points, normals, p, ids| {
+            // SAFETY: the processor supports AVX (this function is compiled for it and called
+            // only where it runs).
+            unsafe { Block::gather_avx(points, normals, p, ids) }
+        })
     }
 
-    /// The neighbours' terms in blocks of [`LANES`], added in row order.
+    /// The neighbours' terms in full blocks of [`LANES`] gathered by `gather`, the last block
+    /// padded with `s` itself and its padding weighted 0, summed lane by lane.
     #[inline(always)]
-    fn moved_lanes(&self, points: &[DVec3], normals: &[DVec3], s: usize, row: &[u32]) -> DVec3 {
+    fn moved_with(
+        &self,
+        points: &[DVec3],
+        normals: &[DVec3],
+        s: usize,
+        row: &[u32],
+        gather: impl Fn(&[DVec3], &[DVec3], DVec3, &[u32; LANES]) -> Block,
+    ) -> DVec3 {
+        // as long as `points`: one bounds check per neighbour covers both
+        let normals = &normals[..points.len()];
         let (p, ni) = (points[s], normals[s]);
-        let (mut acc, mut ws) = (DVec3::ZERO, 0.0);
-        for block in row.chunks(LANES) {
-            let (mut e, mut nj) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
-            for (l, &j) in block.iter().enumerate() {
-                let (x, n) = (points[j as usize] - p, normals[j as usize]);
-                (e[0][l], e[1][l], e[2][l]) = (x.x, x.y, x.z);
-                (nj[0][l], nj[1][l], nj[2][l]) = (n.x, n.y, n.z);
-            }
-            let t = self.terms(ni, &e, &nj);
-            for l in 0..block.len() {
-                // the neighbour's tangent plane far from p: another face, drops out
-                if t.g[l] == 0.0 {
-                    continue;
-                }
-                if t.has_direction[l] {
-                    acc += DVec3::new(t.term[0][l], t.term[1][l], t.term[2][l]);
-                }
-                ws += t.g[l];
-            }
+        let mut sums = Sums::default();
+        let blocks = row.chunks_exact(LANES);
+        let rest = blocks.remainder();
+        for block in blocks {
+            let ids = block.try_into().expect("a full block");
+            self.add_terms(&mut sums, ni, &gather(points, normals, p, ids), LANES);
         }
-        if ws > 0.0 {
-            p + self.tau * acc / ws
+        if !rest.is_empty() {
+            let mut ids = [s as u32; LANES];
+            ids[..rest.len()].copy_from_slice(rest);
+            self.add_terms(&mut sums, ni, &gather(points, normals, p, &ids), rest.len());
+        }
+        let (step, weight) = sums.total();
+        if weight > 0.0 {
+            p + self.tau * step / weight
         } else {
             p
         }
     }
 
-    /// The terms of the neighbours at offsets `e = x_j − p_i` with normals `n_j`, lane by lane
-    /// (each lane's arithmetic in the order of the scalar formula, so the lanes vectorise and
-    /// every instruction set gives the same bits).
+    /// Adds the terms of the first `live` lanes of `b` to `sums`: the weight `g_ij` and the
+    /// step term `g_ij m_ij m_ijᵀ (x_j − p_i)` where the direction `m_ij` exists (`‖v‖ > 0`).
+    /// Each lane's arithmetic is the same scalar formula, so the lanes vectorise and every
+    /// instruction set gives the same bits.
     #[inline(always)]
-    fn terms(&self, ni: DVec3, e: &[[f64; LANES]; 3], nj: &[[f64; LANES]; 3]) -> Terms {
-        let mut t = Terms {
-            g: [0.0; LANES],
-            term: [[0.0; LANES]; 3],
-            has_direction: [false; LANES],
-        };
+    fn add_terms(&self, sums: &mut Sums, ni: DVec3, b: &Block, live: usize) {
         for l in 0..LANES {
-            let (ex, ey, ez) = (e[0][l], e[1][l], e[2][l]);
-            let (mut nx, mut ny, mut nz) = (nj[0][l], nj[1][l], nj[2][l]);
-            let g = biweight(nx * ex + ny * ey + nz * ez, self.width);
+            let (ex, ey, ez) = (b.e[0][l], b.e[1][l], b.e[2][l]);
+            let (mut nx, mut ny, mut nz) = (b.n[0][l], b.n[1][l], b.n[2][l]);
+            // the biweight of the distance to the neighbour's tangent plane (far from p:
+            // another face, weight 0); the padding weighs 0
+            let g = if l < live {
+                biweight(nx * ex + ny * ey + nz * ez, self.width)
+            } else {
+                0.0
+            };
             let c = ni.x * nx + ni.y * ny + ni.z * nz;
             if c < 0.0 {
                 (nx, ny, nz) = (-nx, -ny, -nz);
@@ -138,14 +159,90 @@ impl Kernel {
             // m = v/‖v‖ with v = a n_i + n_j: m mᵀ e = v ⟨v, e⟩ / ‖v‖²
             let (vx, vy, vz) = (a * ni.x + nx, a * ni.y + ny, a * ni.z + nz);
             let vv = vx * vx + vy * vy + vz * vz;
-            let f = (vx * ex + vy * ey + vz * ez) / vv;
-            t.g[l] = g;
-            t.term[0][l] = g * vx * f;
-            t.term[1][l] = g * vy * f;
-            t.term[2][l] = g * vz * f;
-            t.has_direction[l] = vv > 0.0;
+            let f = if vv > 0.0 {
+                (vx * ex + vy * ey + vz * ez) / vv
+            } else {
+                0.0
+            };
+            sums.step[0][l] += g * vx * f;
+            sums.step[1][l] += g * vy * f;
+            sums.step[2][l] += g * vz * f;
+            sums.weight[l] += g;
         }
-        t
+    }
+}
+
+impl Block {
+    /// The neighbours `ids` of `p` with their normals, lane by lane.
+    #[inline(always)]
+    fn gather(points: &[DVec3], normals: &[DVec3], p: DVec3, ids: &[u32; LANES]) -> Self {
+        let mut b = Self {
+            e: [[0.0; LANES]; 3],
+            n: [[0.0; LANES]; 3],
+        };
+        for (l, &j) in ids.iter().enumerate() {
+            let (x, n) = (points[j as usize], normals[j as usize]);
+            (b.e[0][l], b.e[1][l], b.e[2][l]) = (x.x, x.y, x.z);
+            (b.n[0][l], b.n[1][l], b.n[2][l]) = (n.x, n.y, n.z);
+        }
+        for (e, p) in b.e.iter_mut().zip(p.to_array()) {
+            for x in e {
+                *x -= p;
+            }
+        }
+        b
+    }
+
+    /// [`Block::gather`] in AVX registers: the first two coordinates of two points in one
+    /// 128-bit load each, transposed by unpacking (the portable loop goes through memory, and
+    /// its four narrow stores and one wide load stall the gather).
+    ///
+    /// # Safety
+    /// The processor supports AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[inline]
+    unsafe fn gather_avx(
+        points: &[DVec3],
+        normals: &[DVec3],
+        p: DVec3,
+        ids: &[u32; LANES],
+    ) -> Self {
+        use std::arch::x86_64::*;
+        let lanes = |q: [&DVec3; LANES]| {
+            // SAFETY: each reference is to a `DVec3`, three consecutive `f64` (`repr(C)`), so
+            // `&v.x` starts two of them; AVX as the caller guarantees
+            unsafe {
+                let xy = |v: &DVec3| _mm_loadu_pd(&v.x);
+                let z = |u: &DVec3, v: &DVec3| _mm_loadh_pd(_mm_load_sd(&u.z), &v.z);
+                let pair = |lo: __m128d, hi: __m128d| {
+                    _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(lo), hi)
+                };
+                // [x0 y0 x2 y2] and [x1 y1 x3 y3]: unpacked to [x0 x1 x2 x3], [y0 y1 y2 y3]
+                let (a, b) = (pair(xy(q[0]), xy(q[2])), pair(xy(q[1]), xy(q[3])));
+                let z = pair(z(q[0], q[1]), z(q[2], q[3]));
+                [_mm256_unpacklo_pd(a, b), _mm256_unpackhi_pd(a, b), z]
+            }
+        };
+        let x = lanes(ids.map(|j| &points[j as usize]));
+        let n = lanes(ids.map(|j| &normals[j as usize]));
+        // SAFETY: `__m256d` and `[f64; 4]` are the same 32 bytes
+        let array = |v: __m256d| unsafe { std::mem::transmute::<__m256d, [f64; LANES]>(v) };
+        let p = p.to_array();
+        Self {
+            e: [0, 1, 2].map(|c| array(_mm256_sub_pd(x[c], _mm256_set1_pd(p[c])))),
+            n: n.map(array),
+        }
+    }
+}
+
+impl Sums {
+    /// The step term and the weight of the row: the lanes added in one fixed order.
+    #[inline(always)]
+    fn total(&self) -> (DVec3, f64) {
+        let sum = |l: &[f64; LANES]| (l[0] + l[1]) + (l[2] + l[3]);
+        let step = DVec3::new(sum(&self.step[0]), sum(&self.step[1]), sum(&self.step[2]));
+        (step, sum(&self.weight))
     }
 }
 
@@ -242,7 +339,8 @@ mod tests {
     }
 
     /// The step of one point as the formula reads, neighbour by neighbour in plain `DVec3`
-    /// arithmetic, against the lanes (and the AVX lanes where they run): the same bits.
+    /// arithmetic (neighbour `t` of the row into lane `t mod 4`), against the lanes of the
+    /// portable build and of the AVX build where it runs: the same bits.
     #[test]
     fn lanes_give_the_scalar_formula_bits() {
         let o = RobustOptions::default();
@@ -265,10 +363,11 @@ mod tests {
                 }
             })
             .collect();
+        // 22 neighbours: five full blocks and a block of two
         let row: Vec<u32> = (1..23).collect();
         let (p, ni) = (points[0], normals[0]);
-        let (mut acc, mut ws) = (DVec3::ZERO, 0.0);
-        for &j in &row {
+        let (mut acc, mut ws) = ([DVec3::ZERO; LANES], [0.0; LANES]);
+        for (t, &j) in row.iter().enumerate() {
             let (x, nj) = (points[j as usize], normals[j as usize]);
             let e = x - p;
             let g = biweight(nj.dot(e), width);
@@ -285,22 +384,18 @@ mod tests {
             let v = a * ni + nj;
             let vv = v.length_squared();
             if vv > 0.0 {
-                acc += g * v * (v.dot(e) / vv);
+                acc[t % LANES] += g * v * (v.dot(e) / vv);
             }
-            ws += g;
+            ws[t % LANES] += g;
         }
+        let ws = (ws[0] + ws[1]) + (ws[2] + ws[3]);
         assert!(ws > 0.0);
-        let expect = p + o.tau * acc / ws;
-        let lanes = kernel.moved_lanes(&points, &normals, 0, &row);
-        assert_eq!(
-            lanes.to_array().map(f64::to_bits),
-            expect.to_array().map(f64::to_bits)
-        );
+        let expect = p + o.tau * ((acc[0] + acc[1]) + (acc[2] + acc[3])) / ws;
+        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+        let portable = kernel.moved_with(&points, &normals, 0, &row, Block::gather);
+        assert_eq!(bits(portable), bits(expect));
         let dispatched = kernel.moved(&points, &normals, 0, &row);
-        assert_eq!(
-            dispatched.to_array().map(f64::to_bits),
-            expect.to_array().map(f64::to_bits)
-        );
+        assert_eq!(bits(dispatched), bits(expect));
     }
 
     #[test]
