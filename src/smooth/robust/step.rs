@@ -34,10 +34,12 @@ const LANES: usize = 4;
 
 /// The constants of one step.
 struct Kernel {
-    /// Width of the biweight of a neighbour's tangent-plane distance.
-    width: f64,
-    /// Square of the width within which a chord counts as perpendicular to the mean normal.
-    chord_width_sq: f64,
+    /// `1 / width` for the biweight of a neighbour's tangent-plane distance (a product per
+    /// neighbour instead of a quotient).
+    inv_width: f64,
+    /// `1 / w²` for the width `w` within which a chord counts as perpendicular to the mean
+    /// normal.
+    inv_chord_width_sq: f64,
     /// The weight of "one smooth patch" between two normals.
     patch: PatchWeight,
     tau: f64,
@@ -53,10 +55,16 @@ struct Block {
 /// The sums of a row's step, lane by lane: lane `l` adds the neighbours `l`, `l + 4`, `l + 8`,
 /// ... of the row in that order, and [`Sums::total`] adds the lanes in one fixed order. Four
 /// independent chains of additions instead of one, and the same order on every machine.
+///
+/// The step term is kept as `v ⟨v, e⟩ / ‖v‖²` with `v = a n_i + b n_j` (see
+/// [`Kernel::add_terms`]): its part along `n_i` is a multiple of the point's own normal, so only
+/// the multiple is summed.
 #[derive(Default)]
 struct Sums {
-    /// `Σ g_ij m_ij m_ijᵀ (x_j − p_i)`, coordinate by coordinate.
-    step: [[f64; LANES]; 3],
+    /// `Σ g f a`, the step's part along `n_i` in units of `n_i`.
+    along_ni: [f64; LANES],
+    /// `Σ g f b n_j`, coordinate by coordinate.
+    along_nj: [[f64; LANES]; 3],
     /// `Σ g_ij`.
     weight: [f64; LANES],
 }
@@ -64,8 +72,8 @@ struct Sums {
 impl Kernel {
     fn new(width: f64, o: &RobustOptions) -> Self {
         Self {
-            width,
-            chord_width_sq: (CHORD_WIDTH * width).powi(2),
+            inv_width: 1.0 / width,
+            inv_chord_width_sq: 1.0 / (CHORD_WIDTH * width).powi(2),
             patch: PatchWeight::new(o.feature_angle),
             tau: o.tau,
         }
@@ -120,53 +128,64 @@ impl Kernel {
             ids[..rest.len()].copy_from_slice(rest);
             self.add_terms(&mut sums, ni, &gather(points, normals, p, &ids), rest.len());
         }
-        let (step, weight) = sums.total();
+        let (step, weight) = sums.total(ni);
         if weight > 0.0 {
-            p + self.tau * step / weight
+            p + step * (self.tau / weight)
         } else {
             p
         }
     }
 
-    /// Adds the terms of the first `live` lanes of `b` to `sums`: the weight `g_ij` and the
+    /// Adds the terms of the first `live` lanes of `block` to `sums`: the weight `g_ij` and the
     /// step term `g_ij m_ij m_ijᵀ (x_j − p_i)` where the direction `m_ij` exists (`‖v‖ > 0`).
     /// Each lane's arithmetic is the same scalar formula, so the lanes vectorise and every
     /// instruction set gives the same bits.
+    ///
+    /// With `c = ⟨n_i, n_j⟩`, `n'_j = ±n_j` turned so that `⟨n_i, n'_j⟩ = |c|`, and the patch
+    /// weight `a_ij` (the parent module, item 4): `m_ij ∝ a_ij n_i + n'_j`. Scaled by
+    /// `‖n_i + n'_j‖⁴` and by the sign of `c`, `v = a n_i + b n_j` with `a = ±‖n_i + n'_j‖⁴ a_ij`
+    /// and `b = ‖n_i + n'_j‖⁴` points along `±m_ij`, and `m_ij m_ijᵀ e = v ⟨v, e⟩ / ‖v‖²` for any
+    /// such `v`. The scaling takes the quotient out of the chord's biweight; for unit normals
+    /// `‖n_i + n'_j‖² = 2 (1 + |c|)` and `‖v‖² = a (a + 2bc) + b²`, and `⟨v, e⟩ = a ⟨n_i, e⟩ +
+    /// b ⟨n_j, e⟩` reuses the tangent-plane distance: one division per neighbour.
     #[inline(always)]
-    fn add_terms(&self, sums: &mut Sums, ni: DVec3, b: &Block, live: usize) {
+    fn add_terms(&self, sums: &mut Sums, ni: DVec3, block: &Block, live: usize) {
         for l in 0..LANES {
-            let (ex, ey, ez) = (b.e[0][l], b.e[1][l], b.e[2][l]);
-            let (mut nx, mut ny, mut nz) = (b.n[0][l], b.n[1][l], b.n[2][l]);
+            let (ex, ey, ez) = (block.e[0][l], block.e[1][l], block.e[2][l]);
+            let (nx, ny, nz) = (block.n[0][l], block.n[1][l], block.n[2][l]);
             // the biweight of the distance to the neighbour's tangent plane (far from p:
             // another face, weight 0); the padding weighs 0
+            let d = nx * ex + ny * ey + nz * ez;
             let g = if l < live {
-                biweight(nx * ex + ny * ey + nz * ez, self.width)
+                biweight(d * self.inv_width)
             } else {
                 0.0
             };
             let c = ni.x * nx + ni.y * ny + ni.z * nz;
-            if c < 0.0 {
-                (nx, ny, nz) = (-nx, -ny, -nz);
-            }
+            let flip = c < 0.0;
+            let ne = ni.x * ex + ni.y * ey + ni.z * ez;
             // one smooth patch: normals close, or the chord perpendicular to their mean
-            // (⟨n_i + n_j, e⟩ / ‖n_i + n_j‖ within the chord width; squared, no root)
-            let (sx, sy, sz) = (ni.x + nx, ni.y + ny, ni.z + nz);
-            let chord = sx * ex + sy * ey + sz * ez;
-            let a = self.patch.weight(c.abs()).max(biweight_sq(
-                chord * chord,
-                (sx * sx + sy * sy + sz * sz) * self.chord_width_sq,
-            ));
-            // m = v/‖v‖ with v = a n_i + n_j: m mᵀ e = v ⟨v, e⟩ / ‖v‖²
-            let (vx, vy, vz) = (a * ni.x + nx, a * ni.y + ny, a * ni.z + nz);
-            let vv = vx * vx + vy * vy + vz * vz;
-            let f = if vv > 0.0 {
-                (vx * ex + vy * ey + vz * ez) / vv
+            // s = n_i + n'_j (the biweight of ⟨s, e⟩ / (w ‖s‖), w the chord width): b a_ij is
+            // the larger of b times the patch weight and (‖s‖² − ⟨s, e⟩² / w²)², b = ‖s‖⁴
+            let chord = ne + if flip { -d } else { d };
+            let ss = 2.0 * (1.0 + c.abs());
+            let off_chord = (ss - chord * chord * self.inv_chord_width_sq).max(0.0);
+            let b = ss * ss;
+            let (patch, chord_weight) = (self.patch.weight(c.abs()) * b, off_chord * off_chord);
+            let a = if patch > chord_weight {
+                patch
             } else {
-                0.0
+                chord_weight
             };
-            sums.step[0][l] += g * vx * f;
-            sums.step[1][l] += g * vy * f;
-            sums.step[2][l] += g * vz * f;
+            let a = if flip { -a } else { a };
+            let vv = a * (a + 2.0 * b * c) + b * b;
+            let ve = a * ne + b * d;
+            let gf = if vv > 0.0 { g * (ve / vv) } else { 0.0 };
+            let gfb = gf * b;
+            sums.along_ni[l] += gf * a;
+            sums.along_nj[0][l] += gfb * nx;
+            sums.along_nj[1][l] += gfb * ny;
+            sums.along_nj[2][l] += gfb * nz;
             sums.weight[l] += g;
         }
     }
@@ -237,25 +256,17 @@ impl Block {
 }
 
 impl Sums {
-    /// The step term and the weight of the row: the lanes added in one fixed order.
+    /// The step term and the weight of the row: the lanes added in one fixed order, the part
+    /// along `n_i` last.
     #[inline(always)]
-    fn total(&self) -> (DVec3, f64) {
+    fn total(&self, ni: DVec3) -> (DVec3, f64) {
         let sum = |l: &[f64; LANES]| (l[0] + l[1]) + (l[2] + l[3]);
-        let step = DVec3::new(sum(&self.step[0]), sum(&self.step[1]), sum(&self.step[2]));
-        (step, sum(&self.weight))
-    }
-}
-
-/// Tukey's biweight from squares: `(1 − d²/w²)²` for `d² < w²`, else 0 (see
-/// `geometry::robust_plane::biweight`); saves the roots of a distance and a width that come
-/// squared.
-#[inline]
-fn biweight_sq(d2: f64, w2: f64) -> f64 {
-    let v = 1.0 - d2 / w2;
-    if v > 0.0 {
-        v * v
-    } else {
-        0.0
+        let along_nj = DVec3::new(
+            sum(&self.along_nj[0]),
+            sum(&self.along_nj[1]),
+            sum(&self.along_nj[2]),
+        );
+        (along_nj + sum(&self.along_ni) * ni, sum(&self.weight))
     }
 }
 
@@ -265,20 +276,21 @@ fn biweight_sq(d2: f64, w2: f64) -> f64 {
 /// normals, `1/e` at the feature angle, like a Gaussian in the angle (`‖n_i − n_j‖ = 2 sin(θ/2)
 /// ≈ θ`) without its arc cosine.
 struct PatchWeight {
-    inv_c2: f64,
+    /// `−2/c²` (the factor 2 is exact: `(1 − |cos θ|)·(−2/c²)` rounds as `−2(1 − |cos θ|)/c²`).
+    scale: f64,
 }
 
 impl PatchWeight {
     fn new(feature_angle_deg: f64) -> Self {
         let c = 2.0 * (feature_angle_deg.to_radians() / 2.0).sin();
         Self {
-            inv_c2: 1.0 / (c * c),
+            scale: -2.0 / (c * c),
         }
     }
 
     #[inline(always)]
     fn weight(&self, abs_cos: f64) -> f64 {
-        exp_non_positive(-2.0 * (1.0 - abs_cos.min(1.0)) * self.inv_c2)
+        exp_non_positive((1.0 - abs_cos.min(1.0)) * self.scale)
     }
 }
 
@@ -366,31 +378,30 @@ mod tests {
         // 22 neighbours: five full blocks and a block of two
         let row: Vec<u32> = (1..23).collect();
         let (p, ni) = (points[0], normals[0]);
-        let (mut acc, mut ws) = ([DVec3::ZERO; LANES], [0.0; LANES]);
+        let (mut along_ni, mut along_nj, mut weight) = ([0.0; 4], [DVec3::ZERO; 4], [0.0; 4]);
+        let mut used = 0;
         for (t, &j) in row.iter().enumerate() {
-            let (x, nj) = (points[j as usize], normals[j as usize]);
-            let e = x - p;
-            let g = biweight(nj.dot(e), width);
-            if g == 0.0 {
-                continue;
-            }
+            let (e, nj) = (points[j as usize] - p, normals[j as usize]);
+            // the kernel's constants: 1/width and 1/(chord width)² rounded once
+            let g = biweight(nj.dot(e) * (1.0 / width));
+            used += usize::from(g > 0.0);
             let c = ni.dot(nj);
-            let nj = if c < 0.0 { -nj } else { nj };
-            let sum = ni + nj;
-            let a = kernel.patch.weight(c.abs()).max(biweight_sq(
-                sum.dot(e).powi(2),
-                sum.length_squared() * (CHORD_WIDTH * width).powi(2),
-            ));
-            let v = a * ni + nj;
-            let vv = v.length_squared();
-            if vv > 0.0 {
-                acc[t % LANES] += g * v * (v.dot(e) / vv);
-            }
-            ws[t % LANES] += g;
+            let sign = if c < 0.0 { -1.0 } else { 1.0 };
+            let chord = ni.dot(e) + sign * nj.dot(e);
+            let ss = 2.0 * (1.0 + c.abs());
+            let off_chord = (ss - chord * chord * (1.0 / (CHORD_WIDTH * width).powi(2))).max(0.0);
+            let b = ss * ss;
+            let a = sign * (kernel.patch.weight(c.abs()) * b).max(off_chord * off_chord);
+            let f = (a * ni.dot(e) + b * nj.dot(e)) / (a * (a + 2.0 * b * c) + b * b);
+            along_ni[t % 4] += g * f * a;
+            along_nj[t % 4] += g * f * b * nj;
+            weight[t % 4] += g;
         }
-        let ws = (ws[0] + ws[1]) + (ws[2] + ws[3]);
-        assert!(ws > 0.0);
-        let expect = p + o.tau * ((acc[0] + acc[1]) + (acc[2] + acc[3])) / ws;
+        assert!(used > 10, "{used} neighbours weighted");
+        let weight = (weight[0] + weight[1]) + (weight[2] + weight[3]);
+        let step = ((along_nj[0] + along_nj[1]) + (along_nj[2] + along_nj[3]))
+            + ((along_ni[0] + along_ni[1]) + (along_ni[2] + along_ni[3])) * ni;
+        let expect = p + step * (o.tau / weight);
         let bits = |v: DVec3| v.to_array().map(f64::to_bits);
         let portable = kernel.moved_with(&points, &normals, 0, &row, Block::gather);
         assert_eq!(bits(portable), bits(expect));
@@ -404,7 +415,5 @@ mod tests {
         assert_eq!(w.weight(1.0), 1.0);
         assert!((w.weight(20f64.to_radians().cos()) - (-1f64).exp()).abs() < 1e-12);
         assert!(w.weight(0.0) < 1e-6); // perpendicular normals: e^(−16.6)
-        assert_eq!(biweight_sq(0.25, 1.0), biweight(0.5, 1.0));
-        assert_eq!(biweight_sq(1.0, 1.0), 0.0);
     }
 }
