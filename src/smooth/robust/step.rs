@@ -294,11 +294,15 @@ impl PatchWeight {
     }
 }
 
-/// `eˣ` for finite `x ≤ 0`, to within two units in the last place, in plain arithmetic
-/// that vectorises and gives the same bits on every machine and instruction set (the C
-/// library's `exp` may differ between versions). Cody–Waite reduction `x = k ln 2 + r`,
-/// `|r| ≤ ln 2 / 2`, and the Taylor polynomial of `eʳ` to degree 13 (truncation below 1e-17);
-/// below −700 it returns e⁻⁷⁰⁰ ≈ 1e-304, which is 0 to every use here.
+/// `eˣ` for finite `x ≤ 0`, to within 5e-11 relative (the patch weight needs nowhere near the
+/// last bit: it blends two directions, and an error ε in it turns `m_ij` by about ε), in plain
+/// arithmetic that vectorises and gives the same bits on every machine and instruction set (the
+/// C library's `exp` may differ between versions). Cody–Waite reduction `x = k ln 2 + r`,
+/// `|r| ≤ ln 2 / 2`, and a degree-7 polynomial of `eʳ` whose constant term is 1 (so `e⁰ = 1`
+/// exactly) and whose other coefficients minimise the largest relative error on that interval
+/// (4.7e-11; the Taylor polynomial of degree 7 is off by up to 5e-9), evaluated by Estrin's
+/// scheme: a tree of depth three instead of a chain of seven multiply-adds. Below −700 it
+/// returns e⁻⁷⁰⁰ ≈ 1e-304, which is 0 to every use here.
 #[inline(always)]
 fn exp_non_positive(x: f64) -> f64 {
     // 1.5·2⁵²: adding it rounds to an integer held in the low bits of the mantissa
@@ -306,29 +310,26 @@ fn exp_non_positive(x: f64) -> f64 {
     // ln 2 split so that k·LN2_HI is exact for |k| < 2¹¹
     const LN2_HI: f64 = 6.931_471_803_691_238e-1;
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    // the coefficients of r⁰ … r⁷, fitted on |r| ≤ 1.0005 ln 2 / 2 (a margin for the rounding
+    // of the reduction)
+    const C: [f64; 8] = [
+        1.0,
+        1.000_000_000_209_429,
+        0.500_000_007_737_619_7,
+        0.166_666_651_593_024_96,
+        0.041_666_271_767_110_16,
+        0.008_333_569_367_158_92,
+        0.001_394_595_457_032_406_5,
+        0.000_197_675_994_298_660_92,
+    ];
     let x = x.max(-700.0);
     let t = x * std::f64::consts::LOG2_E + ROUND;
     let k = t - ROUND;
     let ki = t.to_bits() as i64 - ROUND.to_bits() as i64;
     let r = (x - k * LN2_HI) - k * LN2_LO;
-    let mut p = 1.0 / 6_227_020_800.0;
-    for d in [
-        479_001_600.0,
-        39_916_800.0,
-        3_628_800.0,
-        362_880.0,
-        40_320.0,
-        5_040.0,
-        720.0,
-        120.0,
-        24.0,
-        6.0,
-        2.0,
-        1.0,
-        1.0,
-    ] {
-        p = p * r + 1.0 / d;
-    }
+    let r2 = r * r;
+    let pair = |i: usize| C[i] + C[i + 1] * r;
+    let p = (pair(0) + pair(2) * r2) + (pair(4) + pair(6) * r2) * (r2 * r2);
     p * f64::from_bits(((ki + 1023) as u64) << 52)
 }
 
@@ -337,14 +338,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn exp_matches_the_c_library_to_the_last_bits() {
+    fn exp_is_within_5e11_of_the_c_library() {
         let mut worst = 0.0f64;
         for i in 0..200_000 {
             let x = -(i as f64) * 3.5e-3 - (i % 7) as f64 * 1e-9;
             let (ours, libm) = (exp_non_positive(x), x.exp());
             worst = worst.max(((ours - libm) / libm).abs());
         }
-        assert!(worst < 4.5e-16, "{worst}");
+        assert!(worst < 5e-11, "{worst}");
         assert_eq!(exp_non_positive(0.0), 1.0);
         assert_eq!(exp_non_positive(-0.0), 1.0);
         assert!(exp_non_positive(f64::NEG_INFINITY) < 1e-300);
@@ -413,7 +414,7 @@ mod tests {
     fn patch_weight_is_a_gaussian_in_the_normals_distance() {
         let w = PatchWeight::new(20.0);
         assert_eq!(w.weight(1.0), 1.0);
-        assert!((w.weight(20f64.to_radians().cos()) - (-1f64).exp()).abs() < 1e-12);
+        assert!((w.weight(20f64.to_radians().cos()) - (-1f64).exp()).abs() < 2e-11);
         assert!(w.weight(0.0) < 1e-6); // perpendicular normals: e^(−16.6)
     }
 }
