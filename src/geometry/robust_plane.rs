@@ -15,13 +15,13 @@ use glam::{DMat3, DVec3};
 /// Lanes of the sums; the coordinates are padded to a multiple of it.
 pub(crate) const LANES: usize = 4;
 
-/// Tukey's biweight `(1 − (d/width)²)²` for `|d| < width`, 0 from there on (and 0 for
-/// `width ≤ 0`). A robust inlier weight: smooth, 1 on the plane, and exactly 0 for outliers.
+/// Tukey's biweight `(1 − u²)²` of a distance `u = d/width` in units of the width, for
+/// `|u| < 1`; 0 from there on. A robust inlier weight: smooth, 1 on the plane, and exactly 0
+/// for outliers. It takes the ratio, so that a loop with one width multiplies by its inverse.
 #[inline]
-pub fn biweight(d: f64, width: f64) -> f64 {
-    // branch-free (it runs in the innermost loops of the plane selection): for |d| ≥ width,
+pub fn biweight(u: f64) -> f64 {
+    // branch-free (it runs in the innermost loops of the plane selection): for |u| ≥ 1,
     // 1 − u² ≤ 0 and the max gives 0; a NaN (d or width not finite, 0/0) gives 0 as well
-    let u = d / width;
     let v = (1.0 - u * u).max(0.0);
     v * v
 }
@@ -515,11 +515,11 @@ mod tests {
 
     #[test]
     fn biweight_is_a_bounded_bump() {
-        assert_eq!(biweight(0.0, 1.0), 1.0);
-        assert_eq!(biweight(0.5, 1.0), 0.5625);
-        assert_eq!(biweight(-1.0, 1.0), 0.0);
-        assert_eq!(biweight(0.0, 0.0), 0.0);
-        assert_eq!(biweight(f64::NAN, 1.0), 0.0);
+        assert_eq!(biweight(0.0), 1.0);
+        assert_eq!(biweight(0.5), 0.5625);
+        assert_eq!(biweight(-1.0), 0.0);
+        assert_eq!(biweight(3.0), 0.0);
+        assert_eq!(biweight(f64::NAN), 0.0);
     }
 
     #[test]
@@ -558,7 +558,7 @@ mod tests {
         let mut w = vec![0.0; 16];
         lanes::plane_weights(&h, n, 0.05, 0.2, &mut w);
         for (k, &p) in pts.iter().enumerate() {
-            assert_eq!(w[k], biweight(n.dot(p) - 0.05, 0.2), "{k}");
+            assert_eq!(w[k], biweight((n.dot(p) - 0.05) / 0.2), "{k}");
         }
     }
 

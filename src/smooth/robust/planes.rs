@@ -109,7 +109,7 @@ impl Local {
         }
     }
 
-    /// `Σ biweight(⟨n, q⟩ − offset, width)` over the local points `q`: how many of them the
+    /// `Σ biweight((⟨n, q⟩ − offset) / width)` over the local points `q`: how many of them the
     /// plane `⟨n, q⟩ = offset` explains. Summed in eight lanes and then lane by lane, the same
     /// order on every machine and thread. Where the processor has AVX, the eight lanes are one
     /// instruction each: the same operations on the same lanes, so the same bits (without FMA,
@@ -301,7 +301,7 @@ mod tests {
         let n = DVec3::new(0.1, 0.2, 1.0).normalize();
         let expect: f64 = pts
             .iter()
-            .map(|&q| biweight(n.dot(q - pts[0]) - 0.05, 0.2))
+            .map(|&q| biweight((n.dot(q - pts[0]) - 0.05) / 0.2))
             .sum();
         assert!((f64::from(local.score(n, 0.05, 0.2)) - expect).abs() < 1e-5);
         // the instruction set's version gives the portable loop's bits
