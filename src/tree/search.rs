@@ -407,7 +407,20 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 dist: fd,
                 gaps: g,
             };
-            len += may_enter(out, fd, min_id, far) as usize;
+            if may_enter(out, fd, min_id, far) {
+                len += 1;
+                // The far cell is visited after the near side's subtree: its first lines are
+                // requested now (its step shares the near step's line, already read), so that
+                // their misses overlap the near side's work.
+                let fs = steps[far as usize];
+                if fs.link & 3 == DESCENT_LEAF {
+                    let (a, b) = fs.leaf_range();
+                    prefetch_range(&tree.coords[a * D..b * D]);
+                } else {
+                    let f = (fs.link >> 2) as usize;
+                    prefetch_range(&steps[f..f + 1]);
+                }
+            }
             node = near;
             if !may_enter(out, dist, min_id, node) {
                 break;
