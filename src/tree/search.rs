@@ -411,11 +411,13 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 len += 1;
                 // The far cell is visited after the near side's subtree: its first lines are
                 // requested now (its step shares the near step's line, already read), so that
-                // their misses overlap the near side's work.
+                // their misses overlap the near side's work. A leaf's indices too: on the 1M
+                // cube k = 30 took 0.89-0.95x the time with them, k = 10 the same.
                 let fs = steps[far as usize];
                 if fs.link & 3 == DESCENT_LEAF {
                     let (a, b) = fs.leaf_range();
                     prefetch_range(&tree.coords[a * D..b * D]);
+                    prefetch_range(&tree.ids[a..b]);
                 } else {
                     let f = (fs.link >> 2) as usize;
                     prefetch_range(&steps[f..f + 1]);
