@@ -575,7 +575,7 @@ mod tests {
                 assert!(b > a);
                 next = b;
             }
-            assert_eq!(next as usize, tree.len());
+            assert_eq!(next, tree.len());
             for (s, m) in d.steps.iter().zip(&d.min_id) {
                 if s.link & 3 == DESCENT_LEAF {
                     let (a, b) = s.leaf_range();
