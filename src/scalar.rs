@@ -54,6 +54,12 @@ pub trait Scalar:
     fn read_ne(bytes: &[u8]) -> Self;
     /// `true` unless NaN or infinite.
     fn is_finite(self) -> bool;
+    /// A value whose bits carry `i < 2^30` (an index stored in a value slot, only moved, never
+    /// computed with): `f32` the bits themselves (exponent at most 127, so never a NaN),
+    /// `f64` the bits as a subnormal. [`Scalar::index_bits`] gives `i` back.
+    fn from_index_bits(i: u32) -> Self;
+    /// The index stored by [`Scalar::from_index_bits`].
+    fn index_bits(self) -> u32;
     /// Larger of two non-NaN values.
     #[inline]
     fn max_of(self, other: Self) -> Self {
@@ -102,6 +108,14 @@ impl Scalar for f32 {
     fn is_finite(self) -> bool {
         f32::is_finite(self)
     }
+    #[inline(always)]
+    fn from_index_bits(i: u32) -> Self {
+        f32::from_bits(i)
+    }
+    #[inline(always)]
+    fn index_bits(self) -> u32 {
+        self.to_bits()
+    }
 }
 
 impl Scalar for f64 {
@@ -125,5 +139,13 @@ impl Scalar for f64 {
     #[inline]
     fn is_finite(self) -> bool {
         f64::is_finite(self)
+    }
+    #[inline(always)]
+    fn from_index_bits(i: u32) -> Self {
+        f64::from_bits(i as u64)
+    }
+    #[inline(always)]
+    fn index_bits(self) -> u32 {
+        self.to_bits() as u32
     }
 }

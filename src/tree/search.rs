@@ -21,6 +21,8 @@
 //! enter, the side with the smaller index is taken first (the build orders identical points by
 //! caller index, `src/tree/layout.rs`), so the copies with the lowest indices are met first.
 
+#[cfg(test)]
+use super::node::Step;
 use super::node::{Descent, Node, DESCENT_LEAF};
 use crate::query::result_set::ResultSet;
 use crate::scalar::Scalar;
@@ -119,6 +121,31 @@ fn sq_dist_at<T: Scalar, const D: usize>(q: &[T], coords: &[T], i: usize, dim: u
         s = s + t * t;
     }
     s
+}
+
+/// Requests the cache lines of `s` (a hint: never faults, changes no result).
+#[inline(always)]
+fn prefetch_range<U>(s: &[U]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let bytes = std::mem::size_of_val(s);
+        let p = s.as_ptr() as *const i8;
+        let mut off = 0;
+        while off < bytes {
+            // SAFETY: `p + off` lies inside the slice `s`; a prefetch reads nothing
+            // architecturally and cannot fault.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(off)) };
+            off += 64;
+        }
+        if bytes > 0 {
+            // The last line, which the steps of 64 bytes miss when `s` is not line-aligned.
+            // SAFETY: as above, the last byte of `s`.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(bytes - 1)) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = s;
 }
 
 /// Whether a cell with lower bound `dist` and smallest caller index `min_id` may still hold a
@@ -327,8 +354,11 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
             let s = steps[node as usize];
             let sd = (s.link & 3) as usize;
             if sd == DESCENT_LEAF as usize {
-                let [a, b] = tree.descent.leaves[(s.link >> 2) as usize];
-                let (a, b) = (a as usize, b as usize);
+                let (a, b) = s.leaf_range();
+                // The leaf's indices are another array: their lines are requested now, while
+                // the distances are computed, instead of missing at the first offer (on the 1M
+                // cube the first index read of a leaf held a fifth of the samples).
+                prefetch_range(&tree.ids[a..b]);
                 // The leaf's points and indices as slices: no bounds test per point.
                 let points = &tree.coords[a * D..b * D];
                 let ids = &tree.ids[a..b];
@@ -377,7 +407,22 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 dist: fd,
                 gaps: g,
             };
-            len += may_enter(out, fd, min_id, far) as usize;
+            if may_enter(out, fd, min_id, far) {
+                len += 1;
+                // The far cell is visited after the near side's subtree: its first lines are
+                // requested now (its step shares the near step's line, already read), so that
+                // their misses overlap the near side's work. A leaf's indices too: on the 1M
+                // cube k = 30 took 0.89-0.95x the time with them, k = 10 the same.
+                let fs = steps[far as usize];
+                if fs.link & 3 == DESCENT_LEAF {
+                    let (a, b) = fs.leaf_range();
+                    prefetch_range(&tree.coords[a * D..b * D]);
+                    prefetch_range(&tree.ids[a..b]);
+                } else {
+                    let f = (fs.link >> 2) as usize;
+                    prefetch_range(&steps[f..f + 1]);
+                }
+            }
             node = near;
             if !may_enter(out, dist, min_id, node) {
                 break;
@@ -517,19 +562,28 @@ mod tests {
         for coords in clouds(3) {
             let tree = KdTree::from_flat(&coords, 3, &BuildOptions::default()).unwrap();
             let d = tree.descent.as_ref().unwrap();
-            let mut leaves = d.leaves.clone();
+            let mut leaves: Vec<(usize, usize)> = d
+                .steps
+                .iter()
+                .filter(|s| s.link & 3 == DESCENT_LEAF)
+                .map(Step::leaf_range)
+                .collect();
             leaves.sort();
             let mut next = 0;
-            for [a, b] in leaves {
+            for (a, b) in leaves {
                 assert_eq!(a, next);
                 assert!(b > a);
                 next = b;
             }
-            assert_eq!(next as usize, tree.len());
+            assert_eq!(next, tree.len());
             for (s, m) in d.steps.iter().zip(&d.min_id) {
                 if s.link & 3 == DESCENT_LEAF {
-                    let [a, b] = d.leaves[(s.link >> 2) as usize];
-                    assert_eq!(*m, *tree.ids[a as usize..b as usize].iter().min().unwrap());
+                    let (a, b) = s.leaf_range();
+                    // The leaf's indices are another array: their lines are requested now, while
+                    // the distances are computed, instead of missing at the first offer (on the 1M
+                    // cube the first index read of a leaf held a fifth of the samples).
+                    prefetch_range(&tree.ids[a..b]);
+                    assert_eq!(*m, *tree.ids[a..b].iter().min().unwrap());
                 }
             }
         }
