@@ -56,9 +56,12 @@ pub trait Scalar:
     fn is_finite(self) -> bool;
     /// A value whose bits carry `i < 2^30` (an index stored in a value slot, only moved, never
     /// computed with): `f32` the bits themselves (exponent at most 127, so never a NaN),
-    /// `f64` the bits as a subnormal. [`Scalar::index_bits`] gives `i` back.
+    /// `f64` the bits as a subnormal. [`Scalar::index_bits`] gives `i` back. Plumbing of the
+    /// tree's compact descent (`src/tree/node.rs`), not for callers.
+    #[doc(hidden)]
     fn from_index_bits(i: u32) -> Self;
     /// The index stored by [`Scalar::from_index_bits`].
+    #[doc(hidden)]
     fn index_bits(self) -> u32;
     /// Larger of two non-NaN values.
     #[inline]
