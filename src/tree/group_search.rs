@@ -702,7 +702,7 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
             exclude_self: self.exclude_self,
         };
         let first = chunks.start;
-        let run = |c: usize, rows: &mut dyn FnMut(&Search<'_, T, D>, Range<usize>)| {
+        let run = |c: usize, rows: &mut GroupAnswer<'_, T, D>| {
             let c = first + c;
             for g in &self.groups[self.chunk_groups[c]..self.chunk_groups[c + 1]] {
                 rows(&search, g.clone());
@@ -722,71 +722,64 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
             row_of,
             row_len,
             |c, out| {
-                let mut stack = Vec::new();
-                if k == usize::MAX && T::TYPE == ScalarType::F32 {
-                    let mut rows = self.radius_rows(sq_radius);
-                    let mut gather = Gather::<T, u64, D>::within(self.nbhd.is_sorted());
-                    run(c, &mut |s, g| {
-                        // a chunk whose rows did not fit takes no more (see `RowsChunk`)
-                        if !out.is_done() {
-                            s.gathered_group(g, &mut gather, &mut rows, &mut stack, out)
-                        }
-                    });
+                let groups = |each: &mut GroupAnswer<'_, T, D>| run(c, each);
+                let sorted = self.nbhd.is_sorted();
+                let f32 = T::TYPE == ScalarType::F32;
+                if k == usize::MAX && f32 {
+                    let gather = Gather::<T, u64, D>::within(sorted);
+                    answer_groups(&groups, self.radius_rows(sq_radius), Some(gather), out);
                 } else if k == usize::MAX {
-                    let mut rows = self.radius_rows(sq_radius);
-                    let mut gather = Gather::<T, u128, D>::within(self.nbhd.is_sorted());
-                    run(c, &mut |s, g| {
-                        if !out.is_done() {
-                            s.gathered_group(g, &mut gather, &mut rows, &mut stack, out)
-                        }
-                    });
-                } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
-                    let mut rows = SortedRows::<T, Key32>::new(k, sq_radius);
-                    let mut gather = Gather::<T, u64, D>::nearest(k);
-                    run(c, &mut |s, g| {
-                        if !out.is_done() {
-                            s.gathered_group(g, &mut gather, &mut rows, &mut stack, out)
-                        }
-                    });
+                    let gather = Gather::<T, u128, D>::within(sorted);
+                    answer_groups(&groups, self.radius_rows(sq_radius), Some(gather), out);
+                } else if k <= SORTED_MAX_K && f32 {
+                    let rows = SortedRows::<T, Key32>::new(k, sq_radius);
+                    answer_groups(&groups, rows, Some(Gather::<T, u64, D>::nearest(k)), out);
                 } else if k <= SORTED_MAX_K {
-                    let mut rows = SortedRows::<T, Neighbor<T>>::new(k, sq_radius);
-                    let mut gather = Gather::<T, u128, D>::nearest(k);
-                    run(c, &mut |s, g| {
-                        if !out.is_done() {
-                            s.gathered_group(g, &mut gather, &mut rows, &mut stack, out)
-                        }
-                    });
-                } else if k <= KEY_HEAP_MAX_K && T::TYPE == ScalarType::F32 {
-                    let mut rows = KeyHeapRows::<T, u64>::new(k, sq_radius);
-                    run(c, &mut |s, g| {
-                        if !out.is_done() {
-                            s.group(g, &mut rows, &mut stack, out)
-                        }
-                    });
+                    let rows = SortedRows::<T, Neighbor<T>>::new(k, sq_radius);
+                    answer_groups(&groups, rows, Some(Gather::<T, u128, D>::nearest(k)), out);
+                } else if k <= KEY_HEAP_MAX_K && f32 {
+                    let rows = KeyHeapRows::<T, u64>::new(k, sq_radius);
+                    answer_groups(&groups, rows, None::<Gather<T, u64, D>>, out);
                 } else if k <= KEY_HEAP_MAX_K {
-                    let mut rows = KeyHeapRows::<T, u128>::new(k, sq_radius);
-                    run(c, &mut |s, g| {
-                        if !out.is_done() {
-                            s.group(g, &mut rows, &mut stack, out)
-                        }
-                    });
+                    let rows = KeyHeapRows::<T, u128>::new(k, sq_radius);
+                    answer_groups(&groups, rows, None::<Gather<T, u128, D>>, out);
                 } else {
-                    let mut rows = HeapRows {
+                    let rows = HeapRows {
                         k,
                         sq_radius,
                         rows: (0..GROUP).map(|_| Vec::new()).collect(),
                         keys: Keys::default(),
                     };
-                    run(c, &mut |s, g| {
-                        if !out.is_done() {
-                            s.group(g, &mut rows, &mut stack, out)
-                        }
-                    });
+                    answer_groups(&groups, rows, None::<Gather<T, u64, D>>, out);
                 }
                 Ok(())
             },
         )
     }
+}
+
+/// What answers one group: given the search and the group's tree positions.
+type GroupAnswer<'f, T, const D: usize> = dyn FnMut(&Search<'_, T, D>, Range<usize>) + 'f;
+
+/// Answers every group that `groups` hands out with the rows `rows`, each group first from a
+/// gathered block where `gather` is given (`group_search/gather.rs`), and appends the rows to
+/// `out`; once a chunk's rows did not fit, it takes no more (see `RowsChunk`).
+fn answer_groups<T: Scalar, const D: usize, R: RowSets<T>, K: PackedKey<T>>(
+    groups: &dyn Fn(&mut GroupAnswer<'_, T, D>),
+    mut rows: R,
+    mut gather: Option<Gather<T, K, D>>,
+    out: &mut RowsChunk<'_, T>,
+) {
+    let mut stack = Vec::new();
+    groups(&mut |s, g| {
+        if out.is_done() {
+            return;
+        }
+        match &mut gather {
+            Some(gather) => s.gathered_group(g, gather, &mut rows, &mut stack, out),
+            None => s.group(g, &mut rows, &mut stack, out),
+        }
+    });
 }
 
 /// What every group's search reads.
