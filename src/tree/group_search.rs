@@ -131,22 +131,30 @@ impl<T: Scalar, const D: usize> Soa<T, D> {
         Self { stride, v }
     }
 
-    /// Squared distances from `q` to the points at tree positions `start..start + BLOCK`, each
-    /// summed over the dimensions in order, `((0 + t0²) + t1²) + …`, as the single-query search
-    /// does (`0 + x` is exact): the same bits.
+    /// Squared distances from `q` to the points at tree positions `start..start + BLOCK`.
     #[inline(always)]
     fn block_sq_dists(&self, q: &[T; D], start: usize) -> [T; BLOCK] {
-        let mut d = [T::ZERO; BLOCK];
-        for (j, &qj) in q.iter().enumerate() {
-            let at = j * self.stride + start;
-            let c: &[T; BLOCK] = self.v[at..at + BLOCK].try_into().unwrap();
-            for p in 0..BLOCK {
-                let t = qj - c[p];
-                d[p] = d[p] + t * t;
-            }
-        }
-        d
+        sq_dists_to_block(q, |j| &self.v[j * self.stride + start..][..BLOCK])
     }
+}
+
+/// Squared distances from `q` to a block of [`BLOCK`] points whose coordinates in dimension
+/// `j` are `coord(j)`, each summed over the dimensions in order, `((0 + t0²) + t1²) + …`, as
+/// the single-query search does (`0 + x` is exact): the same bits.
+#[inline(always)]
+fn sq_dists_to_block<'c, T: Scalar, const D: usize>(
+    q: &[T; D],
+    coord: impl Fn(usize) -> &'c [T],
+) -> [T; BLOCK] {
+    let mut d = [T::ZERO; BLOCK];
+    for (j, &qj) in q.iter().enumerate() {
+        let c: &[T; BLOCK] = coord(j).try_into().unwrap();
+        for p in 0..BLOCK {
+            let t = qj - c[p];
+            d[p] = d[p] + t * t;
+        }
+    }
+    d
 }
 
 /// Bit `p` set where `d[p] ≤ bound`: SSE compares and movemask on x86-64 (4 or 2 lanes per

@@ -21,7 +21,7 @@
 //! is answered by the parent's search instead. The rows are the same either way, byte for byte:
 //! the guess only decides the speed.
 
-use super::{below_mask, box_dist, Members, PackedKey, Search, BLOCK, GROUP};
+use super::{below_mask, box_dist, sq_dists_to_block, Members, PackedKey, Search, BLOCK, GROUP};
 use crate::scalar::Scalar;
 use crate::table::RowsChunk;
 
@@ -248,7 +248,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
         self.keys.resize(self.ids.len(), K::default());
         let (mut n, count) = (0, self.ids.len());
         for start in (0..count).step_by(BLOCK) {
-            let d = block_sq_dists(&self.coords, qi, start);
+            let d = sq_dists_to_block(qi, |j| &self.coords[j][start..start + BLOCK]);
             let mut hits = below_mask(&d, r2);
             if count - start < BLOCK {
                 // the padding is infinitely far, yet within an infinite r²
@@ -357,26 +357,6 @@ impl Rank for u128 {
                 .sum();
         }
     }
-}
-
-/// Squared distances from `q` to the gathered points `start..start + BLOCK`, summed over the
-/// dimensions in order as the single-query search does (see [`super::Soa::block_sq_dists`]):
-/// the same bits.
-#[inline(always)]
-fn block_sq_dists<T: Scalar, const D: usize>(
-    coords: &[Vec<T>; D],
-    q: &[T; D],
-    start: usize,
-) -> [T; BLOCK] {
-    let mut d = [T::ZERO; BLOCK];
-    for (c, &qj) in coords.iter().zip(q) {
-        let c: &[T; BLOCK] = c[start..start + BLOCK].try_into().unwrap();
-        for p in 0..BLOCK {
-            let t = qj - c[p];
-            d[p] = d[p] + t * t;
-        }
-    }
-    d
 }
 
 #[cfg(test)]
