@@ -21,8 +21,6 @@
 //! enter, the side with the smaller index is taken first (the build orders identical points by
 //! caller index, `src/tree/layout.rs`), so the copies with the lowest indices are met first.
 
-#[cfg(test)]
-use super::node::Step;
 use super::node::{Descent, Node, DESCENT_LEAF};
 use crate::query::result_set::ResultSet;
 use crate::scalar::Scalar;
@@ -436,6 +434,7 @@ mod tests {
     use super::*;
     use crate::query::result_set::{Key32, KnnRow, RowEntry, WithinRadius};
     use crate::query::{Neighbor, NeighborHeap};
+    use crate::tree::node::Step;
     use crate::tree::{BuildOptions, KdTree, PivotPolicy};
 
     /// Clouds with many ties: points on a coarse grid (queries on split values), copies of a
@@ -579,10 +578,6 @@ mod tests {
             for (s, m) in d.steps.iter().zip(&d.min_id) {
                 if s.link & 3 == DESCENT_LEAF {
                     let (a, b) = s.leaf_range();
-                    // The leaf's indices are another array: their lines are requested now, while
-                    // the distances are computed, instead of missing at the first offer (on the 1M
-                    // cube the first index read of a leaf held a fifth of the samples).
-                    prefetch_range(&tree.ids[a..b]);
                     assert_eq!(*m, *tree.ids[a..b].iter().min().unwrap());
                 }
             }
