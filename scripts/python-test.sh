@@ -50,5 +50,8 @@ cargo build --quiet -p nbhd-cli
 export NBHD_CLI="$CARGO_TARGET_DIR/debug/nbhd" NBHD_REQUIRE_CLI=1
 
 echo "== pytest python/tests"
-# run from the repository root: python/ itself would shadow the installed package
-python -m pytest -q -p no:cacheprovider --rootdir python python/tests
+# run from the repository root: python/ itself would shadow the installed package. The tests'
+# scratch files (the Dask tests' tiles: about 1 GB) live under the target directory, which
+# pytest empties at the start of each run, not in /tmp.
+python -m pytest -q -p no:cacheprovider --rootdir python --basetemp "$CARGO_TARGET_DIR/pytest" \
+    python/tests

@@ -167,7 +167,8 @@ fn empty_and_file_round_trip() {
         Err(NbhdError::RemovedPoint { index: 1 })
     );
     let a = grown::<f32>(3, 9, 6);
-    let path = std::env::temp_dir().join(format!("nbhd-dynamic-{}.nbhdfrst", std::process::id()));
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("nbhd-dynamic-{}.nbhdfrst", std::process::id()));
     a.save_file(&path).unwrap();
     let b = DynamicKdTree::<f32>::load_file(&path).unwrap();
     std::fs::remove_file(&path).unwrap();

@@ -165,7 +165,8 @@ fn loaded_f64_trees_answer_every_query_identically() {
 fn files_round_trip_and_missing_files_name_the_path() {
     let c = points(Kind::Clustered, 3000, 3, 2);
     let tree = build(&c, 3, BuildOptions::default());
-    let dir = std::env::temp_dir().join(format!("nbhd-persist-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("nbhd-persist-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("clustered.nbhdtree");
     tree.save_file(&path).unwrap();

@@ -20,7 +20,8 @@ fn stderr(o: &Output) -> String {
 
 /// A small scan-like XYZ file (a wavy 60 × 50 grid, one NaN point) in a fresh folder.
 fn small_xyz() -> String {
-    let d = std::env::temp_dir().join(format!("nbhd-bench-speed-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("nbhd-bench-speed-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     let mut s = String::from("nan nan nan\n");
     for i in 0..60 {

@@ -34,7 +34,8 @@ fn data(rel: &str) -> Option<String> {
 }
 
 fn tmp(name: &str) -> String {
-    let d = std::env::temp_dir().join(format!("nbhd-cli-test-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("nbhd-cli-test-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d.join(name).display().to_string()
 }
