@@ -22,6 +22,7 @@ pub mod io;
 pub(crate) mod linalg;
 pub(crate) mod parallel;
 pub mod points;
+pub(crate) mod prefetch;
 pub mod query;
 pub mod scalar;
 pub(crate) mod select;

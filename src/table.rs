@@ -3,6 +3,7 @@
 //! query `i` (for a tree's own points: the caller's point `i`; skipped points get empty rows).
 
 use crate::error::{NbhdError, Result};
+use crate::prefetch::{prefetch_bytes, prefetch_range};
 use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
 use rayon::prelude::*;
@@ -156,9 +157,31 @@ struct Direct<'a, T> {
     offsets: &'a [usize],
     row_of: &'a (dyn Fn(usize) -> usize + Sync),
     next: usize,
+    /// The end of the chunk's work items.
+    end: usize,
 }
 
 impl<T: Copy> Direct<'_, T> {
+    /// Requests the slots of the next `now` work items' rows (whose offsets an earlier call
+    /// requested) and the offsets of the `later` items after them: rows go to the caller's
+    /// order, scattered over the table, and each would otherwise wait for two cache misses.
+    fn prefetch(&self, now: usize, later: usize) {
+        let soon = self.next..(self.next + now).min(self.end);
+        for r in soon.clone().map(self.row_of) {
+            let (from, to) = (self.offsets[r], self.offsets[r + 1]);
+            if from <= to && to <= self.table.total {
+                let len = to - from;
+                let ids = self.table.ids.wrapping_add(from);
+                prefetch_bytes(ids.cast(), len * std::mem::size_of::<u32>());
+                let dists = self.table.dists.wrapping_add(from);
+                prefetch_bytes(dists.cast(), len * std::mem::size_of::<T>());
+            }
+        }
+        for r in (soon.end..(soon.end + later).min(self.end)).map(self.row_of) {
+            prefetch_range(&self.offsets[r..r + 2]);
+        }
+    }
+
     /// The entries of the next work item's row as two slices, if its slot has `len` entries.
     #[inline]
     fn next_slot(&mut self, len: usize) -> Option<(&mut [u32], &mut [T])> {
@@ -210,6 +233,16 @@ impl<T: Copy + Default> RowsChunk<'_, T> {
     #[inline]
     pub(crate) fn is_done(&self) -> bool {
         self.failed.is_some() || self.mismatch
+    }
+
+    /// Requests the memory the rows of the next `now` work items will be written to, and
+    /// prepares the same for the `later` items after them (a hint: no row changes; best called
+    /// once per group of `now` rows, with `later` about the next group's size).
+    #[inline]
+    pub(crate) fn prefetch(&self, now: usize, later: usize) {
+        if let Some(direct) = &self.direct {
+            direct.prefetch(now, later);
+        }
     }
 
     /// Appends the row of the next work item: `len` pairs `(sq_dist, index)`.
@@ -661,6 +694,7 @@ fn rows_in_place<T: Scalar>(
                 offsets: &offsets,
                 row_of,
                 next: bounds[c],
+                end: bounds[c + 1],
             });
             fill(c, &mut chunk)?;
             let written = chunk.direct.as_ref().map_or(0, |d| d.next);

@@ -861,6 +861,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         stack: &mut Vec<(u32, T)>,
         out: &mut RowsChunk<'_, T>,
     ) {
+        out.prefetch(g.len(), GROUP);
         let mb = self.members(g.clone());
         self.group_of(g, mb, rows, stack, out);
     }

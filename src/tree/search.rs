@@ -22,6 +22,7 @@
 //! caller index, `src/tree/layout.rs`), so the copies with the lowest indices are met first.
 
 use super::node::{Descent, Node, DESCENT_LEAF};
+use crate::prefetch::prefetch_range;
 use crate::query::result_set::ResultSet;
 use crate::scalar::Scalar;
 
@@ -119,31 +120,6 @@ fn sq_dist_at<T: Scalar, const D: usize>(q: &[T], coords: &[T], i: usize, dim: u
         s = s + t * t;
     }
     s
-}
-
-/// Requests the cache lines of `s` (a hint: never faults, changes no result).
-#[inline(always)]
-fn prefetch_range<U>(s: &[U]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let bytes = std::mem::size_of_val(s);
-        let p = s.as_ptr() as *const i8;
-        let mut off = 0;
-        while off < bytes {
-            // SAFETY: `p + off` lies inside the slice `s`; a prefetch reads nothing
-            // architecturally and cannot fault.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(off)) };
-            off += 64;
-        }
-        if bytes > 0 {
-            // The last line, which the steps of 64 bytes miss when `s` is not line-aligned.
-            // SAFETY: as above, the last byte of `s`.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(bytes - 1)) };
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = s;
 }
 
 /// Whether a cell with lower bound `dist` and smallest caller index `min_id` may still hold a

@@ -24,13 +24,31 @@
 use super::{below_mask, box_dist, sq_dists_to_block, Members, PackedKey, Search, BLOCK, GROUP};
 use crate::scalar::Scalar;
 use crate::table::RowsChunk;
+use std::ops::Range;
 
-/// The margin of the guess, on squared distances, is `1 + GUESS_SPREAD / √k`: the k-th squared
-/// distance of a point of a surface varies from point to point by about `1/√k` of itself (it
-/// counts about k points of a random sample). Measured on the 77k torus (k = 10, 15, 52; wall
-/// time, one thread): 1.5–2 take the same time within the noise, 3 is 5–10 % slower (larger
-/// blocks); a fixed margin of 1.25 left a fifth of the k = 10 groups to the parent's search.
+/// The margin of the guess, on squared distances, is `1 + spread / √k`: the k-th squared
+/// distance of a point varies from point to point by about `1/√k` of itself (it counts about k
+/// points of a random sample; on a volume by `2/3` of that). The spread starts at
+/// [`GUESS_SPREAD`] and adapts to the data: each group a gathered block answers shrinks it by
+/// [`SHRINK`], each group that falls short grows it by [`GROW`]; in balance one group in
+/// `1 + ln GROW / ln(1/SHRINK)` (about 14) falls short. A short group costs a second search, a
+/// wide margin larger blocks and more keys to rank in every group. Fixed spreads measured: on
+/// the 77k torus 1.5–2 alike and 3 5–10 % slower; on the 1M cube 1.0 10 % faster than 2 but
+/// on the torus 4–10 % slower. Adapting takes the cube's kNN table (k = 10) 6 % below the
+/// fixed 2 and leaves the surfaces as they were. Under a radius (k nearest within it) the
+/// spread stays fixed: rows there may be short because the radius cuts them, and adapting
+/// measured 5–10 % slower (1M torus).
 const GUESS_SPREAD: f64 = 2.0;
+
+/// The factor on the spread of each group answered from a gathered block.
+const SHRINK: f64 = 0.98;
+
+/// The factor on the spread of each group whose block falls short.
+const GROW: f64 = 1.3;
+
+/// The range of the spread.
+const MIN_SPREAD: f64 = 0.25;
+const MAX_SPREAD: f64 = 4.0;
 
 /// Most candidates a group gathers, per neighbour asked for (and at least [`MIN_CAP`]): a
 /// larger block means copies of a point or a guess far too wide, and the parent's search
@@ -69,8 +87,10 @@ pub(super) struct Gather<T, K, const D: usize> {
     /// Squared radius of the next gather (k-nearest rows); `None` until a group of this run
     /// was answered.
     guess: Option<T>,
-    /// Factor from a group's largest k-th squared distance to the next guess.
+    /// Factor from a group's largest k-th squared distance to the next guess: `1 + spread / √k`.
     margin: T,
+    /// The margin's spread (see [`GUESS_SPREAD`]).
+    spread: f64,
     /// Most points a block may hold: fixed for k-nearest rows, doubled for radius rows (up to
     /// [`MAX_CAP`]) each time a group's block would pass it.
     cap: usize,
@@ -86,13 +106,16 @@ pub(super) struct Gather<T, K, const D: usize> {
     keys: Vec<K>,
     ranked: Vec<K>,
     stack: Vec<(u32, T)>,
+    /// Scratch: the gathered runs of consecutive tree positions (adjacent leaves merged), copied
+    /// into the block once the traversal ends.
+    runs: Vec<Range<usize>>,
 }
 
 impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
     /// The scratch of rows of the `k` nearest (k-nearest rows, with or without a radius).
     pub(super) fn nearest(k: usize) -> Self {
         let mut g = Self::new(k, true);
-        g.margin = T::from_f64(1.0 + GUESS_SPREAD / (k as f64).sqrt());
+        g.adapt(1.0);
         g.cap = (CAP_PER_NEIGHBOUR * k).max(MIN_CAP);
         g
     }
@@ -108,6 +131,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
             sorted,
             guess: None,
             margin: T::ZERO,
+            spread: GUESS_SPREAD,
             cap: MIN_CAP,
             coords: std::array::from_fn(|_| Vec::new()),
             ids: Vec::new(),
@@ -116,7 +140,14 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
             keys: Vec::new(),
             ranked: vec![K::default(); RANK_MAX + 1],
             stack: Vec::new(),
+            runs: Vec::new(),
         }
+    }
+
+    /// Multiplies the guess's spread by `f` (within its range) and sets the margin from it.
+    fn adapt(&mut self, f: f64) {
+        self.spread = (self.spread * f).clamp(MIN_SPREAD, MAX_SPREAD);
+        self.margin = T::from_f64(1.0 + self.spread / (self.k as f64).sqrt());
     }
 
     /// Sets the k-nearest guess from a group: `bound` is the largest squared distance of its
@@ -148,6 +179,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
                 None => return false,
             }
         };
+        out.prefetch(m, GROUP);
         // gathered within the search's own limit, a row of fewer than k is whole
         let whole = r2 == limit;
         if !self.collect(search, &mb.lo, &mb.hi, r2) {
@@ -160,22 +192,23 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
         if !self.reserve_rows(m) {
             return false;
         }
-        let mut largest = T::ZERO;
-        for i in 0..m {
-            let held = self.member(&mb.q[i], mb.self_id[i], r2);
-            if held < self.k && !whole {
-                return false;
+        // the spread adapts for rows of the k nearest alone: under a radius, rows may be short
+        // because the radius cuts them, which a wider guess does not mend
+        let adapts = !limit.is_finite();
+        let Some(largest) = self.members(mb, m, r2, whole) else {
+            if adapts {
+                self.adapt(GROW);
             }
-            if let Some(last) = self.rows.last().filter(|_| held > 0) {
-                largest = largest.max_of(last.pair().0);
-            }
-            self.starts[i + 1] = self.rows.len();
-        }
+            return false;
+        };
         for i in 0..m {
             let row = &self.rows[self.starts[i]..self.starts[i + 1]];
             out.push_row(row.len(), row.iter().map(|&e| e.pair()));
         }
         if self.k != usize::MAX {
+            if adapts {
+                self.adapt(SHRINK);
+            }
             self.learn(largest, limit);
         }
         true
@@ -201,8 +234,10 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
             c.clear();
         }
         self.ids.clear();
-        let stack = &mut self.stack;
+        let (stack, runs) = (&mut self.stack, &mut self.runs);
         stack.clear();
+        runs.clear();
+        let mut held = 0;
         stack.push((0, box_dist(glo, ghi, &boxes.lo[0], &boxes.hi[0])));
         while let Some((mut node, lb)) = stack.pop() {
             if lb > r2 {
@@ -212,13 +247,15 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
                 let nd = &tree.nodes[node as usize];
                 if nd.is_leaf() {
                     let (a, b) = (nd.a as usize, nd.b as usize);
-                    if self.ids.len() + (b - a) > cap {
+                    held += b - a;
+                    if held > cap {
                         return false;
                     }
-                    for (j, c) in self.coords.iter_mut().enumerate() {
-                        c.extend_from_slice(&soa.v[j * soa.stride + a..j * soa.stride + b]);
+                    // leaves come in tree order: a leaf right after the last run extends it
+                    match runs.last_mut() {
+                        Some(run) if run.end == a => run.end = b,
+                        _ => runs.push(a..b),
                     }
-                    self.ids.extend_from_slice(&tree.ids[a..b]);
                     break;
                 }
                 let (l, r) = (node + 1, nd.a);
@@ -233,11 +270,35 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
                 node = l;
             }
         }
+        for run in runs.iter() {
+            for (j, c) in self.coords.iter_mut().enumerate() {
+                c.extend_from_slice(&soa.v[j * soa.stride + run.start..j * soa.stride + run.end]);
+            }
+            self.ids.extend_from_slice(&tree.ids[run.clone()]);
+        }
         let padded = self.ids.len().div_ceil(BLOCK) * BLOCK;
         for c in &mut self.coords {
             c.resize(padded, T::INFINITY);
         }
         true
+    }
+
+    /// Appends the rows of the `m` members `mb` from the gathered block within `r2` and
+    /// returns the largest squared distance of their last neighbours; `None` when a member's
+    /// row falls short of `k` and the block is not `whole` (then the rows are incomplete).
+    fn members(&mut self, mb: &Members<T, D>, m: usize, r2: T, whole: bool) -> Option<T> {
+        let mut largest = T::ZERO;
+        for i in 0..m {
+            let held = self.member(&mb.q[i], mb.self_id[i], r2);
+            if held < self.k && !whole {
+                return None;
+            }
+            if let Some(last) = self.rows.last().filter(|_| held > 0) {
+                largest = largest.max_of(last.pair().0);
+            }
+            self.starts[i + 1] = self.rows.len();
+        }
+        Some(largest)
     }
 
     /// Appends the row of the member at `qi`: the first `k` keys (all for radius rows), in
