@@ -19,6 +19,7 @@
 use std::ops::Range;
 
 use crate::error::{NbhdError, Result};
+use crate::prefetch::prefetch_range;
 use crate::query::{Neighbor, Neighborhood, Query};
 use crate::table::{try_zeroed, NeighborTable};
 use crate::{BuildOptions, KdTree, PointsView};
@@ -188,6 +189,12 @@ pub(super) fn by_blocks(
             .zip(dists.par_chunks_mut(width))
             .enumerate()
             .map_init(Vec::new, |scratch, (r, (row, dist))| {
+                if r + PREFETCH_ROWS < table.len() {
+                    // the candidates are caller indices, scattered over `points`
+                    for &j in table.indices_of(r + PREFETCH_ROWS) {
+                        prefetch_range(std::slice::from_ref(&points[j as usize]));
+                    }
+                }
                 let o = order[positions.start + r];
                 let last = table.sq_dists_of(r).last().map_or(0.0, |&d| f64::from(d));
                 keep_nearest(points, o, table.indices_of(r), width, scratch);
@@ -236,6 +243,10 @@ pub(super) fn by_blocks(
     }
     Ok(order)
 }
+
+/// Rows ahead whose candidates' `f64` points are requested before the row is re-measured:
+/// the candidates lie all over the caller's array, and waiting for them was 7 % of the normals.
+const PREFETCH_ROWS: usize = 4;
 
 /// What the rows' memory is, in an [`NbhdError::OutOfMemory`].
 const WHAT: &str = "the nearest-neighbour rows (points × min(k, points − 1) entries)";

@@ -18,6 +18,7 @@ use crate::error::{NbhdError, Result};
 use crate::geometry::normals::{NormalCovariance, FLAG_SKIPPED};
 use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
+use crate::prefetch::prefetch_range;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -240,6 +241,9 @@ fn estimate_of(points: &[DVec3], p: DVec3, row: &[u32], buf: &mut Vec<DVec3>) ->
 /// `smooth/robust/planes.rs`).
 const BATCH: usize = 16;
 
+/// Rows ahead whose neighbours' points are requested before their covariance is summed.
+const PREFETCH_ROWS: usize = 4;
+
 /// The estimates of `n` points, point `r` at `p` with its neighbours `row` (caller indices,
 /// nearest first) as `point(r)` gives them, in parallel over batches of [`BATCH`] points of at
 /// least `min_len` points a task: the covariances of a batch, then their eigenvectors together
@@ -259,7 +263,14 @@ fn estimates_of_rows<'a>(
             // the lanes past the last point (of the last batch only) stay zero
             let mut c = [NormalCovariance::default(); BATCH];
             for (l, c) in c.iter_mut().enumerate().take(batch.len()) {
-                let (p, row) = point(b * BATCH + l);
+                let i = b * BATCH + l;
+                if i + PREFETCH_ROWS < n {
+                    // the neighbours are caller indices, scattered over `points`
+                    for &j in point(i + PREFETCH_ROWS).1 {
+                        prefetch_range(std::slice::from_ref(&points[j as usize]));
+                    }
+                }
+                let (p, row) = point(i);
                 *c = covariance_of(points, p, row, buf);
             }
             for (e, normal) in batch.iter_mut().zip(NormalCovariance::normals(&c)) {
