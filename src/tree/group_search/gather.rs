@@ -50,6 +50,11 @@ const GROW: f64 = 1.3;
 const MIN_SPREAD: f64 = 0.25;
 const MAX_SPREAD: f64 = 4.0;
 
+/// The spread of a member's first bound: its predecessor's k-th squared distance times
+/// `1 + MEMBER_SPREAD / √k` (a member above it takes its keys within the group's squared
+/// radius after all, a second pass over the block).
+const MEMBER_SPREAD: f64 = 1.0;
+
 /// Most candidates a group gathers, per neighbour asked for (and at least [`MIN_CAP`]): a
 /// larger block means copies of a point or a guess far too wide, and the parent's search
 /// answers the group. Volumes need room: in a uniform cube a group of 16 gathers about 250
@@ -91,6 +96,9 @@ pub(super) struct Gather<T, K, const D: usize> {
     margin: T,
     /// The margin's spread (see [`GUESS_SPREAD`]).
     spread: f64,
+    /// Factor from a member's k-th squared distance to the next member's first bound:
+    /// `1 + MEMBER_SPREAD / √k`.
+    member_margin: T,
     /// Most points a block may hold: fixed for k-nearest rows, doubled for radius rows (up to
     /// [`MAX_CAP`]) each time a group's block would pass it.
     cap: usize,
@@ -132,6 +140,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
             guess: None,
             margin: T::ZERO,
             spread: GUESS_SPREAD,
+            member_margin: T::from_f64(1.0 + MEMBER_SPREAD / (k as f64).sqrt()),
             cap: MIN_CAP,
             coords: std::array::from_fn(|_| Vec::new()),
             ids: Vec::new(),
@@ -288,13 +297,20 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
     /// row falls short of `k` and the block is not `whole` (then the rows are incomplete).
     fn members(&mut self, mb: &Members<T, D>, m: usize, r2: T, whole: bool) -> Option<T> {
         let mut largest = T::ZERO;
+        // the first member looks within r², each next one first within its predecessor's k-th
+        // squared distance with a margin: members follow each other in tree order
+        let mut hint = r2;
         for i in 0..m {
-            let held = self.member(&mb.q[i], mb.self_id[i], r2);
+            let held = self.member(&mb.q[i], mb.self_id[i], r2, hint);
             if held < self.k && !whole {
                 return None;
             }
             if let Some(last) = self.rows.last().filter(|_| held > 0) {
-                largest = largest.max_of(last.pair().0);
+                let kth = last.pair().0;
+                largest = largest.max_of(kth);
+                if held == self.k {
+                    hint = kth * self.member_margin;
+                }
             }
             self.starts[i + 1] = self.rows.len();
         }
@@ -304,24 +320,15 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
     /// Appends the row of the member at `qi`: the first `k` keys (all for radius rows), in
     /// `(sq_dist, index)` order unless unsorted rows are asked for, of the gathered points within
     /// `r2` of `qi` other than `self_id`; returns how many it holds.
-    fn member(&mut self, qi: &[T; D], self_id: u32, r2: T) -> usize {
-        // room for every gathered point: the keys are written without a capacity test
-        self.keys.resize(self.ids.len(), K::default());
-        let (mut n, count) = (0, self.ids.len());
-        for start in (0..count).step_by(BLOCK) {
-            let d = sq_dists_to_block(qi, |j| &self.coords[j][start..start + BLOCK]);
-            let mut hits = below_mask(&d, r2);
-            if count - start < BLOCK {
-                // the padding is infinitely far, yet within an infinite r²
-                hits &= (1 << (count - start)) - 1;
-            }
-            while hits != 0 {
-                let p = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
-                let id = self.ids[start + p];
-                self.keys[n] = K::of(id, d[p]);
-                n += usize::from(id != self_id);
-            }
+    ///
+    /// The keys are first taken within `hint` (when below `r2`): `k` of them there are the
+    /// row, since the block holds every point within `r2` and so within `hint` (fewer keys
+    /// to order); with fewer than `k` the member takes its keys within `r2` after all.
+    fn member(&mut self, qi: &[T; D], self_id: u32, r2: T, hint: T) -> usize {
+        let tight = hint.min_of(r2);
+        let mut n = self.keys_within(qi, self_id, tight);
+        if n < self.k && tight < r2 {
+            n = self.keys_within(qi, self_id, r2);
         }
         let held = n.min(self.k);
         let at = self.rows.len();
@@ -333,6 +340,30 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
             row.copy_from_slice(keys);
         }
         held
+    }
+
+    /// Writes into `keys` the keys of the gathered points within `bound` of `qi` other than
+    /// `self_id`, in block order; returns how many.
+    fn keys_within(&mut self, qi: &[T; D], self_id: u32, bound: T) -> usize {
+        // room for every gathered point: the keys are written without a capacity test
+        self.keys.resize(self.ids.len(), K::default());
+        let (mut n, count) = (0, self.ids.len());
+        for start in (0..count).step_by(BLOCK) {
+            let d = sq_dists_to_block(qi, |j| &self.coords[j][start..start + BLOCK]);
+            let mut hits = below_mask(&d, bound);
+            if count - start < BLOCK {
+                // the padding is infinitely far, yet within an infinite bound
+                hits &= (1 << (count - start)) - 1;
+            }
+            while hits != 0 {
+                let p = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let id = self.ids[start + p];
+                self.keys[n] = K::of(id, d[p]);
+                n += usize::from(id != self_id);
+            }
+        }
+        n
     }
 }
 
