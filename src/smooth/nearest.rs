@@ -152,10 +152,15 @@ pub(super) fn by_blocks(
     if !fits_f32 {
         return by_blocks_in_f64(points, k, block, consume);
     }
-    let flat: Vec<f32> = points
-        .iter()
-        .flat_map(|p| (*p - centre).to_array().map(|c| c as f32))
-        .collect();
+    let mut flat = vec![0f32; points.len() * 3];
+    flat.par_chunks_mut(3)
+        .zip(points.par_iter())
+        .with_min_len(4096)
+        .for_each(|(f, p)| {
+            for (f, c) in f.iter_mut().zip((*p - centre).to_array()) {
+                *f = c as f32;
+            }
+        });
     let tree = KdTree::<f32>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())?;
     drop(flat);
     let order = tree.tree_order().to_vec();
@@ -383,10 +388,13 @@ fn search_in_f64(
 /// it: the points are searched relative to the centre, so the `f32` rounding of a coordinate is
 /// at most `extent · 2⁻²⁴`.
 fn centre_and_extent(points: &[DVec3]) -> (DVec3, f64) {
-    let (lo, hi) = points.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
+    let empty = || (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    // minima and maxima are exact: the same box whatever the split into parallel parts
+    let (lo, hi) = points
+        .par_iter()
+        .with_min_len(4096)
+        .fold(empty, |(lo, hi), &p| (lo.min(p), hi.max(p)))
+        .reduce(empty, |a, b| (a.0.min(b.0), a.1.max(b.1)));
     let centre = (lo + hi) * 0.5;
     let extent = (hi - centre).max(centre - lo).max_element();
     (centre, extent)

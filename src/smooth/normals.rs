@@ -326,7 +326,7 @@ fn normals_in_tree_order(
         let block = estimates_of_rows(points, b.positions.len(), 256, |r| {
             (points[b.order[start + r] as usize], b.row(r))
         });
-        in_tree.extend(block.into_iter().enumerate().map(|(r, e)| {
+        in_tree.par_extend(block.into_par_iter().enumerate().map(|(r, e)| {
             let summary = RowSummary {
                 nearest: b.nearest[r],
                 farthest: b.farthest[r],
@@ -339,8 +339,14 @@ fn normals_in_tree_order(
     // caller order: the position of every caller index, then a parallel gather
     let position = super::positions_of(&order);
     let summary = |i: usize| in_tree[position[i] as usize].1;
-    // the mean nearest-neighbour spacing, summed in caller order as on the table path
-    let h = mean_nearest((0..n).map(|i| summary(i).nearest));
+    // the mean nearest-neighbour spacing, summed in caller order as on the table path (the
+    // scattered reads in parallel, the sum in order)
+    let nearest: Vec<Option<f64>> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| summary(i).nearest)
+        .collect();
+    let h = mean_nearest(nearest.into_iter());
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
