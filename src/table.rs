@@ -624,7 +624,30 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
     }
     blocks.into_par_iter().for_each(|(block, ids, dists)| {
         let base = offsets[block.start];
+        let end = block.end;
         for r in block {
+            // the sources are scattered over the chunks (tree order): request a row's source
+            // entry two steps ahead and its entries one step ahead (a hint: rows without a
+            // source, such as empty ones, are passed over)
+            if r + 2 * GATHER_AHEAD < end {
+                let (c, j) = source[r + 2 * GATHER_AHEAD];
+                if let Some(entry) = chunks.get(c as usize).and_then(|ch| ch.rows.get(j)) {
+                    prefetch_range(std::slice::from_ref(entry));
+                }
+            }
+            if r + GATHER_AHEAD < end {
+                let (c, j) = source[r + GATHER_AHEAD];
+                if let Some(chunk) = chunks.get(c as usize) {
+                    if let Some(s) = chunk.rows.get(j) {
+                        let at = s.at..s.at + s.len;
+                        if let (Some(i), Some(d)) = (chunk.ids.get(at.clone()), chunk.dists.get(at))
+                        {
+                            prefetch_range(i);
+                            prefetch_range(d);
+                        }
+                    }
+                }
+            }
             let (from, to) = (offsets[r] - base, offsets[r + 1] - base);
             if from == to {
                 continue;
@@ -651,6 +674,9 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
         sq_dists,
     })
 }
+
+/// Rows ahead whose source entries [`rows_in_chunks`] requests while it gathers a row.
+const GATHER_AHEAD: usize = 8;
 
 /// [`rows_in_chunks`] for rows of `len` entries each, written in place; `None` (nothing
 /// written that counts) if two work items map to one row or a row turned out to have another
