@@ -35,7 +35,7 @@ export NBHD_REQUIRE_LASPY=1
 
 # --- Rust ---------------------------------------------------------------------------------
 # Disk: CI's machine has a few GB to spare. Incremental caches and full debug information of
-# the ~60 test binaries took 13 GB of target/debug; line tables keep backtraces' file:line.
+# every test binary took 13 GB of target/debug; line tables keep backtraces' file:line.
 export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 export CARGO_PROFILE_DEV_DEBUG="${CARGO_PROFILE_DEV_DEBUG:-line-tables-only}"
 export CARGO_PROFILE_TEST_DEBUG="${CARGO_PROFILE_TEST_DEBUG:-line-tables-only}"

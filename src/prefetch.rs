@@ -8,6 +8,15 @@ pub(crate) fn prefetch_range<U>(s: &[U]) {
     prefetch_bytes(s.as_ptr().cast(), std::mem::size_of_val(s));
 }
 
+/// Requests the elements of `items` at `indices` (a row's neighbours, say, scattered over the
+/// caller's array).
+#[inline(always)]
+pub(crate) fn prefetch_at<U>(items: &[U], indices: &[u32]) {
+    for &i in indices {
+        prefetch_range(std::slice::from_ref(&items[i as usize]));
+    }
+}
+
 /// Requests the cache lines of the `bytes` bytes from `p`. `p` need not point into an
 /// allocation the caller may read (the slots another part of a table holds, say): the address
 /// is only computed, never dereferenced.

@@ -622,31 +622,28 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
         (ids_rest, dists_rest) = (ir, dr);
         blocks.push((first..end, ids, dists));
     }
+    // A row's chunk and entry there, for the hints ahead of the copy: `None` past the table and
+    // for rows no work item wrote (empty ones, whose source is the default).
+    let source_of = |r: usize| {
+        let &(c, j) = source.get(r)?;
+        let chunk = chunks.get(c as usize)?;
+        Some((chunk, chunk.rows.get(j)?))
+    };
     blocks.into_par_iter().for_each(|(block, ids, dists)| {
         let base = offsets[block.start];
         let end = block.end;
         for r in block {
             // the sources are scattered over the chunks (tree order): request a row's source
-            // entry two steps ahead and its entries one step ahead (a hint: rows without a
-            // source, such as empty ones, are passed over)
-            if r + 2 * GATHER_AHEAD < end {
-                let (c, j) = source[r + 2 * GATHER_AHEAD];
-                if let Some(entry) = chunks.get(c as usize).and_then(|ch| ch.rows.get(j)) {
-                    prefetch_range(std::slice::from_ref(entry));
-                }
+            // entry two steps ahead and its entries one step ahead
+            if let Some((_, s)) =
+                source_of(r + 2 * GATHER_AHEAD).filter(|_| r + 2 * GATHER_AHEAD < end)
+            {
+                prefetch_range(std::slice::from_ref(s));
             }
-            if r + GATHER_AHEAD < end {
-                let (c, j) = source[r + GATHER_AHEAD];
-                if let Some(chunk) = chunks.get(c as usize) {
-                    if let Some(s) = chunk.rows.get(j) {
-                        let at = s.at..s.at + s.len;
-                        if let (Some(i), Some(d)) = (chunk.ids.get(at.clone()), chunk.dists.get(at))
-                        {
-                            prefetch_range(i);
-                            prefetch_range(d);
-                        }
-                    }
-                }
+            if let Some((chunk, s)) = source_of(r + GATHER_AHEAD).filter(|_| r + GATHER_AHEAD < end)
+            {
+                prefetch_range(&chunk.ids[s.at..s.at + s.len]);
+                prefetch_range(&chunk.dists[s.at..s.at + s.len]);
             }
             let (from, to) = (offsets[r] - base, offsets[r + 1] - base);
             if from == to {

@@ -19,7 +19,7 @@
 use std::ops::Range;
 
 use crate::error::{NbhdError, Result};
-use crate::prefetch::prefetch_range;
+use crate::prefetch::prefetch_at;
 use crate::query::{Neighbor, Neighborhood, Query};
 use crate::table::{try_zeroed, NeighborTable};
 use crate::{BuildOptions, KdTree, PointsView};
@@ -195,10 +195,7 @@ pub(super) fn by_blocks(
             .enumerate()
             .map_init(Vec::new, |scratch, (r, (row, dist))| {
                 if r + PREFETCH_ROWS < table.len() {
-                    // the candidates are caller indices, scattered over `points`
-                    for &j in table.indices_of(r + PREFETCH_ROWS) {
-                        prefetch_range(std::slice::from_ref(&points[j as usize]));
-                    }
+                    prefetch_at(points, table.indices_of(r + PREFETCH_ROWS));
                 }
                 let o = order[positions.start + r];
                 let last = table.sq_dists_of(r).last().map_or(0.0, |&d| f64::from(d));

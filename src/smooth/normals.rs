@@ -18,7 +18,7 @@ use crate::error::{NbhdError, Result};
 use crate::geometry::normals::{NormalCovariance, FLAG_SKIPPED};
 use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
-use crate::prefetch::prefetch_range;
+use crate::prefetch::prefetch_at;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -265,10 +265,7 @@ fn estimates_of_rows<'a>(
             for (l, c) in c.iter_mut().enumerate().take(batch.len()) {
                 let i = b * BATCH + l;
                 if i + PREFETCH_ROWS < n {
-                    // the neighbours are caller indices, scattered over `points`
-                    for &j in point(i + PREFETCH_ROWS).1 {
-                        prefetch_range(std::slice::from_ref(&points[j as usize]));
-                    }
+                    prefetch_at(points, point(i + PREFETCH_ROWS).1);
                 }
                 let (p, row) = point(i);
                 *c = covariance_of(points, p, row, buf);

@@ -783,6 +783,9 @@ fn answer_groups<T: Scalar, const D: usize, R: RowSets<T>, K: PackedKey<T>>(
         if out.is_done() {
             return;
         }
+        // the group's rows go to slots scattered over the table: request them (and the next
+        // group's offsets) before the search
+        out.prefetch(g.len(), GROUP);
         match &mut gather {
             Some(gather) => s.gathered_group(g, gather, &mut rows, &mut stack, out),
             None => s.group(g, &mut rows, &mut stack, out),
@@ -861,7 +864,6 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         stack: &mut Vec<(u32, T)>,
         out: &mut RowsChunk<'_, T>,
     ) {
-        out.prefetch(g.len(), GROUP);
         let mb = self.members(g.clone());
         self.group_of(g, mb, rows, stack, out);
     }

@@ -188,7 +188,6 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
                 None => return false,
             }
         };
-        out.prefetch(m, GROUP);
         // gathered within the search's own limit, a row of fewer than k is whole
         let whole = r2 == limit;
         if !self.collect(search, &mb.lo, &mb.hi, r2) {
