@@ -25,6 +25,9 @@
 //! order of the point distance, and rounding is monotone, so a cell's bound never exceeds the
 //! computed squared distance of any of its points to any member.
 
+#[cfg(all(target_arch = "x86_64", rustc_1_89))]
+#[clippy::msrv = "1.89"]
+mod avx512;
 mod gather;
 
 use std::ops::Range;
@@ -374,7 +377,7 @@ impl<T: Scalar, E: RowEntry<T>> RowSets<T> for SortedRows<T, E> {
 /// A neighbour packed into one integer key that orders as `(sq_dist, index)`
 /// (`src/query/order.rs`): a `u64` for `f32` ([`order::key32`]), a `u128` for any scalar
 /// ([`order::key64`]).
-trait PackedKey<T>: Copy + Ord + Default + gather::Rank {
+trait PackedKey<T>: Copy + Ord + Default + gather::Rank + 'static {
     /// The key of a candidate.
     fn of(index: u32, sq_dist: T) -> Self;
     /// Its `(sq_dist, index)`.

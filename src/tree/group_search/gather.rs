@@ -21,9 +21,13 @@
 //! is answered by the parent's search instead. The rows are the same either way, byte for byte:
 //! the guess only decides the speed.
 
+#[cfg(all(target_arch = "x86_64", rustc_1_89))]
+use super::avx512;
 use super::{below_mask, box_dist, sq_dists_to_block, Members, PackedKey, Search, BLOCK, GROUP};
 use crate::scalar::Scalar;
 use crate::table::RowsChunk;
+#[cfg(all(target_arch = "x86_64", rustc_1_89))]
+use std::any::Any;
 use std::ops::Range;
 
 /// The margin of the guess, on squared distances, is `1 + spread / √k`: the k-th squared
@@ -117,6 +121,9 @@ pub(super) struct Gather<T, K, const D: usize> {
     /// Scratch: the gathered runs of consecutive tree positions (adjacent leaves merged), copied
     /// into the block once the traversal ends.
     runs: Vec<Range<usize>>,
+    /// Whether a member's keys come from the AVX-512 loop (`f32` rows on a processor that has
+    /// it, see `avx512.rs`).
+    avx512: bool,
 }
 
 impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
@@ -150,6 +157,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
             ranked: vec![K::default(); RANK_MAX + 1],
             stack: Vec::new(),
             runs: Vec::new(),
+            avx512: avx512_keys::<T, K>(),
         }
     }
 
@@ -228,7 +236,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
     fn reserve_rows(&mut self, m: usize) -> bool {
         let count = self.ids.len();
         self.rows.clear();
-        let keys_more = count.saturating_sub(self.keys.len());
+        let keys_more = (count + BLOCK).saturating_sub(self.keys.len());
         self.rows.try_reserve(m * count.min(self.k)).is_ok()
             && self.keys.try_reserve(keys_more).is_ok()
     }
@@ -344,8 +352,12 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
     /// Writes into `keys` the keys of the gathered points within `bound` of `qi` other than
     /// `self_id`, in block order; returns how many.
     fn keys_within(&mut self, qi: &[T; D], self_id: u32, bound: T) -> usize {
-        // room for every gathered point: the keys are written without a capacity test
-        self.keys.resize(self.ids.len(), K::default());
+        // room for every gathered point and a block more: the keys are written without a
+        // capacity test
+        self.keys.resize(self.ids.len() + BLOCK, K::default());
+        if let Some(n) = self.keys_within_avx512(qi, self_id, bound) {
+            return n;
+        }
         let (mut n, count) = (0, self.ids.len());
         for start in (0..count).step_by(BLOCK) {
             let d = sq_dists_to_block(qi, |j| &self.coords[j][start..start + BLOCK]);
@@ -363,6 +375,41 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
             }
         }
         n
+    }
+
+    /// [`Gather::keys_within`] by the AVX-512 loop (`avx512.rs`) when `self.avx512` says it
+    /// runs here; `None` otherwise.
+    fn keys_within_avx512(&mut self, qi: &[T; D], self_id: u32, bound: T) -> Option<usize> {
+        if !self.avx512 {
+            return None;
+        }
+        #[cfg(all(target_arch = "x86_64", rustc_1_89))]
+        if let (Some(coords), Some(q), Some(&b), Some(keys)) = (
+            (&self.coords as &dyn Any).downcast_ref::<[Vec<f32>; D]>(),
+            (qi as &dyn Any).downcast_ref::<[f32; D]>(),
+            (&bound as &dyn Any).downcast_ref::<f32>(),
+            (&mut self.keys as &mut dyn Any).downcast_mut::<Vec<u64>>(),
+        ) {
+            // SAFETY: `avx512` (checked above) is set only where the processor has AVX-512 F
+            // and VL.
+            return Some(unsafe { avx512::keys_within(coords, &self.ids, q, self_id, b, keys) });
+        }
+        let _ = (qi, self_id, bound);
+        None
+    }
+}
+
+/// Whether [`Gather::keys_within`] takes the AVX-512 loop: `f32` coordinates, 64-bit keys and
+/// a processor with AVX-512 F and VL.
+fn avx512_keys<T: Scalar, K: 'static>() -> bool {
+    use std::any::TypeId;
+    TypeId::of::<T>() == TypeId::of::<f32>() && TypeId::of::<K>() == TypeId::of::<u64>() && {
+        #[cfg(all(target_arch = "x86_64", rustc_1_89))]
+        let here = std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl");
+        #[cfg(not(all(target_arch = "x86_64", rustc_1_89)))]
+        let here = false;
+        here
     }
 }
 
@@ -390,11 +437,33 @@ fn first_in_order<T, K: PackedKey<T>>(keys: &mut [K], ranked: &mut [K], row: &mu
 /// a data-dependent branch (a sort of a few keys mispredicts about once per key).
 fn rank<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor supports AVX2 (checked just above).
-        return unsafe { rank_avx2(keys, slots) };
+    {
+        #[cfg(rustc_1_89)]
+        if std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+        {
+            // SAFETY: the processor supports AVX-512 F and VL (checked just above).
+            return unsafe { rank_avx512(keys, slots) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor supports AVX2 (checked just above).
+            return unsafe { rank_avx2(keys, slots) };
+        }
     }
     rank_portable(keys, slots)
+}
+
+/// [`rank`] compiled for AVX-512: eight 64-bit compares at a time, into mask registers.
+#[cfg(all(target_arch = "x86_64", rustc_1_89))]
+#[target_feature(enable = "avx512f,avx512vl")]
+fn rank_avx512<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
+    let last = slots.len() - 1;
+    let mut below = [0u32; RANK_MAX];
+    // SAFETY: this function runs only where AVX-512 F and VL are (its own target features).
+    unsafe { K::count_below_avx512(keys, &mut below[..keys.len()]) };
+    for (&a, &b) in keys.iter().zip(&below) {
+        slots[(b as usize).min(last)] = a;
+    }
 }
 
 /// [`rank`] compiled for AVX2: the counts of smaller keys four 64-bit compares at a time.
@@ -419,6 +488,16 @@ fn rank_portable<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
 pub(super) trait Rank: Sized {
     /// `below[i]` = how many of `keys` are less than `keys[i]`.
     fn count_below(keys: &[Self], below: &mut [u32]);
+
+    /// [`Rank::count_below`] on a processor with AVX-512 F and VL.
+    ///
+    /// # Safety
+    /// The processor must support AVX-512 F and VL.
+    #[cfg(all(target_arch = "x86_64", rustc_1_89))]
+    #[target_feature(enable = "avx512f,avx512vl")]
+    unsafe fn count_below_avx512(keys: &[Self], below: &mut [u32]) {
+        Self::count_below(keys, below)
+    }
 }
 
 impl Rank for u64 {
@@ -427,6 +506,13 @@ impl Rank for u64 {
         for (c, &a) in below.iter_mut().zip(keys) {
             *c = keys.iter().map(|&b| u32::from(b < a)).sum();
         }
+    }
+
+    #[cfg(all(target_arch = "x86_64", rustc_1_89))]
+    #[target_feature(enable = "avx512f,avx512vl")]
+    unsafe fn count_below_avx512(keys: &[u64], below: &mut [u32]) {
+        // SAFETY: the processor has AVX-512 F and VL (this function's own contract).
+        unsafe { super::avx512::count_below(keys, below) }
     }
 }
 
@@ -477,6 +563,54 @@ mod tests {
                     .map(|&k| (u128::from(k >> 40) << 64) | u128::from(k) << 20)
                     .collect();
                 check_ranks(&wide, held);
+            }
+        }
+    }
+
+    /// The AVX-512 loop of a member's keys gives the portable loop's keys, in the same order,
+    /// for blocks of every length around the register's sixteen lanes, bounds that fall
+    /// exactly on points, an infinite bound (the padding stays out) and the member inside or
+    /// outside the block. Where the processor has no AVX-512 there is one loop and nothing to
+    /// compare: the test says so and passes.
+    #[test]
+    fn avx512_keys_match_the_portable_loop() {
+        if !avx512_keys::<f32, u64>() {
+            eprintln!("no AVX-512 here: only the portable loop runs");
+            return;
+        }
+        let mut g = Gather::<f32, u64, 3>::within(true);
+        let mut state = 7u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            // a coarse grid, so that distances tie and fall exactly on a bound
+            ((state >> 59) as f32) * 0.25
+        };
+        for count in [0usize, 1, 7, 8, 9, 15, 16, 17, 31, 33, 100] {
+            for c in &mut g.coords {
+                c.clear();
+            }
+            g.ids = (0..count as u32).map(|i| 3 * i + 1).collect();
+            for _ in 0..count {
+                for c in &mut g.coords {
+                    c.push(next());
+                }
+            }
+            for c in &mut g.coords {
+                c.resize(count.div_ceil(BLOCK) * BLOCK, f32::INFINITY);
+            }
+            let q = [next(), next(), next()];
+            for bound in [0.0, 0.0625, 1.0, 2.25, 16.0, f32::INFINITY] {
+                for self_id in [1, 3 * (count as u32 / 2) + 1, 2] {
+                    let mut got = Vec::new();
+                    for fast in [true, false] {
+                        g.avx512 = fast;
+                        let n = g.keys_within(&q, self_id, bound);
+                        got.push(g.keys[..n].to_vec());
+                    }
+                    assert_eq!(got[0], got[1], "count {count} bound {bound} self {self_id}");
+                }
             }
         }
     }
