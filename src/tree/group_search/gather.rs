@@ -16,9 +16,10 @@
 //! neighbours are about as far). A member's row is exact as soon as it holds `k` keys within
 //! `r²`: every point left out lies in a cell whose lower bound to the group's box — and so to
 //! the member — exceeds `r²` (the bounds are exact in floating point, see the parent module),
-//! so it cannot precede the k-th key. When a member falls short, or the block grows past a cap
-//! (clusters of copies of a point, where the parent's tie pruning is the right tool), the group
-//! is answered by the parent's search instead. The rows are the same either way, byte for byte:
+//! so it cannot precede the k-th key. When a member falls short the group gathers once more
+//! within a wider radius; when it falls short again, or the block grows past a cap (clusters
+//! of copies of a point, where the parent's tie pruning is the right tool), the group is
+//! answered by the parent's search instead. The rows are the same either way, byte for byte:
 //! the guess only decides the speed.
 
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
@@ -64,9 +65,15 @@ const MEMBER_SPREAD: f64 = 1.0;
 /// answers the group. Volumes need room: in a uniform cube a group of 16 gathers about 250
 /// points for k = 10 (12 per neighbour left three quarters of the 1M cube's groups to the
 /// parent's search, 1.15 s against 0.85 s with 64; measured alike with 32 on the surface and
-/// duplicate-heavy sets). Retrying a short group within twice the squared radius before the
-/// parent's search was measured too, and gained nothing (1–5 % of the groups are short).
+/// duplicate-heavy sets). A short group first retries within a wider radius ([`RETRY`]).
 const CAP_PER_NEIGHBOUR: usize = 64;
+
+/// A group whose block fell short gathers once more within this many times the squared
+/// radius before the parent's search answers it. Measured with the AVX-512 loops (one thread,
+/// side by side): 1M cube k = 10 447–451 → 419–432 ms, 1M torus k = 10 240–265 → 218–236 ms,
+/// k = 30 alike; 1.5 measured the same as 2 within the noise. (Before those loops, when a
+/// member's keys cost more, the retry gained nothing.)
+const RETRY: f64 = 2.0;
 
 /// The smallest cap of a gathered block.
 const MIN_CAP: usize = 256;
@@ -196,26 +203,35 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
                 None => return false,
             }
         };
-        // gathered within the search's own limit, a row of fewer than k is whole
-        let whole = r2 == limit;
-        if !self.collect(search, &mb.lo, &mb.hi, r2) {
-            if self.k == usize::MAX {
-                // radius rows hold every point the block would: room for more next time
-                self.cap = (self.cap * 2).min(MAX_CAP);
-            }
-            return false;
-        }
-        if !self.reserve_rows(m) {
-            return false;
-        }
         // the spread adapts for rows of the k nearest alone: under a radius, rows may be short
         // because the radius cuts them, which a wider guess does not mend
         let adapts = !limit.is_finite();
-        let Some(largest) = self.members(mb, m, r2, whole) else {
+        let (mut r2, mut retried) = (r2, false);
+        let largest = loop {
+            // gathered within the search's own limit, a row of fewer than k is whole
+            let whole = r2 == limit;
+            if !self.collect(search, &mb.lo, &mb.hi, r2) {
+                if self.k == usize::MAX {
+                    // radius rows hold every point the block would: room for more next time
+                    self.cap = (self.cap * 2).min(MAX_CAP);
+                }
+                return false;
+            }
+            if !self.reserve_rows(m) {
+                return false;
+            }
+            if let Some(largest) = self.members(mb, m, r2, whole) {
+                break largest;
+            }
             if adapts {
                 self.adapt(GROW);
             }
-            return false;
+            if retried {
+                return false;
+            }
+            // short: once more from a block gathered within a wider squared radius
+            retried = true;
+            r2 = (r2 * T::from_f64(RETRY)).min_of(limit);
         };
         for i in 0..m {
             let row = &self.rows[self.starts[i]..self.starts[i + 1]];
