@@ -37,13 +37,19 @@ if [ "${#missing[@]}" -gt 0 ]; then
     python -m pip install --quiet --disable-pip-version-check "${missing[@]}"
 fi
 
+# python/ is a Cargo workspace of its own, built in a target directory of its own: nbhd is also a
+# cdylib, so its release rlib's file name carries no hash (target/release/deps/libnbhd.rlib), and
+# in a shared directory the root workspace's build of it (against its own glam) would stand in
+# for python/'s whenever the root built last ("expected `DVec3`, found `glam::f64::dvec3::DVec3`").
+py_target="$CARGO_TARGET_DIR/python"
+
 echo "== python/: cargo fmt --check, clippy"
 cargo fmt --manifest-path python/Cargo.toml -- --check
-cargo clippy --manifest-path python/Cargo.toml --all-targets -- -D warnings
+CARGO_TARGET_DIR="$py_target" cargo clippy --manifest-path python/Cargo.toml --all-targets -- -D warnings
 
 echo "== pip install . (maturin, release build of python/)"
-python -m pip install --quiet --disable-pip-version-check --no-build-isolation \
-    --force-reinstall --no-deps .
+CARGO_TARGET_DIR="$py_target" python -m pip install --quiet --disable-pip-version-check \
+    --no-build-isolation --force-reinstall --no-deps .
 
 echo "== the command-line tool, for the comparisons with the Rust results"
 cargo build --quiet -p nbhd-cli
