@@ -5,10 +5,11 @@
 //! same squared distances, bit for bit, summed in the same order; the same keys in the same
 //! order); `gather.rs` calls them only where the processor has the instructions.
 
+use super::BLOCK as LANES;
 use std::arch::x86_64::*;
 
-/// Points per step: one register of sixteen `f32` lanes (the block's padding, [`super::BLOCK`]).
-const LANES: usize = 16;
+// One step is one register of sixteen `f32` lanes, the block's padding.
+const _: () = assert!(LANES == 16);
 
 /// Writes into `keys` the packed keys (`order::key32`: the squared distance's bits above the
 /// index) of the block's points within `bound` of `q`, other than `self_id`, in block order;

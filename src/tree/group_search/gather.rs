@@ -419,14 +419,19 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
 /// a processor with AVX-512 F and VL.
 fn avx512_keys<T: Scalar, K: 'static>() -> bool {
     use std::any::TypeId;
-    TypeId::of::<T>() == TypeId::of::<f32>() && TypeId::of::<K>() == TypeId::of::<u64>() && {
-        #[cfg(all(target_arch = "x86_64", rustc_1_89))]
-        let here = std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl");
-        #[cfg(not(all(target_arch = "x86_64", rustc_1_89)))]
-        let here = false;
-        here
-    }
+    TypeId::of::<T>() == TypeId::of::<f32>()
+        && TypeId::of::<K>() == TypeId::of::<u64>()
+        && avx512_here()
+}
+
+/// Whether the AVX-512 loops run here: built (x86-64, Rust 1.89 or later) and a processor with
+/// AVX-512 F and VL.
+fn avx512_here() -> bool {
+    #[cfg(all(target_arch = "x86_64", rustc_1_89))]
+    return std::arch::is_x86_feature_detected!("avx512f")
+        && std::arch::is_x86_feature_detected!("avx512vl");
+    #[cfg(not(all(target_arch = "x86_64", rustc_1_89)))]
+    false
 }
 
 /// The first `row.len()` of the distinct `keys` in order into `row` (`keys` may be reordered;
@@ -455,9 +460,7 @@ fn rank<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
     #[cfg(target_arch = "x86_64")]
     {
         #[cfg(rustc_1_89)]
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-        {
+        if avx512_here() {
             // SAFETY: the processor supports AVX-512 F and VL (checked just above).
             return unsafe { rank_avx512(keys, slots) };
         }
@@ -473,13 +476,10 @@ fn rank<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
 #[target_feature(enable = "avx512f,avx512vl")]
 fn rank_avx512<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
-    let last = slots.len() - 1;
-    let mut below = [0u32; RANK_MAX];
     // SAFETY: this function runs only where AVX-512 F and VL are (its own target features).
-    unsafe { K::count_below_avx512(keys, &mut below[..keys.len()]) };
-    for (&a, &b) in keys.iter().zip(&below) {
-        slots[(b as usize).min(last)] = a;
-    }
+    place_by_rank(keys, slots, |k, below| unsafe {
+        K::count_below_avx512(k, below)
+    });
 }
 
 /// [`rank`] compiled for AVX2: the counts of smaller keys four 64-bit compares at a time.
@@ -492,9 +492,16 @@ fn rank_avx2<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
 /// The loop of [`rank`], inlined into each instruction set's version.
 #[inline(always)]
 fn rank_portable<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
+    place_by_rank(keys, slots, K::count_below);
+}
+
+/// Each key into `slots` at its rank as `count_below` counts it (a form of
+/// [`Rank::count_below`]), the ranks from the last slot on sharing it.
+#[inline(always)]
+fn place_by_rank<K: Copy>(keys: &[K], slots: &mut [K], count_below: impl FnOnce(&[K], &mut [u32])) {
     let last = slots.len() - 1;
     let mut below = [0u32; RANK_MAX];
-    K::count_below(keys, &mut below[..keys.len()]);
+    count_below(keys, &mut below[..keys.len()]);
     for (&a, &b) in keys.iter().zip(&below) {
         slots[(b as usize).min(last)] = a;
     }
