@@ -9,6 +9,11 @@ import numpy as np
 
 import nbhd
 
+# a call that releases the GIL lets the probe's thread run about once a millisecond, hundreds of
+# times in a 0.1 s call; one that holds it lets it run at most at the call's edges, when a busy
+# machine delays the caller by more than the probe's 20 ms margin: the line between is this count
+RELEASED = 5
+
 
 def runs_meanwhile(work):
     """Timestamps at which a second Python thread ran during `work()`, a call into the library:
@@ -49,14 +54,14 @@ def test_gil_is_released_during_tables_and_smoothing(rng):
         return lambda: tree.neighborhoods(k=30, threads=1)
 
     secs, ticks = long_enough(table, 300_000)
-    assert secs > 0.1 and ticks > 5, (secs, ticks)
+    assert secs > 0.1 and ticks > RELEASED, (secs, ticks)
 
     def build(n):
         pts = rng.random((n, 3))
         return lambda: nbhd.KdTree(pts, threads=1, median="presorted")
 
     secs, ticks = long_enough(build, 300_000)
-    assert secs > 0.1 and ticks > 5, (secs, ticks)
+    assert secs > 0.1 and ticks > RELEASED, (secs, ticks)
 
     def smoothing(n):
         sph = rng.normal(size=(n, 3))
@@ -64,7 +69,7 @@ def test_gil_is_released_during_tables_and_smoothing(rng):
         return lambda: nbhd.smooth(sph, threads=1, steps=5)
 
     secs, ticks = long_enough(smoothing, 60_000)
-    assert secs > 0.1 and ticks > 5, (secs, ticks)
+    assert secs > 0.1 and ticks > RELEASED, (secs, ticks)
 
 
 def test_one_tree_queried_from_many_python_threads(rng):
@@ -80,7 +85,7 @@ def test_one_tree_queried_from_many_python_threads(rng):
 
 def test_the_probe_sees_a_call_that_holds_the_gil():
     # control: a C call that never releases the GIL (the regex engine backtracking) lets the
-    # other thread run not once, so the probe above can fail
+    # other thread run hardly at all, so the probe above can fail
     import re
 
     # lengthen the backtracking (each 'a' about 1.6 times the work) until the call is long
@@ -91,4 +96,4 @@ def test_the_probe_sees_a_call_that_holds_the_gil():
         if secs > 0.1 or n > 40:
             break
         n += 2
-    assert secs > 0.1 and ticks == 0, (n, secs, ticks)
+    assert secs > 0.1 and ticks <= RELEASED, (n, secs, ticks)
