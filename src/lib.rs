@@ -25,6 +25,7 @@ pub mod points;
 pub(crate) mod prefetch;
 pub mod query;
 pub mod scalar;
+pub(crate) mod scatter;
 pub(crate) mod select;
 #[cfg(any(test, feature = "shapes"))]
 pub mod shapes;

@@ -72,7 +72,8 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
             farthest[pos] = block.farthest[r];
         }
         Ok(())
-    })?;
+    })?
+    .order;
     Ok(Nearest {
         order,
         width,
@@ -97,7 +98,8 @@ pub(crate) fn nearest_table(points: &[DVec3], k: usize) -> Result<(NeighborTable
             sq_dist[at..at + width].copy_from_slice(block.dists_of(r));
         }
         Ok(())
-    })?;
+    })?
+    .order;
     let offsets = (0..=n).map(|i| i * width).collect();
     // one row of `width` per point: the parts always fit
     let table = NeighborTable::from_parts(offsets, index, sq_dist).unwrap_or_default();
@@ -137,14 +139,14 @@ impl Block<'_> {
 /// The `k` nearest other points of every point of `points` (a nonempty set of finite points),
 /// handed to `consume` a block of `block` consecutive positions of the `f32` tree at a time, so
 /// that no table of every row is ever held (at a million points and k = 48, 576 MB) and a
-/// block's rows are consumed while in cache. Returns the tree's order: the caller's index of
-/// the point stored at each position.
+/// block's rows are consumed while in cache. Returns the search (its tree's order, and rows
+/// again on request).
 pub(super) fn by_blocks(
     points: &[DVec3],
     k: usize,
     block: usize,
     consume: &mut dyn FnMut(&Block<'_>) -> Result<()>,
-) -> Result<Vec<u32>> {
+) -> Result<Searched> {
     let n = points.len();
     let (centre, extent) = centre_and_extent(points);
     // false for a NaN extent too (coordinates whose centre overflows)
@@ -167,7 +169,12 @@ pub(super) fn by_blocks(
     let width = k.min(n.saturating_sub(1));
     // with every other point among the candidates, a row is exact without a proof
     let searched = (width + MARGIN).min(n.saturating_sub(1));
-    let complete = searched == n.saturating_sub(1);
+    let proof = Proof {
+        width,
+        searched,
+        complete: searched == n.saturating_sub(1),
+        extent,
+    };
     // the f64 tree of the rows the proof does not settle, built when the first one needs it
     let mut exact: Option<KdTree<f64>> = None;
     let (mut rows, mut dists) = (Vec::new(), Vec::new());
@@ -199,13 +206,12 @@ pub(super) fn by_blocks(
                 }
                 let o = order[positions.start + r];
                 let last = table.sq_dists_of(r).last().map_or(0.0, |&d| f64::from(d));
-                keep_nearest(points, o, table.indices_of(r), width, scratch);
+                let proven = proof.settle(points, o, table.indices_of(r), last, scratch);
                 for ((slot, d), &(e, j)) in row.iter_mut().zip(dist.iter_mut()).zip(scratch.iter())
                 {
                     (*slot, *d) = (j, e);
                 }
                 let kth = scratch.get(width.wrapping_sub(1)).map_or(0.0, |e| e.0);
-                let proven = complete || proves(kth, last, extent);
                 (scratch.first().map(|e| e.0), kth, proven)
             })
             .collect();
@@ -243,7 +249,143 @@ pub(super) fn by_blocks(
     } else {
         tree.neighborhoods_by_blocks(Neighborhood::Knn { k: searched }, true, block, &mut each)?;
     }
-    Ok(order)
+    Ok(Searched {
+        order,
+        width,
+        tree: SearchTree::F32 {
+            tree,
+            proof,
+            exact: exact.map(Box::new),
+        },
+    })
+}
+
+/// What [`by_blocks`] searched with, kept to give rows once more after the blocks: a caller that
+/// learns only at the end which rows it needs again (the rows cut by a length known once every
+/// row was seen, `normals.rs`) gets them from the same tree, proven exact the same way, rather
+/// than from a second tree of every point.
+pub(super) struct Searched {
+    /// The caller's index of the point stored at each position (the search tree's order).
+    pub(super) order: Vec<u32>,
+    /// Row length: `k`, or every other point when there are fewer.
+    width: usize,
+    tree: SearchTree,
+}
+
+/// The tree of a [`Searched`].
+enum SearchTree {
+    /// The `f32` search of the centred points, with the `f64` tree of the rows its proof did not
+    /// settle once one needed it.
+    F32 {
+        tree: KdTree<f32>,
+        proof: Proof,
+        exact: Option<Box<KdTree<f64>>>,
+    },
+    /// The `f64` search of points too far out for `f32`.
+    F64(KdTree<f64>),
+}
+
+impl Searched {
+    /// The rows of the points at the tree positions `positions`, exactly as the blocks gave them:
+    /// the `width` nearest other points of each by `(f64 sq_dist, index)`.
+    pub(super) fn rows_at(
+        &self,
+        points: &[DVec3],
+        positions: &[usize],
+    ) -> Result<Vec<Vec<Neighbor<f64>>>> {
+        let (order, width) = (&self.order, self.width);
+        if width == 0 {
+            return Ok(vec![Vec::new(); positions.len()]);
+        }
+        let (tree, proof, exact) = match &self.tree {
+            SearchTree::F64(tree) => {
+                return positions
+                    .par_iter()
+                    .map(|&pos| knn_at(tree, pos, order[pos], width))
+                    .collect();
+            }
+            SearchTree::F32 { tree, proof, exact } => (tree, proof, exact),
+        };
+        let mut settled: Vec<(Vec<Neighbor<f64>>, bool)> = positions
+            .par_iter()
+            .map_init(Vec::new, |scratch, &pos| {
+                let o = order[pos];
+                let found = knn_at(tree, pos, o, proof.searched)?;
+                let last = found.last().map_or(0.0, |c| f64::from(c.sq_dist));
+                let ids: Vec<u32> = found.iter().map(|c| c.index).collect();
+                let proven = proof.settle(points, o, &ids, last, scratch);
+                let row = scratch
+                    .iter()
+                    .map(|&(sq_dist, index)| Neighbor { index, sq_dist })
+                    .collect();
+                Ok((row, proven))
+            })
+            .collect::<Result<_>>()?;
+        let unproven: Vec<usize> = (0..positions.len()).filter(|&r| !settled[r].1).collect();
+        if !unproven.is_empty() {
+            let built;
+            let tree = match exact {
+                Some(t) => &**t,
+                None => {
+                    built = f64_tree(points)?;
+                    &built
+                }
+            };
+            let callers: Vec<u32> = positions.iter().map(|&pos| order[pos]).collect();
+            let searched = search_in_f64(tree, &callers, &unproven, width)?;
+            for (&r, row) in unproven.iter().zip(searched) {
+                settled[r].0 = row;
+            }
+        }
+        Ok(settled.into_iter().map(|(row, _)| row).collect())
+    }
+}
+
+/// The `k` nearest other points of the point at tree position `pos` (caller index `o`).
+fn knn_at<T: crate::scalar::Scalar>(
+    tree: &KdTree<T>,
+    pos: usize,
+    o: u32,
+    k: usize,
+) -> Result<Vec<Neighbor<T>>> {
+    let mut row = Vec::with_capacity(k);
+    let query = Query::Point {
+        coords: tree.point_at(pos),
+        exclude: Some(o),
+    };
+    tree.knn(query, k, &mut row)?;
+    Ok(row)
+}
+
+/// How a row of `f32` candidates is made exact: re-measured in `f64`, the first `width` kept, and
+/// proven the exact nearest by [`proves`] (or by holding every other point).
+struct Proof {
+    /// Row length: `k`, or every other point when there are fewer.
+    width: usize,
+    /// Candidates searched: `width` and a margin, or every other point.
+    searched: usize,
+    /// Whether the candidates are every other point (a row exact without a proof).
+    complete: bool,
+    /// The largest coordinate relative to the centre ([`f32_error`]).
+    extent: f64,
+}
+
+impl Proof {
+    /// The candidates `ids` of the point with caller index `o` (the last at `f32` squared
+    /// distance `last`) re-measured into `out` (see [`keep_nearest`]); whether they are proven
+    /// the exact `width` nearest.
+    fn settle(
+        &self,
+        points: &[DVec3],
+        o: u32,
+        ids: &[u32],
+        last: f64,
+        out: &mut Vec<(f64, u32)>,
+    ) -> bool {
+        keep_nearest(points, o, ids, self.width, out);
+        let kth = out.get(self.width.wrapping_sub(1)).map_or(0.0, |e| e.0);
+        self.complete || proves(kth, last, self.extent)
+    }
 }
 
 /// Rows ahead whose candidates' `f64` points are requested before the row is re-measured:
@@ -285,7 +427,7 @@ fn by_blocks_in_f64(
     k: usize,
     block: usize,
     consume: &mut dyn FnMut(&Block<'_>) -> Result<()>,
-) -> Result<Vec<u32>> {
+) -> Result<Searched> {
     let tree = f64_tree(points)?;
     let order = tree.tree_order().to_vec();
     let width = k.min(points.len().saturating_sub(1));
@@ -313,21 +455,11 @@ fn by_blocks_in_f64(
         block,
         &mut each,
     )?;
-    Ok(order)
-}
-
-/// The exact rows of the points `callers` (caller indices): the `width` nearest other points of
-/// each by an `f64` search, as [`by_blocks`] gives them (no tree is built for none).
-pub(super) fn exact_rows(
-    points: &[DVec3],
-    callers: &[u32],
-    width: usize,
-) -> Result<Vec<Vec<Neighbor<f64>>>> {
-    if callers.is_empty() {
-        return Ok(Vec::new());
-    }
-    let all: Vec<usize> = (0..callers.len()).collect();
-    search_in_f64(&f64_tree(points)?, callers, &all, width)
+    Ok(Searched {
+        order,
+        width,
+        tree: SearchTree::F64(tree),
+    })
 }
 
 /// The candidates `ids` of the point with caller index `o`, re-measured in `f64` and sorted by
@@ -455,6 +587,29 @@ mod tests {
             assert_eq!(got, want, "row of point {o}");
             assert_eq!(found.nearest[o as usize], all.first().map(|e| e.0));
         }
+        assert_rows_again(points, k);
+    }
+
+    /// `Searched::rows_at` gives the rows the blocks gave, bit for bit, for positions asked in
+    /// any order.
+    fn assert_rows_again(points: &[DVec3], k: usize) {
+        let mut blocks: Vec<Vec<Neighbor<f64>>> = Vec::new();
+        let searched = by_blocks(points, k, 700, &mut |b| {
+            for r in 0..b.positions.len() {
+                let row = b.row(r).iter().zip(b.dists_of(r));
+                blocks.push(
+                    row.map(|(&index, &sq_dist)| Neighbor { index, sq_dist })
+                        .collect(),
+                );
+            }
+            Ok(())
+        })
+        .unwrap();
+        let asked: Vec<usize> = (0..points.len()).rev().step_by(3).collect();
+        let again = searched.rows_at(points, &asked).unwrap();
+        for (&pos, row) in asked.iter().zip(&again) {
+            assert_eq!(row, &blocks[pos], "row at position {pos}");
+        }
     }
 
     fn noisy_sphere(n: usize, offset: f64) -> Vec<DVec3> {
@@ -486,6 +641,19 @@ mod tests {
         // coordinates of about 1e20: searched in f64 throughout
         let huge: Vec<DVec3> = noisy_sphere(500, 0.0).iter().map(|&p| p * 1e20).collect();
         assert_exact(&huge, 16);
+    }
+
+    #[test]
+    fn rows_are_exact_where_f32_cannot_tell_points_apart() {
+        // two clusters 2e5 apart, each 400 points within 1e-3: f32 resolves about 0.008 out
+        // there, so the f32 candidates are the copies it sees and only the f64 search is right
+        let cluster = |x: f64| {
+            noisy_sphere(400, 0.0)
+                .into_iter()
+                .map(move |p| p * 5e-4 + DVec3::new(x, 0.0, 0.0))
+        };
+        let pts: Vec<DVec3> = cluster(1e5).chain(cluster(-1e5)).collect();
+        assert_exact(&pts, 10);
     }
 
     #[test]

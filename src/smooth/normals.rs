@@ -19,6 +19,7 @@ use crate::geometry::normals::{NormalCovariance, FLAG_SKIPPED};
 use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
 use crate::prefetch::prefetch_at;
+use crate::scatter::{scatter, TargetCheck};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -179,17 +180,6 @@ fn normals_finite(
 /// grouped search to keep two threads busy.
 const BLOCK: usize = 8192;
 
-/// What the fused pass keeps of one point's row besides its estimate.
-#[derive(Clone, Copy, Debug, Default)]
-struct RowSummary {
-    /// Squared distance to the nearest neighbour (`None` for an empty row).
-    nearest: Option<f64>,
-    /// Squared distance to the farthest (the last) neighbour, 0 for an empty row.
-    farthest: f64,
-    /// Number of neighbours.
-    len: u32,
-}
-
 /// What `super::check_not_degenerate` refuses, with the same message: no neighbourhood reaches
 /// 3 points, or every estimate is flagged.
 struct Refusal {
@@ -307,7 +297,9 @@ fn estimate((normal, values, flags): (DVec3, DVec3, u8)) -> NormalEstimate {
 /// nearby points read again and again rather than points all over the caller's array. ε is
 /// known only once the spacing is (the mean over every row's nearest neighbour), so each row
 /// is consumed whole and the rows that ε cuts (rare for the default 6h; their last neighbour
-/// lies beyond ε) are searched again and consumed cut.
+/// lies beyond ε) are searched again, on the blocks' own tree (`Searched::rows_at`: a second
+/// tree of every point for the 0.2 % of rows the 1M torus has cut cost a sixth of the call), and
+/// consumed cut.
 fn normals_in_tree_order(
     points: &[DVec3],
     options: &SmoothOptions,
@@ -315,77 +307,57 @@ fn normals_in_tree_order(
 ) -> Result<NormalsResult> {
     let n = points.len();
     let k = options.k;
-    // estimates and row summaries in tree order, block after block
-    let mut in_tree: Vec<(NormalEstimate, RowSummary)> = Vec::with_capacity(n);
-    let order = super::nearest::by_blocks(points, k, BLOCK, &mut |b| {
-        debug_assert_eq!(b.positions.start, in_tree.len());
+    // each block's estimates and nearest distances go to the caller's order as they are made
+    // (written in parallel, overlapping the blocks' work, rather than gathered at random
+    // afterwards); the farthest distances stay in tree order, where the cut rows are found
+    let mut estimates = vec_of(NormalEstimate::skipped(), n);
+    let mut nearest: Vec<Option<f64>> = vec_of(None, n);
+    let mut farthest_in_tree: Vec<f64> = Vec::with_capacity(n);
+    let mut targets = TargetCheck::new(n);
+    let mut width = 0;
+    let searched = super::nearest::by_blocks(points, k, BLOCK, &mut |b| {
         let start = b.positions.start;
         let block = estimates_of_rows(points, b.positions.len(), 256, |r| {
             (points[b.order[start + r] as usize], b.row(r))
         });
-        in_tree.par_extend(block.into_par_iter().enumerate().map(|(r, e)| {
-            let summary = RowSummary {
-                nearest: b.nearest[r],
-                farthest: b.farthest[r],
-                len: b.width as u32,
-            };
-            (e, summary)
-        }));
+        let to = targets.check(&b.order[b.positions.clone()])?;
+        scatter(&mut estimates, &to, &block)?;
+        scatter(&mut nearest, &to, b.nearest)?;
+        farthest_in_tree.extend_from_slice(b.farthest);
+        width = b.width;
         report(0.9 * b.positions.end as f64 / n as f64, Stage::Neighbors)
     })?;
-    // caller order: the position of every caller index, then a parallel gather
-    let position = super::positions_of(&order);
-    let summary = |i: usize| in_tree[position[i] as usize].1;
-    // the mean nearest-neighbour spacing, summed in caller order as on the table path (the
-    // scattered reads in parallel, the sum in order)
-    let nearest: Vec<Option<f64>> = (0..n)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|i| summary(i).nearest)
-        .collect();
+    let order = &searched.order;
+    // the mean nearest-neighbour spacing, summed in caller order as on the table path
     let h = mean_nearest(nearest.into_iter());
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
     let e2 = eps * eps;
-    let mut estimates: Vec<NormalEstimate> = position
-        .par_iter()
-        .with_min_len(4096)
-        .map(|&pos| in_tree[pos as usize].0)
-        .collect();
-    // rows that ε cuts: searched again (the same rows as the blocks'), consumed up to ε
+    // rows that ε cuts (found in tree order): their rows again from the blocks' search,
+    // consumed up to ε
     let cut: Vec<usize> = (0..n)
         .into_par_iter()
         .with_min_len(4096)
-        .filter(|&i| summary(i).farthest > e2)
+        .filter(|&pos| farthest_in_tree[pos] > e2)
         .collect();
-    let callers: Vec<u32> = cut.iter().map(|&i| i as u32).collect();
-    let rows = super::nearest::exact_rows(points, &callers, k.min(n - 1))?;
+    let rows = searched.rows_at(points, &cut)?;
     let recomputed: Vec<(NormalEstimate, usize)> = cut
         .par_iter()
         .zip(&rows)
         .with_min_len(64)
-        .map_init(Vec::new, |buf, (&i, found)| {
+        .map_init(Vec::new, |buf, (&pos, found)| {
+            let i = order[pos] as usize;
             let within = found.partition_point(|x| x.sq_dist <= e2);
             let ids: Vec<u32> = found[..within].iter().map(|x| x.index).collect();
             (estimate_of(points, points[i], &ids, buf), within)
         })
         .collect();
-    let mut largest = (0..n)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|i| {
-            let s = summary(i);
-            if s.farthest > e2 {
-                0
-            } else {
-                s.len as usize
-            }
-        })
-        .max()
-        .unwrap_or(0);
-    for (&i, &(e, within)) in cut.iter().zip(&recomputed) {
-        estimates[i] = e;
+    // every row has `width` neighbours; an uncut one holds them all within ε
+    let uncut = farthest_in_tree.par_iter().any(|&f| f <= e2);
+    let mut largest = if uncut { width } else { 0 };
+    for (&pos, &(e, within)) in cut.iter().zip(&recomputed) {
+        estimates[order[pos] as usize] = e;
         largest = largest.max(within);
     }
     let refusal = Refusal {
@@ -403,6 +375,14 @@ fn normals_in_tree_order(
         spacing: h,
         epsilon: eps,
     })
+}
+
+/// `n` copies of `value`, written in parallel (the pages of a large vector are first touched by
+/// every thread).
+fn vec_of<U: Copy + Send + Sync>(value: U, n: usize) -> Vec<U> {
+    let mut v = Vec::with_capacity(n);
+    v.par_extend(rayon::iter::repeat_n(value, n));
+    v
 }
 
 /// The mean distance of a point to its nearest other point from each point's squared distance
