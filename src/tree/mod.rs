@@ -179,7 +179,8 @@ impl<T: Scalar> KdTree<T> {
     /// compact descent.
     fn derive(&mut self) {
         self.min_id = search::min_ids(&self.nodes, &self.ids);
-        self.descent = Descent::new(&self.nodes, &self.min_id, self.dim, DESCENT_BUCKET);
+        let bucket = descent_bucket(self.len());
+        self.descent = Descent::new(&self.nodes, &self.min_id, self.dim, bucket);
     }
 
     /// Runs a single search into `out`: over the compact descent where the tree has one.
@@ -305,10 +306,23 @@ impl<T: Scalar> KdTree<T> {
     }
 }
 
-/// Subtrees of at most this many points are one leaf of the compact descent (`node.rs`): on
-/// the 77k torus (README "Single queries, the floor, and copies of a point") 24, 32 and 40
-/// took the same time within the noise, all well below the build's leaves of 12.
-const DESCENT_BUCKET: usize = 32;
+/// Subtrees of at most this many points are one leaf of the compact descent (`node.rs`): 32
+/// up to [`LARGE_TREE`] points, 64 above. Where the points fit the core's cache, leaves of 32
+/// are best (77k torus: 24, 32 and 40 the same within the noise, 64 10-20 % slower at k = 10,
+/// README "Single queries, the floor, and copies of a point"); where every leaf is a cache
+/// miss, fewer, larger leaves are (1M cube and torus: 64 took 0.80-0.93x the time of 32 at
+/// k = 10 and 30, 96 and 128 no better than 64; docs/speed-log.md, round 8).
+fn descent_bucket(points: usize) -> usize {
+    if points > LARGE_TREE {
+        64
+    } else {
+        32
+    }
+}
+
+/// Trees of more points than this take the larger leaves of [`descent_bucket`]: 3 MB of `f32`
+/// coordinates, beyond the 1-2 MB of a core's own cache (the 123k set, 1.5 MB, kept 32's speed).
+const LARGE_TREE: usize = 1 << 18;
 
 /// Single kNN queries up to this `k` keep their candidates on the call stack (`f32`: sorted in a
 /// [`KnnRow`] up to [`KNN_ROW_MAX_K`], unsorted in a [`KnnBuf`] above; `f64`: sorted by

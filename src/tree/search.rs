@@ -410,7 +410,7 @@ mod tests {
     use super::*;
     use crate::query::result_set::{Key32, KnnRow, RowEntry, WithinRadius};
     use crate::query::{Neighbor, NeighborHeap};
-    use crate::tree::node::Step;
+    use crate::tree::node::{Descent, Step};
     use crate::tree::{BuildOptions, KdTree, PivotPolicy};
 
     /// Clouds with many ties: points on a coarse grid (queries on split values), copies of a
@@ -449,7 +449,8 @@ mod tests {
         for dim in 1..=3 {
             for coords in clouds(dim) {
                 for pivot in PivotPolicy::ALL {
-                    for leaf_size in [1, 5, 12] {
+                    // both leaf sizes of the descent (`descent_bucket`), and an odd one
+                    for (leaf_size, bucket) in [(1, 32), (5, 64), (12, 32), (12, 64), (5, 7)] {
                         let opts = BuildOptions {
                             pivot,
                             leaf_size,
@@ -457,9 +458,10 @@ mod tests {
                             ..BuildOptions::default()
                         };
                         let tree = KdTree::from_flat(&coords, dim, &opts).unwrap();
-                        let descent = tree.descent.as_ref().expect("dimension ≤ 3");
+                        let descent = Descent::new(&tree.nodes, &tree.min_id, dim, bucket)
+                            .expect("dimension ≤ 3");
                         let compact = DescentView {
-                            descent,
+                            descent: &descent,
                             coords: &tree.coords,
                             ids: &tree.ids,
                             depth: tree.depth,
@@ -481,7 +483,7 @@ mod tests {
                                 hb.finish();
                                 assert_eq!(
                                     a, b,
-                                    "dim {dim} {pivot:?} leaf {leaf_size} q {qi} k {k}"
+                                    "dim {dim} {pivot:?} leaf {leaf_size}/{bucket} q {qi} k {k}"
                                 );
                                 // The single query's sorted row of packed keys (its first
                                 // leaf taken as one sorted block) keeps the same.
