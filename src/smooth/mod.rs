@@ -532,12 +532,9 @@ pub(crate) fn check_spacing(h: f64, relative: bool) -> Result<()> {
 
 /// Refuses an empty set ([`NbhdError::EmptyInput`]) and names the first point with a NaN or
 /// infinite coordinate ([`NbhdError::NonFinite`]).
-pub(crate) fn check_points(points: &[DVec3]) -> Result<()> {
+fn check_points(points: &[DVec3]) -> Result<()> {
     if points.is_empty() {
         return Err(NbhdError::EmptyInput);
-    }
-    if all_finite(points) {
-        return Ok(());
     }
     match points.iter().enumerate().find_map(|(i, p)| {
         p.to_array()
@@ -636,14 +633,14 @@ fn smooth_on_pool(
     }
 }
 
-/// [`smooth_from`] on finite points.
+/// [`smooth_from`] on finite points (nonempty, every coordinate finite: [`finite_subset`]
+/// checked or chose them, so they are not scanned again).
 fn smooth_finite(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
     options: &SmoothOptions,
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<SmoothResult> {
-    check_points(points)?;
     let total = options.steps as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;

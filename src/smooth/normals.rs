@@ -11,8 +11,8 @@
 
 use super::source::{knn_rows, Neighbors, SearchMethod};
 use super::{
-    check_points, check_spacing, cut_to, finite_subset, progress_in_units, quotient_of, Length,
-    SmoothOptions, Stage,
+    check_spacing, cut_to, finite_subset, progress_in_units, quotient_of, Length, SmoothOptions,
+    Stage,
 };
 use crate::error::{NbhdError, Result};
 use crate::geometry::normals::{NormalCovariance, FLAG_SKIPPED};
@@ -92,14 +92,14 @@ pub fn estimate_normals_from(
     })?
 }
 
-/// [`estimate_normals_from`] on finite points.
+/// [`estimate_normals_from`] on finite points (nonempty, every coordinate finite:
+/// [`super::finite_subset`] checked or chose them, so they are not scanned again).
 fn normals_finite(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
     options: &SmoothOptions,
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<NormalsResult> {
-    check_points(points)?;
     let mut report = progress_in_units(1.0, progress);
     report(0.0, Stage::Neighbors)?;
     if neighbors == Neighbors::Search(SearchMethod::KdTree)

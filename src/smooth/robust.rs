@@ -80,7 +80,7 @@ mod rows;
 mod step;
 
 use super::source::{knn_rows, Neighbors, SearchMethod};
-use super::{check_points, check_spacing, point_outputs, progress_in_units, Criteria, Length};
+use super::{check_spacing, point_outputs, progress_in_units, Criteria, Length};
 use super::{FeatureCriterion, SmoothResult, Stage, Weighting};
 use crate::error::{NbhdError, Result};
 use crate::geometry::neighbors::mean_spacing_of_nearest;
@@ -290,14 +290,14 @@ fn robust_on_pool(
     }
 }
 
-/// [`smooth_robust_from`] on finite points.
+/// [`smooth_robust_from`] on finite points (nonempty, every coordinate finite:
+/// [`super::finite_subset`] checked or chose them, so they are not scanned again).
 fn robust_finite(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
     options: &RobustOptions,
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<RobustReport> {
-    check_points(points)?;
     let total = options.max_iterations as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
