@@ -752,7 +752,11 @@ pub(crate) fn try_filled<V: Clone>(n: usize, value: V, what: &'static str) -> Re
 
 /// [`try_filled`] filled by the workers of the current pool, so that the pages are first
 /// touched (and placed) by the threads that write the table next.
-fn try_filled_par<V: Copy + Send + Sync>(n: usize, value: V, what: &'static str) -> Result<Vec<V>> {
+pub(crate) fn try_filled_par<V: Copy + Send + Sync>(
+    n: usize,
+    value: V,
+    what: &'static str,
+) -> Result<Vec<V>> {
     let mut v = Vec::new();
     v.try_reserve_exact(n).map_err(|_| NbhdError::OutOfMemory {
         what,

@@ -20,6 +20,7 @@ use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
 use crate::prefetch::prefetch_at;
 use crate::scatter::{scatter, TargetCheck};
+use crate::table::try_filled_par;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -310,11 +311,10 @@ fn normals_in_tree_order(
     // each block's estimates and nearest distances go to the caller's order as they are made
     // (written in parallel, overlapping the blocks' work, rather than gathered at random
     // afterwards); the farthest distances stay in tree order, where the cut rows are found
-    let mut estimates = vec_of(NormalEstimate::skipped(), n);
-    let mut nearest: Vec<Option<f64>> = vec_of(None, n);
+    let mut estimates = try_filled_par(n, NormalEstimate::skipped(), "the normals")?;
+    let mut nearest = try_filled_par(n, None, "the nearest-neighbour distances")?;
     let mut farthest_in_tree: Vec<f64> = Vec::with_capacity(n);
     let mut targets = TargetCheck::new(n);
-    let mut width = 0;
     let searched = super::nearest::by_blocks(points, k, BLOCK, &mut |b| {
         let start = b.positions.start;
         let block = estimates_of_rows(points, b.positions.len(), 256, |r| {
@@ -324,7 +324,6 @@ fn normals_in_tree_order(
         scatter(&mut estimates, &to, &block)?;
         scatter(&mut nearest, &to, b.nearest)?;
         farthest_in_tree.extend_from_slice(b.farthest);
-        width = b.width;
         report(0.9 * b.positions.end as f64 / n as f64, Stage::Neighbors)
     })?;
     let order = &searched.order;
@@ -353,9 +352,10 @@ fn normals_in_tree_order(
             (estimate_of(points, points[i], &ids, buf), within)
         })
         .collect();
-    // every row has `width` neighbours; an uncut one holds them all within ε
+    // every row has its k nearest others (all others where there are fewer); an uncut one
+    // holds them all within ε
     let uncut = farthest_in_tree.par_iter().any(|&f| f <= e2);
-    let mut largest = if uncut { width } else { 0 };
+    let mut largest = if uncut { k.min(n - 1) } else { 0 };
     for (&pos, &(e, within)) in cut.iter().zip(&recomputed) {
         estimates[order[pos] as usize] = e;
         largest = largest.max(within);
@@ -375,14 +375,6 @@ fn normals_in_tree_order(
         spacing: h,
         epsilon: eps,
     })
-}
-
-/// `n` copies of `value`, written in parallel (the pages of a large vector are first touched by
-/// every thread).
-fn vec_of<U: Copy + Send + Sync>(value: U, n: usize) -> Vec<U> {
-    let mut v = Vec::with_capacity(n);
-    v.par_extend(rayon::iter::repeat_n(value, n));
-    v
 }
 
 /// The mean distance of a point to its nearest other point from each point's squared distance
