@@ -34,6 +34,7 @@ use std::ops::Range;
 
 use gather::Gather;
 
+use super::kernel::{below_mask, sq_dists_by_dim};
 use super::node::Node;
 use super::search::TreeView;
 use crate::error::Result;
@@ -137,77 +138,7 @@ impl<T: Scalar, const D: usize> Soa<T, D> {
     /// Squared distances from `q` to the points at tree positions `start..start + BLOCK`.
     #[inline(always)]
     fn block_sq_dists(&self, q: &[T; D], start: usize) -> [T; BLOCK] {
-        sq_dists_to_block(q, |j| &self.v[j * self.stride + start..][..BLOCK])
-    }
-}
-
-/// Squared distances from `q` to a block of [`BLOCK`] points whose coordinates in dimension
-/// `j` are `coord(j)`, each summed over the dimensions in order, `((0 + t0²) + t1²) + …`, as
-/// the single-query search does (`0 + x` is exact): the same bits.
-#[inline(always)]
-fn sq_dists_to_block<'c, T: Scalar, const D: usize>(
-    q: &[T; D],
-    coord: impl Fn(usize) -> &'c [T],
-) -> [T; BLOCK] {
-    let mut d = [T::ZERO; BLOCK];
-    for (j, &qj) in q.iter().enumerate() {
-        let c: &[T; BLOCK] = coord(j).try_into().unwrap();
-        for p in 0..BLOCK {
-            let t = qj - c[p];
-            d[p] = d[p] + t * t;
-        }
-    }
-    d
-}
-
-/// Bit `p` set where `d[p] ≤ bound`: SSE compares and movemask on x86-64 (4 or 2 lanes per
-/// instruction), a plain loop elsewhere.
-#[inline(always)]
-fn below_mask<T: Scalar>(d: &[T; BLOCK], bound: T) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::*;
-        match T::TYPE {
-            ScalarType::F32 => {
-                // SAFETY: `Scalar` is sealed to f32 and f64 and `T::TYPE` is F32, so `T` is
-                // f32 and `[T; BLOCK]` is `[f32; BLOCK]`.
-                let d = unsafe { &*(d as *const [T; BLOCK]).cast::<[f32; BLOCK]>() };
-                let mut mask = 0u32;
-                // SAFETY: SSE is part of the x86-64 baseline; each load reads the 4 f32 of
-                // `lanes`.
-                unsafe {
-                    let b = _mm_set1_ps(bound.to_f64() as f32);
-                    for (c, lanes) in d.chunks_exact(4).enumerate() {
-                        let v = _mm_loadu_ps(lanes.as_ptr());
-                        mask |= (_mm_movemask_ps(_mm_cmple_ps(v, b)) as u32) << (4 * c);
-                    }
-                }
-                return mask;
-            }
-            ScalarType::F64 => {
-                // SAFETY: as above, `T` is f64.
-                let d = unsafe { &*(d as *const [T; BLOCK]).cast::<[f64; BLOCK]>() };
-                let mut mask = 0u32;
-                // SAFETY: SSE2 is part of the x86-64 baseline; each load reads the 2 f64 of
-                // `lanes`.
-                unsafe {
-                    let b = _mm_set1_pd(bound.to_f64());
-                    for (c, lanes) in d.chunks_exact(2).enumerate() {
-                        let v = _mm_loadu_pd(lanes.as_ptr());
-                        mask |= (_mm_movemask_pd(_mm_cmple_pd(v, b)) as u32) << (2 * c);
-                    }
-                }
-                return mask;
-            }
-        }
-    }
-    #[allow(unreachable_code)]
-    {
-        let mut mask = 0u32;
-        for (p, &x) in d.iter().enumerate() {
-            mask |= u32::from(x <= bound) << p;
-        }
-        mask
+        sq_dists_by_dim(q, |j| &self.v[j * self.stride + start..][..BLOCK])
     }
 }
 

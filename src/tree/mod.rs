@@ -9,7 +9,8 @@
 //!   itself (Algorithm 3.1) and what it works on;
 //! - `neighborhoods.rs`: the table driver, [`KdTree::neighborhoods`] and
 //!   [`KdTree::neighborhoods_of`];
-//! - `search.rs`, `group_search.rs`: the descents that answer one query or a group;
+//! - `search.rs`, `group_search.rs`: the descents that answer one query or a group, and
+//!   `kernel.rs`, the leaf arithmetic they share;
 //! - `range.rs`: box (orthogonal range) queries, [`KdTree::in_box`] and [`KdTree::in_boxes`];
 //! - `spacing.rs`: the nearest-neighbour spacing `h`, [`KdTree::spacing`];
 //! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
@@ -17,6 +18,7 @@
 mod build;
 mod construct;
 pub(crate) mod group_search;
+mod kernel;
 mod layout;
 mod neighborhoods;
 mod node;

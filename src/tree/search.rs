@@ -21,6 +21,7 @@
 //! enter, the side with the smaller index is taken first (the build orders identical points by
 //! caller index, `src/tree/layout.rs`), so the copies with the lowest indices are met first.
 
+use super::kernel::{below_mask, sq_dists_packed};
 use super::node::{Descent, Node, DESCENT_LEAF};
 use crate::prefetch::prefetch_range;
 use crate::query::result_set::ResultSet;
@@ -237,6 +238,18 @@ fn search_d<T: Scalar, C: ResultSet<T>, const D: usize, const G: usize>(
     }
 }
 
+/// Points of a leaf scanned at once by the compact search: one mask of 32 bits, and a single
+/// query's first block sorted whole. Blocks of 16 took 1.13x the time on the 1M cube at k = 10
+/// (the half of a first leaf that is not sorted whole enters by insertions; docs/speed-log.md,
+/// round 9).
+const SCAN: usize = 32;
+
+/// The lowest `n` bits (`n` ≤ 32).
+#[inline(always)]
+fn low_bits(n: usize) -> u32 {
+    (u64::MAX >> (64 - n)) as u32
+}
+
 /// The tree's arrays a compact search reads.
 pub(crate) struct DescentView<'a, T> {
     pub descent: &'a Descent<T>,
@@ -336,24 +349,16 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 // The leaf's points and indices as slices: no bounds test per point.
                 let points = &tree.coords[a * D..b * D];
                 let ids = &tree.ids[a..b];
-                // Blocks of up to 32 points: every squared distance first (no branch), the
-                // points within the bound as bits of a mask, then offers of those only, as one
-                // block (a single query's empty row sorts its first block at once). The test
-                // per point was the search's most mispredicted branch (README "Single queries,
-                // the floor, and copies of a point").
-                for (points, ids) in points.chunks(32 * D).zip(ids.chunks(32)) {
-                    let bound = out.bound();
-                    let mut d = [T::ZERO; 32];
-                    let mut mask = 0u32;
-                    for ((j, p), dj) in points.chunks_exact(D).enumerate().zip(&mut d) {
-                        let mut d2 = T::ZERO;
-                        for (x, y) in qa.iter().zip(p) {
-                            let t = *x - *y;
-                            d2 = d2 + t * t;
-                        }
-                        *dj = d2;
-                        mask |= ((d2 <= bound) as u32) << j;
-                    }
+                // Blocks of up to `SCAN` points: every squared distance first (no branch, four
+                // points at a time in vector arithmetic), the points within the bound as bits
+                // of a mask (vector compares), then offers of those only, as one block (a
+                // single query's empty row sorts its first block at once). The test per point
+                // was the search's most mispredicted branch (README "Single queries, the
+                // floor, and copies of a point").
+                for (points, ids) in points.chunks(SCAN * D).zip(ids.chunks(SCAN)) {
+                    let mut d = [T::ZERO; SCAN];
+                    sq_dists_packed::<T, D, SCAN>(&qa, points, &mut d);
+                    let mask = below_mask(&d, out.bound()) & low_bits(ids.len());
                     out.offer_block(ids, &d, mask, excluded);
                 }
                 break;

@@ -24,7 +24,7 @@
 
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
 use super::avx512;
-use super::{below_mask, box_dist, sq_dists_to_block, Members, PackedKey, Search, BLOCK, GROUP};
+use super::{below_mask, box_dist, sq_dists_by_dim, Members, PackedKey, Search, BLOCK, GROUP};
 use crate::scalar::Scalar;
 use crate::table::RowsChunk;
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
@@ -376,7 +376,7 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
         }
         let (mut n, count) = (0, self.ids.len());
         for start in (0..count).step_by(BLOCK) {
-            let d = sq_dists_to_block(qi, |j| &self.coords[j][start..start + BLOCK]);
+            let d: [T; BLOCK] = sq_dists_by_dim(qi, |j| &self.coords[j][start..start + BLOCK]);
             let mut hits = below_mask(&d, bound);
             if count - start < BLOCK {
                 // the padding is infinitely far, yet within an infinite bound
