@@ -12,6 +12,7 @@ use super::options::{BuildOptions, MedianAlgorithm};
 use super::split::{choose_split, resolve_below, NodeFacts, Plan, Split};
 use crate::scalar::Scalar;
 use crate::select::{select_nth, SelectAlgorithm};
+use rayon::prelude::*;
 
 /// Children smaller than this are built serially.
 const PARALLEL_MIN: usize = 16 * 1024;
@@ -28,10 +29,76 @@ pub(crate) struct Subtree<T> {
     pub depth: usize,
 }
 
+/// Most dimensions whose ranges one pass over a node's items finds together.
+const MAX_D: usize = 8;
+
+/// Smallest and largest coordinate of the first `d` ≤ [`MAX_D`] dimensions.
+#[derive(Clone, Copy)]
+struct Ranges<T> {
+    lo: [T; MAX_D],
+    hi: [T; MAX_D],
+}
+
+impl<T: Scalar> Ranges<T> {
+    /// The ranges of both (`self`'s values kept on ties, as a scan keeps the first).
+    fn merge(mut self, other: Self, d: usize) -> Self {
+        for j in 0..d {
+            self.lo[j] = self.lo[j].min_of(other.lo[j]);
+            self.hi[j] = self.hi[j].max_of(other.hi[j]);
+        }
+        self
+    }
+
+    /// The dimension of largest spread (the lowest on a tie) and its range.
+    fn widest(&self, d: usize) -> (usize, T, T) {
+        let mut best = 0;
+        for j in 1..d {
+            if self.hi[j] - self.lo[j] > self.hi[best] - self.lo[best] {
+                best = j;
+            }
+        }
+        (best, self.lo[best], self.hi[best])
+    }
+}
+
+/// Of two coordinate values, the one closer to `target`, the lower on a tie, `a` if equal.
+#[inline]
+fn closer<T: Scalar>(a: T, b: T, target: T) -> T {
+    let dist = |c: T| if c > target { c - target } else { target - c };
+    let (da, db) = (dist(a), dist(b));
+    if db < da || (db == da && b < a) {
+        b
+    } else {
+        a
+    }
+}
+
 /// Facts about the items of one node, found by scanning them.
 struct ScanFacts<'a, L: Layout<T>, T: Scalar> {
     layout: &'a L,
     items: &'a [L::Item],
+}
+
+impl<L: Layout<T>, T: Scalar> ScanFacts<'_, L, T> {
+    /// The ranges of the first `d` ≤ [`MAX_D`] dimensions, in one pass over the items.
+    fn ranges(&self, d: usize) -> Ranges<T> {
+        let mut r = Ranges {
+            lo: [T::ZERO; MAX_D],
+            hi: [T::ZERO; MAX_D],
+        };
+        for j in 0..d {
+            r.lo[j] = self.layout.coord(&self.items[0], j);
+            r.hi[j] = r.lo[j];
+        }
+        for it in self.items {
+            for j in 0..d {
+                let c = self.layout.coord(it, j);
+                r.lo[j] = r.lo[j].min_of(c);
+                r.hi[j] = r.hi[j].max_of(c);
+            }
+        }
+        r
+    }
 }
 
 impl<L: Layout<T>, T: Scalar> NodeFacts<T> for ScanFacts<'_, L, T> {
@@ -48,7 +115,6 @@ impl<L: Layout<T>, T: Scalar> NodeFacts<T> for ScanFacts<'_, L, T> {
     }
 
     fn widest(&self, d: usize) -> (usize, T, T) {
-        const MAX_D: usize = 8;
         if d > MAX_D {
             return (0..d).map(|j| (j, self.range(j))).fold(
                 (0, T::ZERO, T::ZERO),
@@ -61,42 +127,73 @@ impl<L: Layout<T>, T: Scalar> NodeFacts<T> for ScanFacts<'_, L, T> {
                 },
             );
         }
-        // One pass over the items for all dimensions.
-        let mut lo = [T::ZERO; MAX_D];
-        let mut hi = [T::ZERO; MAX_D];
-        for j in 0..d {
-            lo[j] = self.layout.coord(&self.items[0], j);
-            hi[j] = lo[j];
-        }
-        for it in self.items {
-            for j in 0..d {
-                let c = self.layout.coord(it, j);
-                lo[j] = lo[j].min_of(c);
-                hi[j] = hi[j].max_of(c);
-            }
-        }
-        let mut best = 0;
-        for j in 1..d {
-            if hi[j] - lo[j] > hi[best] - lo[best] {
-                best = j;
-            }
-        }
-        (best, lo[best], hi[best])
+        self.ranges(d).widest(d)
     }
 
     fn closest(&self, j: usize, target: T) -> T {
-        let dist = |c: T| if c > target { c - target } else { target - c };
         let first = self.layout.coord(&self.items[0], j);
         self.items.iter().fold(first, |best, it| {
-            let c = self.layout.coord(it, j);
-            let (dc, db) = (dist(c), dist(best));
-            if dc < db || (dc == db && c < best) {
-                c
-            } else {
-                best
-            }
+            closer(best, self.layout.coord(it, j), target)
         })
     }
+}
+
+/// Facts about the items of a large node (the root's millions of points, which the build's
+/// other threads would wait for), scanned in parallel pieces and merged in order: the values
+/// [`ScanFacts`] finds, as minima, maxima and the closest value keep the first of equals
+/// either way.
+struct ParScanFacts<'a, L: Layout<T>, T: Scalar> {
+    layout: &'a L,
+    items: &'a [L::Item],
+}
+
+impl<'a, L: Layout<T>, T: Scalar> ParScanFacts<'a, L, T> {
+    /// The facts of each piece, merged in item order.
+    fn merged<R: Send>(
+        &self,
+        of: impl Fn(ScanFacts<'_, L, T>) -> R + Sync,
+        merge: impl Fn(R, R) -> R + Sync + Send,
+    ) -> R {
+        let layout = self.layout;
+        self.items
+            .par_chunks(PARALLEL_MIN)
+            .map(|items| of(ScanFacts { layout, items }))
+            .reduce_with(merge)
+            .expect("a node holds at least two items")
+    }
+}
+
+impl<L: Layout<T>, T: Scalar> NodeFacts<T> for ParScanFacts<'_, L, T> {
+    fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    fn range(&self, j: usize) -> (T, T) {
+        self.merged(|f| f.range(j), |a, b| (a.0.min_of(b.0), a.1.max_of(b.1)))
+    }
+
+    fn widest(&self, d: usize) -> (usize, T, T) {
+        if d > MAX_D {
+            let whole = ScanFacts {
+                layout: self.layout,
+                items: self.items,
+            };
+            return whole.widest(d);
+        }
+        self.merged(|f| f.ranges(d), |a, b| a.merge(b, d)).widest(d)
+    }
+
+    fn closest(&self, j: usize, target: T) -> T {
+        self.merged(|f| f.closest(j, target), |a, b| closer(a, b, target))
+    }
+}
+
+/// How [`split_node`] scans a node's items: on this thread, or in parallel pieces (nodes of
+/// [`build_parallel`], whose children wait for the split).
+#[derive(Clone, Copy)]
+enum Scan {
+    Serial,
+    Parallel,
 }
 
 /// Splits the node holding `items`: decides the split and moves the items so that the first
@@ -106,10 +203,14 @@ fn split_node<T: Scalar, L: Layout<T>>(
     input: &BuildInput<L>,
     items: &mut [L::Item],
     depth: usize,
+    scan: Scan,
 ) -> (Split, T, bool) {
     let layout = &input.layout;
-    let facts = ScanFacts { layout, items };
-    let plan = choose_split(input.options.pivot, depth, layout.dim(), &facts);
+    let (policy, d) = (input.options.pivot, layout.dim());
+    let plan = match scan {
+        Scan::Serial => choose_split(policy, depth, d, &ScanFacts { layout, items }),
+        Scan::Parallel => choose_split(policy, depth, d, &ParScanFacts { layout, items }),
+    };
     let (dim, rank) = match plan {
         Plan::Rank(split) => (split.dim, split.rank),
         Plan::Coincident(split) => {
@@ -230,7 +331,7 @@ pub(crate) fn build_serial<T: Scalar, L: Layout<T>>(
             let (split, value) = split_copies(&input.layout, node_items, t.depth);
             (split, value, true)
         } else {
-            split_node(input, node_items, t.depth)
+            split_node(input, node_items, t.depth, Scan::Serial)
         };
         let mid = t.start + split.rank;
         nodes.push(Node::internal(split.dim, value, 0, offset + t.end));
@@ -267,7 +368,7 @@ pub(crate) fn build_parallel<T: Scalar, L: Layout<T>>(
     if n < 2 * PARALLEL_MIN || n <= input.options.leaf_size {
         return build_serial(input, items, offset, depth);
     }
-    let (split, value, _) = split_node(input, items, depth);
+    let (split, value, _) = split_node(input, items, depth, Scan::Parallel);
     let rank = split.rank;
     let (left, right) = items.split_at_mut(rank);
     let (l, r) = if rank >= PARALLEL_MIN && n - rank >= PARALLEL_MIN {

@@ -126,7 +126,7 @@ impl<T: Scalar> KdTree<T> {
             options: *options,
             position_of: OnceLock::new(),
         };
-        tree.derive();
+        tree.derive(options.threads)?;
         Ok(tree)
     }
 

@@ -32,6 +32,8 @@ mod gather;
 
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 use gather::Gather;
 
 use super::kernel::{below_mask, sq_dists_by_dim};
@@ -47,43 +49,50 @@ use crate::table::{rows_in_chunks, NeighborTable, RowsChunk, CHUNK};
 const GROUP: usize = 16;
 
 /// Tight bounding box and smallest caller index of every node.
-struct Boxes<T, const D: usize> {
+struct Boxes<'a, T, const D: usize> {
     lo: Vec<[T; D]>,
     hi: Vec<[T; D]>,
-    min_id: Vec<u32>,
+    /// The tree's own (`TreeView::min_id`).
+    min_id: &'a [u32],
 }
 
-impl<T: Scalar, const D: usize> Boxes<T, D> {
-    /// Bottom-up over the preorder node array (children follow their parent).
-    fn new(tree: &TreeView<'_, T>) -> Self {
+impl<'a, T: Scalar, const D: usize> Boxes<'a, T, D> {
+    /// The leaves' boxes from their points in parallel (they read every point), then the
+    /// internal nodes' bottom-up over the preorder node array (children follow their parent).
+    fn new(tree: &TreeView<'a, T>) -> Self {
         let n = tree.nodes.len();
         let neg_inf = T::ZERO - T::INFINITY;
         let mut lo = vec![[T::INFINITY; D]; n];
         let mut hi = vec![[neg_inf; D]; n];
-        let mut min_id = vec![u32::MAX; n];
+        lo.par_iter_mut()
+            .zip(hi.par_iter_mut())
+            .zip(tree.nodes.par_iter())
+            .with_min_len(1024)
+            .filter(|(_, nd)| nd.is_leaf())
+            .for_each(|((l, h), nd)| {
+                let points = &tree.coords[nd.a as usize * D..nd.b as usize * D];
+                for p in points.chunks_exact(D) {
+                    for j in 0..D {
+                        l[j] = l[j].min_of(p[j]);
+                        h[j] = h[j].max_of(p[j]);
+                    }
+                }
+            });
         for i in (0..n).rev() {
             let nd = &tree.nodes[i];
-            if nd.is_leaf() {
-                let (mut l, mut h, mut m) = ([T::INFINITY; D], [neg_inf; D], u32::MAX);
-                for p in nd.a as usize..nd.b as usize {
-                    for j in 0..D {
-                        let c = tree.coords[p * D + j];
-                        l[j] = l[j].min_of(c);
-                        h[j] = h[j].max_of(c);
-                    }
-                    m = m.min(tree.ids[p]);
-                }
-                (lo[i], hi[i], min_id[i]) = (l, h, m);
-            } else {
+            if !nd.is_leaf() {
                 let (a, b) = (i + 1, nd.a as usize);
                 for j in 0..D {
                     lo[i][j] = lo[a][j].min_of(lo[b][j]);
                     hi[i][j] = hi[a][j].max_of(hi[b][j]);
                 }
-                min_id[i] = min_id[a].min(min_id[b]);
             }
         }
-        Self { lo, hi, min_id }
+        Self {
+            lo,
+            hi,
+            min_id: tree.min_id,
+        }
     }
 }
 
@@ -127,10 +136,16 @@ impl<T: Scalar, const D: usize> Soa<T, D> {
         let n = coords.len() / D;
         let stride = n + BLOCK;
         let mut v = vec![T::ZERO; D * stride];
-        for (p, c) in coords.chunks_exact(D).enumerate() {
-            for j in 0..D {
-                v[j * stride + p] = c[j];
-            }
+        // one dimension at a time, its points in parallel pieces
+        for (j, dim) in v.chunks_exact_mut(stride).enumerate() {
+            dim[..n]
+                .par_chunks_mut(4096)
+                .zip(coords.par_chunks(4096 * D))
+                .for_each(|(out, c)| {
+                    for (o, p) in out.iter_mut().zip(c.chunks_exact(D)) {
+                        *o = p[j];
+                    }
+                });
         }
         Self { stride, v }
     }
@@ -564,7 +579,7 @@ pub(crate) fn table<T: Scalar, const D: usize>(
 /// tree positions at a time when the table of every point would not fit in memory.
 pub(crate) struct Plan<'a, T, const D: usize> {
     tree: &'a TreeView<'a, T>,
-    boxes: Boxes<T, D>,
+    boxes: Boxes<'a, T, D>,
     soa: Soa<T, D>,
     groups: Vec<Range<usize>>,
     /// Chunk `c` holds the groups `chunk_groups[c]..chunk_groups[c + 1]`.
@@ -730,7 +745,7 @@ fn answer_groups<T: Scalar, const D: usize, R: RowSets<T>, K: PackedKey<T>>(
 /// What every group's search reads.
 struct Search<'a, T, const D: usize> {
     tree: &'a TreeView<'a, T>,
-    boxes: &'a Boxes<T, D>,
+    boxes: &'a Boxes<'a, T, D>,
     soa: &'a Soa<T, D>,
     sq_radius: T,
     exclude_self: bool,

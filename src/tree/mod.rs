@@ -34,6 +34,7 @@ mod split;
 use std::sync::OnceLock;
 
 use crate::error::Result;
+use crate::parallel::with_threads;
 use crate::query::order;
 use crate::query::resolve_query;
 use crate::query::result_set::{
@@ -177,12 +178,18 @@ impl<T: Scalar> KdTree<T> {
         }
     }
 
-    /// Makes what is derived from the nodes and not saved: the smallest indices and the
-    /// compact descent.
-    fn derive(&mut self) {
-        self.min_id = search::min_ids(&self.nodes, &self.ids);
+    /// Makes what is derived from the nodes and not saved: the smallest indices (on the
+    /// `threads` of a build, serially for 1) and the compact descent.
+    fn derive(&mut self, threads: usize) -> Result<()> {
+        let (nodes, ids) = (&self.nodes, &self.ids);
+        self.min_id = if threads == 1 {
+            search::min_ids(nodes, ids, false)
+        } else {
+            with_threads(threads, || search::min_ids(nodes, ids, true))?
+        };
         let bucket = descent_bucket(self.len());
         self.descent = Descent::new(&self.nodes, &self.min_id, self.dim, bucket);
+        Ok(())
     }
 
     /// Runs a single search into `out`: over the compact descent where the tree has one.

@@ -734,7 +734,7 @@ impl<T: Scalar> KdTree<T> {
         tree.check_points(bitmap_bytes)?;
         tree.check_nodes()?;
         // Derived, not saved: made once the nodes are known to be well formed.
-        tree.derive();
+        tree.derive(1)?;
         Ok(tree)
     }
 

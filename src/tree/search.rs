@@ -26,6 +26,7 @@ use super::node::{Descent, Node, DESCENT_LEAF};
 use crate::prefetch::prefetch_range;
 use crate::query::result_set::ResultSet;
 use crate::scalar::Scalar;
+use rayon::prelude::*;
 
 /// The tree's arrays a search reads.
 pub(crate) struct TreeView<'a, T> {
@@ -37,21 +38,35 @@ pub(crate) struct TreeView<'a, T> {
     pub dim: usize,
 }
 
-/// The smallest caller index of every node's subtree, bottom-up over the preorder node array
-/// (children follow their parent).
-pub(crate) fn min_ids<T: Copy + Default>(nodes: &[Node<T>], ids: &[u32]) -> Vec<u32> {
-    let mut m = vec![u32::MAX; nodes.len()];
-    for i in (0..nodes.len()).rev() {
-        let n = &nodes[i];
-        m[i] = if n.is_leaf() {
+/// The smallest caller index of every node's subtree: the leaves' from their indices (in
+/// parallel on the current pool if `parallel`: they read every index), then the internal
+/// nodes' bottom-up over the preorder node array (children follow their parent).
+pub(crate) fn min_ids<T: Copy + Default + Sync>(
+    nodes: &[Node<T>],
+    ids: &[u32],
+    parallel: bool,
+) -> Vec<u32> {
+    let leaf_min = |n: &Node<T>| {
+        if n.is_leaf() {
             ids[n.a as usize..n.b as usize]
                 .iter()
                 .copied()
                 .min()
                 .unwrap_or(u32::MAX)
         } else {
-            m[i + 1].min(m[n.a as usize])
-        };
+            u32::MAX
+        }
+    };
+    let mut m: Vec<u32> = if parallel {
+        nodes.par_iter().with_min_len(1024).map(leaf_min).collect()
+    } else {
+        nodes.iter().map(leaf_min).collect()
+    };
+    for i in (0..nodes.len()).rev() {
+        let n = &nodes[i];
+        if !n.is_leaf() {
+            m[i] = m[i + 1].min(m[n.a as usize]);
+        }
     }
     m
 }
