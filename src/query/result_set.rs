@@ -14,6 +14,7 @@
 
 use super::{order, Neighbor, NeighborHeap};
 use crate::scalar::Scalar;
+use crate::select::network::sort32;
 
 /// Where a search puts its candidates.
 pub(crate) trait ResultSet<T: Scalar> {
@@ -273,7 +274,7 @@ impl<T: Scalar> ResultSet<T> for KnnRow<'_> {
     }
 
     /// An empty row (the query's first leaf) takes the block's candidates at once: their keys
-    /// sorted (a branch-light small sort) and the first `k` copied in, instead of one insertion
+    /// sorted (a sorting network, `src/select/network.rs`) and the first `k` copied in, instead of one insertion
     /// each. Most of a single query's insertions come from its first leaf (every point of it is
     /// within the sentinel bound), each shifting the sentinels behind it; the kept keys are the
     /// same `k` smallest, so the row, its bound and all later pruning are unchanged.
@@ -283,7 +284,9 @@ impl<T: Scalar> ResultSet<T> for KnnRow<'_> {
             return offer_each(self, ids, sq_dists, mask, excluded);
         }
         // Every candidate within the bound precedes the sentinel `(sq_radius, u32::MAX)`.
-        let mut keys = [0u64; 32];
+        // Unused entries (and the excluded index's, written at `n` and not counted) hold the
+        // largest key, which sorts last.
+        let mut keys = [u64::MAX; 33];
         let mut n = 0;
         while mask != 0 {
             let j = mask.trailing_zeros() as usize;
@@ -292,8 +295,9 @@ impl<T: Scalar> ResultSet<T> for KnnRow<'_> {
             keys[n] = order::key32(sq_dists[j], id);
             n += (id != excluded) as usize;
         }
-        let keys = &mut keys[..n];
-        keys.sort_unstable();
+        keys[n] = u64::MAX;
+        let sorted: &mut [u64; 32] = (&mut keys[..32]).try_into().unwrap();
+        sort32(sorted);
         let m = n.min(self.row.len());
         for (e, &key) in self.row[..m].iter_mut().zip(&keys[..m]) {
             *e = Key32(key);

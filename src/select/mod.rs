@@ -29,6 +29,7 @@
 
 mod floyd_rivest;
 mod median_of_medians;
+pub(crate) mod network;
 mod quickselect;
 
 /// Which selection algorithm (thesis Chapter 6 / Section 3.3.4).
