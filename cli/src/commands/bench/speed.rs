@@ -10,7 +10,7 @@
 //! The table rows also time the floor: a kernel given the exact neighbours of every point,
 //! which only reads them, computes their squared distances and writes the table in caller
 //! order (what any search must at least do).
-//! Each figure is the median of `--reps` runs; ratios are peer / nbhd, so > 1 means nbhd is
+//! Each figure is the median of `--reps` runs, nbhd's and its peer's in alternation; ratios are peer / nbhd, so > 1 means nbhd is
 //! faster. Neighbour counts are checked against kiddo's and any difference is reported.
 
 use crate::error::{Context, Result};
@@ -366,6 +366,25 @@ fn radius_for_20(points: &[[f64; 3]]) -> Result<f64> {
     Ok(d[d.len() / 2])
 }
 
+/// The median wall times, in seconds, of `reps` rounds that each run every one of `runs` once,
+/// in turn: the runs compared share whatever load passes over the shared machine, so their
+/// ratios are steadier than those of medians taken one after the other (on the 1M cube, single
+/// queries' kiddo / nbhd came out 1.81 and 1.33 in two runs of that kind, 6 minutes apart).
+fn interleaved_medians<const N: usize>(reps: usize, mut runs: [&mut dyn FnMut(); N]) -> [f64; N] {
+    let mut t = vec![Vec::with_capacity(reps); N];
+    for _ in 0..reps {
+        for (f, t) in runs.iter_mut().zip(&mut t) {
+            let s = Instant::now();
+            f();
+            t.push(s.elapsed().as_secs_f64());
+        }
+    }
+    std::array::from_fn(|i| {
+        t[i].sort_by(f64::total_cmp);
+        t[i][reps / 2]
+    })
+}
+
 /// The median wall time of `reps` runs of `f`, in seconds.
 fn median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
     let mut t: Vec<f64> = (0..reps)
@@ -639,25 +658,30 @@ fn bench_set<T: Float>(
             };
             if op == Op::Build {
                 let opts = BuildOptions { threads, ..options };
-                row.nbhd_s = median_secs(plan.reps, || {
-                    KdTree::<T>::build(&view, &opts).expect("built once already");
-                });
-                row.kiddo_s = median_secs(plan.reps, || {
-                    T::peer_build(&pts);
-                });
+                [row.nbhd_s, row.kiddo_s] = interleaved_medians(
+                    plan.reps,
+                    [
+                        &mut || {
+                            KdTree::<T>::build(&view, &opts).expect("built once already");
+                        },
+                        &mut || {
+                            T::peer_build(&pts);
+                        },
+                    ],
+                );
             } else if op.is_single() {
                 let k = op.k().expect("single ops are kNN");
                 let (mut ours, mut theirs, mut via_c) = (0, 0, 0);
-                row.nbhd_s = median_secs(plan.reps, || {
-                    ours = p.install(|| single_table(&tree, &pts, k));
-                });
                 let c_tree = CTree::build(&pts)?;
-                row.c_abi_s = Some(median_secs(plan.reps, || {
-                    via_c = p.install(|| c_tree.table(&pts, k));
-                }));
-                row.kiddo_s = median_secs(plan.reps, || {
-                    theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r));
-                });
+                let [nbhd_s, c_abi_s, kiddo_s] = interleaved_medians(
+                    plan.reps,
+                    [
+                        &mut || ours = p.install(|| single_table(&tree, &pts, k)),
+                        &mut || via_c = p.install(|| c_tree.table(&pts, k)),
+                        &mut || theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r)),
+                    ],
+                );
+                (row.nbhd_s, row.c_abi_s, row.kiddo_s) = (nbhd_s, Some(c_abi_s), kiddo_s);
                 if via_c != ours {
                     return Err(format!(
                         "{}: the C ABI found {via_c} neighbours, KdTree::knn {ours}",
@@ -673,15 +697,18 @@ fn bench_set<T: Float>(
                     threads,
                 };
                 let (mut ours, mut theirs) = (0, 0);
-                row.nbhd_s = median_secs(plan.reps, || {
-                    ours = tree
-                        .neighborhoods(nbhd, &opts)
-                        .expect("valid options")
-                        .total();
-                });
-                row.kiddo_s = median_secs(plan.reps, || {
-                    theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r));
-                });
+                [row.nbhd_s, row.kiddo_s] = interleaved_medians(
+                    plan.reps,
+                    [
+                        &mut || {
+                            ours = tree
+                                .neighborhoods(nbhd, &opts)
+                                .expect("valid options")
+                                .total();
+                        },
+                        &mut || theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r)),
+                    ],
+                );
                 row.totals = Some((ours, theirs));
                 {
                     let exact = tree.neighborhoods(nbhd, &opts).expect("valid options");
@@ -796,7 +823,7 @@ fn markdown(rows: &[Row], infos: &[SetInfo], plan: &Plan) -> String {
     let bad = rows.iter().filter(|r| !r.agrees()).count();
     let _ = write!(
         s,
-        "\nMedian of {} run(s) per figure; ratios are peer / nbhd (> 1: nbhd is faster). Every \
+        "\nMedian of {} run(s) per figure, nbhd and its peers in alternation; ratios are peer / nbhd (> 1: nbhd is faster). Every \
          point queries its own set, itself included; both write the whole table. Brute force: \
          knn10 on sets of at most {} points only, one run (it is quadratic). kiddo's \
          build is single-threaded. single10/single30: one query per point in the caller's \
