@@ -16,7 +16,7 @@
 //                         includes nbhd's tree build and search
 //   PCL NE                pcl::NormalEstimation with a pcl::search::KdTree (its build included)
 //   PCL OMP 1T / T-T      pcl::NormalEstimationOMP with setNumberOfThreads(1 / T)
-// Prints the median of N repetitions (default 3) in milliseconds, wall and process CPU time (the
+// Prints the median of N repetitions (default 3; nbhd's one-thread and T-thread runs alternate) in milliseconds, wall and process CPU time (the
 // CPU time of a one-thread row is the steadier measure on a loaded machine), and for every row
 // the time of the fastest one-thread PCL row over it (> 1: faster than that PCL row), and checks that nbhd's
 // normals agree with PCL's (|cos| > 0.999 for 99% of the points; exit 1 otherwise). T defaults
@@ -64,26 +64,36 @@ Cloud::Ptr torus(std::size_t n) {
     return c;
 }
 
-// Median wall time and median CPU time of the process (all threads) over `reps` runs, in ms. On a
-// shared, loaded machine the CPU time of a one-thread run is the steadier of the two.
+// Median wall times and median CPU times of the process (all threads) over `reps` rounds that each
+// run every one of `fs` once, in turn, in ms: runs compared this way share whatever load passes
+// over a shared machine (one thread against several, above all). On a shared, loaded machine the
+// CPU time of a one-thread run is the steadier of the two.
 struct Times {
     double wall, cpu;
 };
 
-Times median_ms(int reps, const std::function<void()>& f) {
-    std::vector<double> w, c;
+std::vector<Times> interleaved_median_ms(int reps, const std::vector<std::function<void()>>& fs) {
+    std::vector<std::vector<double>> w(fs.size()), c(fs.size());
     for (int r = 0; r < reps; ++r) {
-        auto a = std::chrono::steady_clock::now();
-        std::clock_t ca = std::clock();
-        f();
-        c.push_back(1000.0 * double(std::clock() - ca) / CLOCKS_PER_SEC);
-        w.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a)
-                        .count());
+        for (std::size_t i = 0; i < fs.size(); ++i) {
+            auto a = std::chrono::steady_clock::now();
+            std::clock_t ca = std::clock();
+            fs[i]();
+            c[i].push_back(1000.0 * double(std::clock() - ca) / CLOCKS_PER_SEC);
+            w[i].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a)
+                               .count());
+        }
     }
-    std::sort(w.begin(), w.end());
-    std::sort(c.begin(), c.end());
-    return {w[w.size() / 2], c[c.size() / 2]};
+    std::vector<Times> out;
+    for (std::size_t i = 0; i < fs.size(); ++i) {
+        std::sort(w[i].begin(), w[i].end());
+        std::sort(c[i].begin(), c[i].end());
+        out.push_back({w[i][w[i].size() / 2], c[i][c[i].size() / 2]});
+    }
+    return out;
 }
+
+Times median_ms(int reps, const std::function<void()>& f) { return interleaved_median_ms(reps, {f})[0]; }
 
 bool nbhd_normals(const Cloud& c, std::size_t threads, pcl::PointCloud<pcl::Normal>& out) {
     out.resize(c.size());
@@ -121,9 +131,11 @@ bool bench(const std::string& name, const Cloud::Ptr& c, int reps, int threads) 
         bool pcl_one_thread;
     };
     std::vector<Row> rows;
-    rows.push_back({"nbhd 1 thread", median_ms(reps, [&] { ok = nbhd_normals(*c, 1, ours) && ok; }), false});
-    rows.push_back({"nbhd " + std::to_string(threads) + " threads",
-                    median_ms(reps, [&] { ok = nbhd_normals(*c, threads, ours_t) && ok; }), false});
+    // one thread and several in alternation: their ratio is the scaling
+    auto nbhd = interleaved_median_ms(reps, {[&] { ok = nbhd_normals(*c, 1, ours) && ok; },
+                                             [&] { ok = nbhd_normals(*c, threads, ours_t) && ok; }});
+    rows.push_back({"nbhd 1 thread", nbhd[0], false});
+    rows.push_back({"nbhd " + std::to_string(threads) + " threads", nbhd[1], false});
     rows.push_back({"PCL NormalEstimation", median_ms(reps, [&] {
                         pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
                         pcl_normals(c, ne, ref);
