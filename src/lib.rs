@@ -23,6 +23,7 @@ pub(crate) mod linalg;
 pub(crate) mod parallel;
 pub mod points;
 pub(crate) mod prefetch;
+pub(crate) mod progress;
 pub mod query;
 pub mod scalar;
 pub(crate) mod scatter;

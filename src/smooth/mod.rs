@@ -559,9 +559,9 @@ fn all_finite(points: &[DVec3]) -> bool {
 /// A reporter of progress counted in units out of `total` (steps or iterations, plus one for
 /// the rest): it hands `progress` the fraction done, clamped to `[0, 1]`, and turns a `false`
 /// into [`NbhdError::Cancelled`].
-pub(crate) fn progress_in_units<'a>(
+pub(crate) fn progress_in_units<'a, P: FnMut(f64, Stage) -> bool + ?Sized>(
     total: f64,
-    progress: &'a mut dyn FnMut(f64, Stage) -> bool,
+    progress: &'a mut P,
 ) -> impl FnMut(f64, Stage) -> Result<()> + 'a {
     move |f, s| {
         if progress((f / total).clamp(0.0, 1.0), s) {

@@ -17,11 +17,15 @@
 //! results computed from them do not change.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
 
 use crate::error::{NbhdError, Result};
 use crate::prefetch::prefetch_at;
 use crate::query::{Neighbor, Neighborhood, Query};
+use crate::scatter::{inverse, BlockScatter, Targets};
 use crate::table::{try_zeroed, NeighborTable};
+use crate::tree::Blocks as TreeBlocks;
 use crate::{BuildOptions, KdTree, PointsView};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -47,10 +51,11 @@ pub(super) struct Nearest {
     pub(super) farthest: Vec<f64>,
 }
 
-/// Stored points searched at once by [`nearest_others`]: large enough to keep both threads
-/// busy and the grouped search's sharing effective, small enough that the block's table
-/// (about 400 bytes per point at k = 48 in `f32`) stays a few tens of MB.
-const SEARCH_BLOCK: usize = 1 << 16;
+/// Stored points searched at once by one worker in [`nearest_others`] and [`nearest_table`]:
+/// large enough for the grouped search's sharing, small enough that a block's candidates and
+/// rows (about 800 bytes per point at k = 48) stay in the worker's cache and a few MB, however
+/// many workers there are.
+const SEARCH_BLOCK: usize = 8192;
 
 /// The `k` nearest other points of every point, all rows held (see [`by_blocks`]).
 pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
@@ -59,19 +64,19 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
     let mut index = try_zeroed(entries(n, width)?, WHAT)?;
     let mut nearest = vec![None; n];
     let mut farthest = vec![0.0; n];
-    let mut position: Option<Vec<u32>> = None;
-    let order = by_blocks(points, k, SEARCH_BLOCK, &mut |block| {
-        let position = position.get_or_insert_with(|| super::positions_of(block.order));
-        let rows = &mut index[block.positions.start * width..block.positions.end * width];
-        rows.par_iter_mut()
-            .zip(block.rows)
-            .with_min_len(4096)
-            .for_each(|(slot, &j)| *slot = position[j as usize]);
-        for (r, pos) in block.positions.clone().enumerate() {
-            nearest[block.order[pos] as usize] = block.nearest[r];
-            farthest[pos] = block.farthest[r];
-        }
-        Ok(())
+    let order = by_blocks(points, k, SEARCH_BLOCK, |blocks| {
+        let targets = Targets::check(blocks.order(), n)?;
+        let position = inverse(&targets)?;
+        let bounds = blocks.bounds();
+        let rows = BlockScatter::in_place(&mut index, bounds, width)?;
+        let near = BlockScatter::to_targets(&mut nearest, &targets, bounds, 1)?;
+        let far = BlockScatter::in_place(&mut farthest, bounds, 1)?;
+        blocks.for_each(&|block| {
+            let b = block.index;
+            rows.write(b, block.rows.iter().map(|&j| position[j as usize]))?;
+            near.write(b, block.nearest.iter().copied())?;
+            far.write(b, block.farthest.iter().copied())
+        })
     })?
     .order;
     Ok(Nearest {
@@ -91,13 +96,14 @@ pub(crate) fn nearest_table(points: &[DVec3], k: usize) -> Result<(NeighborTable
     let width = k.min(n.saturating_sub(1));
     let entries = entries(n, width)?;
     let (mut index, mut sq_dist) = (try_zeroed(entries, WHAT)?, try_zeroed(entries, WHAT)?);
-    let order = by_blocks(points, k, SEARCH_BLOCK, &mut |block| {
-        for (r, pos) in block.positions.clone().enumerate() {
-            let at = block.order[pos] as usize * width;
-            index[at..at + width].copy_from_slice(block.row(r));
-            sq_dist[at..at + width].copy_from_slice(block.dists_of(r));
-        }
-        Ok(())
+    let order = by_blocks(points, k, SEARCH_BLOCK, |blocks| {
+        let targets = Targets::check(blocks.order(), n)?;
+        let rows = BlockScatter::to_targets(&mut index, &targets, blocks.bounds(), width)?;
+        let dists = BlockScatter::to_targets(&mut sq_dist, &targets, blocks.bounds(), width)?;
+        blocks.for_each(&|block| {
+            rows.write(block.index, block.rows.iter().copied())?;
+            dists.write(block.index, block.dists.iter().copied())
+        })
     })?
     .order;
     let offsets = (0..=n).map(|i| i * width).collect();
@@ -108,6 +114,8 @@ pub(crate) fn nearest_table(points: &[DVec3], k: usize) -> Result<(NeighborTable
 
 /// The exact rows of a run of consecutive tree positions.
 pub(super) struct Block<'a> {
+    /// The block's number among [`Blocks::bounds`].
+    pub(super) index: usize,
     /// The caller's index of the point stored at each position (the whole tree's order).
     pub(super) order: &'a [u32],
     /// The tree positions of the block's points.
@@ -129,31 +137,72 @@ impl Block<'_> {
     pub(super) fn row(&self, r: usize) -> &[u32] {
         &self.rows[r * self.width..(r + 1) * self.width]
     }
-
-    /// The squared distances of [`Block::row`].
-    pub(super) fn dists_of(&self, r: usize) -> &[f64] {
-        &self.dists[r * self.width..(r + 1) * self.width]
-    }
 }
 
 /// The `k` nearest other points of every point of `points` (a nonempty set of finite points),
-/// handed to `consume` a block of `block` consecutive positions of the `f32` tree at a time, so
-/// that no table of every row is ever held (at a million points and k = 48, 576 MB) and a
-/// block's rows are consumed while in cache. Returns the search (its tree's order, and rows
-/// again on request).
+/// a block of about `block` consecutive positions of the search tree at a time: `run` gets the
+/// [`Blocks`] — the tree's order and the block bounds, known before any block is searched —
+/// and has them searched ([`Blocks::for_each`], whole blocks in parallel), so that no table of
+/// every row is ever held (at a million points and k = 48, 576 MB) and a block's rows are
+/// consumed while in cache. Returns the search (its tree's order, and rows again on request).
 pub(super) fn by_blocks(
     points: &[DVec3],
     k: usize,
     block: usize,
-    consume: &mut dyn FnMut(&Block<'_>) -> Result<()>,
+    run: impl FnOnce(&Blocks<'_>) -> Result<()>,
 ) -> Result<Searched> {
     let n = points.len();
+    let width = k.min(n.saturating_sub(1));
     let (centre, extent) = centre_and_extent(points);
     // false for a NaN extent too (coordinates whose centre overflows)
-    let fits_f32 = extent <= F32_EXTENT;
-    if !fits_f32 {
-        return by_blocks_in_f64(points, k, block, consume);
+    let mut tree = if extent <= F32_EXTENT {
+        // with every other point among the candidates, a row is exact without a proof
+        let searched = (width + MARGIN).min(n.saturating_sub(1));
+        let proof = Proof {
+            width,
+            searched,
+            complete: searched == n.saturating_sub(1),
+            extent,
+        };
+        SearchTree::F32 {
+            tree: f32_tree(points, centre)?,
+            proof,
+            exact: None,
+        }
+    } else {
+        SearchTree::F64(f64_tree(points)?)
+    };
+    let order = match &tree {
+        SearchTree::F32 { tree, .. } => tree.tree_order().to_vec(),
+        SearchTree::F64(tree) => tree.tree_order().to_vec(),
+    };
+    // the f64 tree of the rows the proof does not settle, built when the first one needs it
+    let exact = OnceLock::new();
+    match &tree {
+        _ if width == 0 => run(&Blocks::new(points, &order, width, Source::Single, &exact))?,
+        SearchTree::F32 { tree, proof, .. } => {
+            let nbhd = Neighborhood::Knn { k: proof.searched };
+            tree.with_blocks(nbhd, true, block, |tree_blocks| {
+                let source = Source::F32(tree_blocks, proof);
+                run(&Blocks::new(points, &order, width, source, &exact))
+            })??
+        }
+        SearchTree::F64(tree) => {
+            let nbhd = Neighborhood::Knn { k: width };
+            tree.with_blocks(nbhd, true, block, |tree_blocks| {
+                let source = Source::F64(tree_blocks);
+                run(&Blocks::new(points, &order, width, source, &exact))
+            })??
+        }
     }
+    if let SearchTree::F32 { exact: kept, .. } = &mut tree {
+        *kept = exact.into_inner().map(Box::new);
+    }
+    Ok(Searched { order, width, tree })
+}
+
+/// The `f32` tree of `points` relative to `centre`.
+fn f32_tree(points: &[DVec3], centre: DVec3) -> Result<KdTree<f32>> {
     let mut flat = vec![0f32; points.len() * 3];
     flat.par_chunks_mut(3)
         .zip(points.par_iter())
@@ -163,42 +212,178 @@ pub(super) fn by_blocks(
                 *f = c as f32;
             }
         });
-    let tree = KdTree::<f32>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())?;
-    drop(flat);
-    let order = tree.tree_order().to_vec();
-    let width = k.min(n.saturating_sub(1));
-    // with every other point among the candidates, a row is exact without a proof
-    let searched = (width + MARGIN).min(n.saturating_sub(1));
-    let proof = Proof {
-        width,
-        searched,
-        complete: searched == n.saturating_sub(1),
-        extent,
-    };
-    // the f64 tree of the rows the proof does not settle, built when the first one needs it
-    let mut exact: Option<KdTree<f64>> = None;
-    let (mut rows, mut dists) = (Vec::new(), Vec::new());
-    let mut each = |positions: Range<usize>, table: NeighborTable<f32>| {
-        let len = entries(positions.len(), width)?;
-        try_resize(&mut rows, len)?;
-        try_resize(&mut dists, len)?;
-        if width == 0 {
-            // no other point: empty rows, exact
-            let none = vec![None; positions.len()];
-            let zero = vec![0.0; positions.len()];
-            return consume(&Block {
-                order: &order,
-                positions,
-                width,
-                rows: &rows,
-                dists: &dists,
-                nearest: &none,
-                farthest: &zero,
-            });
+    KdTree::<f32>::build(&PointsView::from_flat(&flat, 3)?, &BuildOptions::default())
+}
+
+/// The blocks of a [`by_blocks`] search: the search tree's order, the block bounds, and the
+/// search of any block.
+pub(super) struct Blocks<'s> {
+    points: &'s [DVec3],
+    order: &'s [u32],
+    width: usize,
+    source: Source<'s>,
+    /// The `f64` tree of the rows an `f32` proof does not settle, once one needed it.
+    exact: &'s OnceLock<KdTree<f64>>,
+}
+
+/// Where the rows of a block come from.
+enum Source<'s> {
+    /// The `f32` tree's candidates, proven exact (or searched again in `f64`).
+    F32(&'s TreeBlocks<'s, f32>, &'s Proof),
+    /// The `f64` tree of points too far out for `f32`.
+    F64(&'s TreeBlocks<'s, f64>),
+    /// A single point: one block of one empty row.
+    Single,
+}
+
+/// One worker's rows of a block, kept from block to block.
+#[derive(Default)]
+struct Rows {
+    rows: Vec<u32>,
+    dists: Vec<f64>,
+    nearest: Vec<Option<f64>>,
+    farthest: Vec<f64>,
+}
+
+impl<'s> Blocks<'s> {
+    fn new(
+        points: &'s [DVec3],
+        order: &'s [u32],
+        width: usize,
+        source: Source<'s>,
+        exact: &'s OnceLock<KdTree<f64>>,
+    ) -> Self {
+        Self {
+            points,
+            order,
+            width,
+            source,
+            exact,
         }
-        let found: Vec<(Option<f64>, f64, bool)> = rows
+    }
+
+    /// The caller's index of the point stored at each position of the search tree.
+    pub(super) fn order(&self) -> &'s [u32] {
+        self.order
+    }
+
+    /// Block `b` holds the tree positions `bounds[b]..bounds[b + 1]`.
+    pub(super) fn bounds(&self) -> &[usize] {
+        match self.source {
+            Source::F32(blocks, _) => blocks.bounds(),
+            Source::F64(blocks) => blocks.bounds(),
+            Source::Single => &[0, 1],
+        }
+    }
+
+    /// Hands `consume` the exact rows of every block, whole blocks in parallel, in no
+    /// particular order: the threads do not wait for each other from block to block, and a
+    /// thread another process holds up delays only its own block. When a row needs the `f64`
+    /// tree, which is not built yet, the blocks not yet begun are set aside, the tree is built
+    /// once, and they are searched then.
+    pub(super) fn for_each(
+        &self,
+        consume: &(dyn Fn(&Block<'_>) -> Result<()> + Sync),
+    ) -> Result<()> {
+        let blocks = self.bounds().len() - 1;
+        let stop = AtomicBool::new(false);
+        let left = self.pass(&(0..blocks).collect::<Vec<_>>(), &stop, consume)?;
+        if left.is_empty() {
+            return Ok(());
+        }
+        if self.exact.get().is_none() {
+            // built outside the parallel pass: no thread waits on another's build
+            let _ = self.exact.set(f64_tree(self.points)?);
+        }
+        let left = self.pass(&left, &stop, consume)?;
+        debug_assert!(left.is_empty(), "every block settled with the f64 tree");
+        Ok(())
+    }
+
+    /// Consumes the blocks `blocks` in parallel; returns those set aside for the `f64` tree
+    /// (none once it is built).
+    fn pass(
+        &self,
+        blocks: &[usize],
+        stop: &AtomicBool,
+        consume: &(dyn Fn(&Block<'_>) -> Result<()> + Sync),
+    ) -> Result<Vec<usize>> {
+        let exact = self.exact.get();
+        let left: Vec<Option<usize>> = blocks
+            .par_iter()
+            .map_init(Rows::default, |rows, &b| {
+                if exact.is_none() && stop.load(Ordering::Relaxed) {
+                    return Ok(Some(b));
+                }
+                if !self.rows_of(b, exact, rows)? {
+                    stop.store(true, Ordering::Relaxed);
+                    return Ok(Some(b));
+                }
+                consume(&Block {
+                    index: b,
+                    order: self.order,
+                    positions: self.bounds()[b]..self.bounds()[b + 1],
+                    width: self.width,
+                    rows: &rows.rows,
+                    dists: &rows.dists,
+                    nearest: &rows.nearest,
+                    farthest: &rows.farthest,
+                })?;
+                Ok(None)
+            })
+            .collect::<Result<_>>()?;
+        Ok(left.into_iter().flatten().collect())
+    }
+
+    /// The exact rows of block `b` into `out`; `false` when a row needs the `f64` tree and
+    /// `exact` is not given.
+    fn rows_of(&self, b: usize, exact: Option<&KdTree<f64>>, out: &mut Rows) -> Result<bool> {
+        let positions = self.bounds()[b]..self.bounds()[b + 1];
+        let width = self.width;
+        let len = entries(positions.len(), width)?;
+        try_resize(&mut out.rows, len)?;
+        try_resize(&mut out.dists, len)?;
+        match self.source {
+            Source::Single => {
+                out.nearest = vec![None; positions.len()];
+                out.farthest = vec![0.0; positions.len()];
+                Ok(true)
+            }
+            Source::F64(blocks) => {
+                let table = blocks.rows(b)?;
+                (out.nearest, out.farthest) = (0..positions.len())
+                    .map(|r| {
+                        let d = table.sq_dists_of(r);
+                        (d.first().copied(), d.last().copied().unwrap_or(0.0))
+                    })
+                    .unzip();
+                let (_, rows, dists) = table.into_parts();
+                (out.rows, out.dists) = (rows, dists);
+                Ok(true)
+            }
+            Source::F32(blocks, proof) => {
+                let table = blocks.rows(b)?;
+                self.settle(positions, &table, proof, exact, out)
+            }
+        }
+    }
+
+    /// The `f32` candidates `table` of the points at `positions` re-measured and proven into
+    /// `out`; the rows the proof does not settle searched again with `exact` (`false` when it
+    /// is not given).
+    fn settle(
+        &self,
+        positions: Range<usize>,
+        table: &NeighborTable<f32>,
+        proof: &Proof,
+        exact: Option<&KdTree<f64>>,
+        out: &mut Rows,
+    ) -> Result<bool> {
+        let (points, order, width) = (self.points, self.order, self.width);
+        let found: Vec<(Option<f64>, f64, bool)> = out
+            .rows
             .par_chunks_mut(width)
-            .zip(dists.par_chunks_mut(width))
+            .zip(out.dists.par_chunks_mut(width))
             .enumerate()
             .map_init(Vec::new, |scratch, (r, (row, dist))| {
                 if r + PREFETCH_ROWS < table.len() {
@@ -215,49 +400,25 @@ pub(super) fn by_blocks(
                 (scratch.first().map(|e| e.0), kth, proven)
             })
             .collect();
-        let (mut nearest, mut farthest): (Vec<Option<f64>>, Vec<f64>) =
-            found.iter().map(|&(d, kth, _)| (d, kth)).unzip();
+        (out.nearest, out.farthest) = found.iter().map(|&(d, kth, _)| (d, kth)).unzip();
         let unproven: Vec<usize> = (0..positions.len()).filter(|&r| !found[r].2).collect();
-        if !unproven.is_empty() {
-            let tree = match &mut exact {
-                Some(t) => t,
-                None => exact.insert(f64_tree(points)?),
-            };
-            let searched = search_in_f64(tree, &order[positions.clone()], &unproven, width)?;
-            for (&r, row) in unproven.iter().zip(searched) {
-                let slots = rows[r * width..(r + 1) * width].iter_mut();
-                for ((slot, d), nb) in slots.zip(&mut dists[r * width..]).zip(&row) {
-                    (*slot, *d) = (nb.index, nb.sq_dist);
-                }
-                nearest[r] = row.first().map(|nb| nb.sq_dist);
-                farthest[r] = row.last().map_or(0.0, |nb| nb.sq_dist);
-            }
+        if unproven.is_empty() {
+            return Ok(true);
         }
-        consume(&Block {
-            order: &order,
-            positions,
-            width,
-            rows: &rows,
-            dists: &dists,
-            nearest: &nearest,
-            farthest: &farthest,
-        })
-    };
-    if searched == 0 {
-        // a single point: no other points, one empty row
-        each(0..n, NeighborTable::default())?;
-    } else {
-        tree.neighborhoods_by_blocks(Neighborhood::Knn { k: searched }, true, block, &mut each)?;
+        let Some(tree) = exact else {
+            return Ok(false);
+        };
+        let searched = search_in_f64(tree, &order[positions], &unproven, width)?;
+        for (&r, row) in unproven.iter().zip(searched) {
+            let slots = out.rows[r * width..(r + 1) * width].iter_mut();
+            for ((slot, d), nb) in slots.zip(&mut out.dists[r * width..]).zip(&row) {
+                (*slot, *d) = (nb.index, nb.sq_dist);
+            }
+            out.nearest[r] = row.first().map(|nb| nb.sq_dist);
+            out.farthest[r] = row.last().map_or(0.0, |nb| nb.sq_dist);
+        }
+        Ok(true)
     }
-    Ok(Searched {
-        order,
-        width,
-        tree: SearchTree::F32 {
-            tree,
-            proof,
-            exact: exact.map(Box::new),
-        },
-    })
 }
 
 /// What [`by_blocks`] searched with, kept to give rows once more after the blocks: a caller that
@@ -421,47 +582,6 @@ fn try_resize<V: Clone + Default>(v: &mut Vec<V>, n: usize) -> Result<()> {
 /// that no squared distance overflows; beyond it every row is searched in `f64`.
 const F32_EXTENT: f64 = 1e18;
 
-/// [`by_blocks`] with an `f64` search throughout (coordinates too large for `f32`).
-fn by_blocks_in_f64(
-    points: &[DVec3],
-    k: usize,
-    block: usize,
-    consume: &mut dyn FnMut(&Block<'_>) -> Result<()>,
-) -> Result<Searched> {
-    let tree = f64_tree(points)?;
-    let order = tree.tree_order().to_vec();
-    let width = k.min(points.len().saturating_sub(1));
-    let mut each = |positions: Range<usize>, table: NeighborTable<f64>| {
-        let (nearest, farthest): (Vec<Option<f64>>, Vec<f64>) = (0..positions.len())
-            .map(|r| {
-                let d = table.sq_dists_of(r);
-                (d.first().copied(), d.last().copied().unwrap_or(0.0))
-            })
-            .unzip();
-        let (_, rows, dists) = table.into_parts();
-        consume(&Block {
-            order: &order,
-            positions,
-            width,
-            rows: &rows,
-            dists: &dists,
-            nearest: &nearest,
-            farthest: &farthest,
-        })
-    };
-    tree.neighborhoods_by_blocks(
-        Neighborhood::Knn { k: width.max(1) },
-        true,
-        block,
-        &mut each,
-    )?;
-    Ok(Searched {
-        order,
-        width,
-        tree: SearchTree::F64(tree),
-    })
-}
-
 /// The candidates `ids` of the point with caller index `o`, re-measured in `f64` and sorted by
 /// `(sq_dist, index)` into `out`, the first `width` of them kept.
 fn keep_nearest(points: &[DVec3], o: u32, ids: &[u32], width: usize, out: &mut Vec<(f64, u32)>) {
@@ -593,18 +713,22 @@ mod tests {
     /// `Searched::rows_at` gives the rows the blocks gave, bit for bit, for positions asked in
     /// any order.
     fn assert_rows_again(points: &[DVec3], k: usize) {
-        let mut blocks: Vec<Vec<Neighbor<f64>>> = Vec::new();
-        let searched = by_blocks(points, k, 700, &mut |b| {
-            for r in 0..b.positions.len() {
-                let row = b.row(r).iter().zip(b.dists_of(r));
-                blocks.push(
-                    row.map(|(&index, &sq_dist)| Neighbor { index, sq_dist })
-                        .collect(),
-                );
-            }
-            Ok(())
+        let rows = std::sync::Mutex::new(vec![Vec::new(); points.len()]);
+        let searched = by_blocks(points, k, 700, |blocks| {
+            blocks.for_each(&|b| {
+                let mut rows = rows.lock().unwrap();
+                for (r, pos) in b.positions.clone().enumerate() {
+                    let dists = &b.dists[r * b.width..(r + 1) * b.width];
+                    let row = b.row(r).iter().zip(dists);
+                    rows[pos] = row
+                        .map(|(&index, &sq_dist)| Neighbor { index, sq_dist })
+                        .collect();
+                }
+                Ok(())
+            })
         })
         .unwrap();
+        let blocks = rows.into_inner().unwrap();
         let asked: Vec<usize> = (0..points.len()).rev().step_by(3).collect();
         let again = searched.rows_at(points, &asked).unwrap();
         for (&pos, row) in asked.iter().zip(&again) {

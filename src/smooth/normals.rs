@@ -19,10 +19,12 @@ use crate::geometry::normals::{NormalCovariance, FLAG_SKIPPED};
 use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
 use crate::prefetch::prefetch_at;
-use crate::scatter::{scatter, TargetCheck};
+use crate::progress::relay;
+use crate::scatter::{BlockScatter, Targets};
 use crate::table::try_filled_par;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// One point's estimate.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,7 +101,7 @@ fn normals_finite(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
     options: &SmoothOptions,
-    progress: &mut dyn FnMut(f64, Stage) -> bool,
+    progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
 ) -> Result<NormalsResult> {
     let mut report = progress_in_units(1.0, progress);
     report(0.0, Stage::Neighbors)?;
@@ -176,9 +178,9 @@ fn normals_finite(
     })
 }
 
-/// Points per block of the fused search: the rows of a block are consumed while they are
-/// still in cache (about 1.4 MB of rows at k = 15), and a block has enough chunks of the
-/// grouped search to keep two threads busy.
+/// Points per block of the fused search: each worker searches and consumes whole blocks, a
+/// block's rows while they are still in its cache (about 1.4 MB at k = 15); 4096 and 16384
+/// measured the same.
 const BLOCK: usize = 8192;
 
 /// What `super::check_not_degenerate` refuses, with the same message: no neighbourhood reaches
@@ -300,35 +302,48 @@ fn estimate((normal, values, flags): (DVec3, DVec3, u8)) -> NormalEstimate {
 /// is consumed whole and the rows that ε cuts (rare for the default 6h; their last neighbour
 /// lies beyond ε) are searched again, on the blocks' own tree (`Searched::rows_at`: a second
 /// tree of every point for the 0.2 % of rows the 1M torus has cut cost a sixth of the call), and
-/// consumed cut.
+/// consumed cut. Whole blocks run in parallel (`nearest::Blocks::for_each`), so the threads
+/// never wait for one another between blocks: with a fork and join for each step of each block,
+/// another process on one core made two threads slower than one (`docs/speed-log.md`, round 10).
 fn normals_in_tree_order(
     points: &[DVec3],
     options: &SmoothOptions,
-    report: &mut dyn FnMut(f64, Stage) -> Result<()>,
+    report: &mut (dyn FnMut(f64, Stage) -> Result<()> + Send),
 ) -> Result<NormalsResult> {
     let n = points.len();
     let k = options.k;
     // each block's estimates and nearest distances go to the caller's order as they are made
-    // (written in parallel, overlapping the blocks' work, rather than gathered at random
-    // afterwards); the farthest distances stay in tree order, where the cut rows are found
+    // (written while the block is in cache, rather than gathered at random afterwards); the
+    // farthest distances stay in tree order, where the cut rows are found
     let mut estimates = try_filled_par(n, NormalEstimate::skipped(), "the normals")?;
     let mut nearest = try_filled_par(n, None, "the nearest-neighbour distances")?;
-    let mut farthest_in_tree: Vec<f64> = Vec::with_capacity(n);
-    let mut targets = TargetCheck::new(n);
-    let searched = super::nearest::by_blocks(points, k, BLOCK, &mut |b| {
-        let start = b.positions.start;
-        let block = estimates_of_rows(points, b.positions.len(), 256, |r| {
-            (points[b.order[start + r] as usize], b.row(r))
-        });
-        let to = targets.check(&b.order[b.positions.clone()])?;
-        scatter(&mut estimates, &to, &block)?;
-        scatter(&mut nearest, &to, b.nearest)?;
-        farthest_in_tree.extend_from_slice(b.farthest);
-        report(0.9 * b.positions.end as f64 / n as f64, Stage::Neighbors)
+    let mut farthest_in_tree = try_filled_par(n, 0.0, "the farthest-neighbour distances")?;
+    let mut blocks_done = |f: f64| report(0.9 * f, Stage::Neighbors);
+    let searched = super::nearest::by_blocks(points, k, BLOCK, |blocks| {
+        let targets = Targets::check(blocks.order(), n)?;
+        let bounds = blocks.bounds();
+        let est = BlockScatter::to_targets(&mut estimates, &targets, bounds, 1)?;
+        let near = BlockScatter::to_targets(&mut nearest, &targets, bounds, 1)?;
+        let far = BlockScatter::in_place(&mut farthest_in_tree, bounds, 1)?;
+        let done = AtomicUsize::new(0);
+        relay(&mut blocks_done, |relay| {
+            blocks.for_each(&|b| {
+                let start = b.positions.start;
+                let block = estimates_of_rows(points, b.positions.len(), 256, |r| {
+                    (points[b.order[start + r] as usize], b.row(r))
+                });
+                est.write(b.index, block.into_iter())?;
+                // the distances themselves, for the mean spacing
+                near.write(b.index, b.nearest.iter().map(|d| d.map(f64::sqrt)))?;
+                far.write(b.index, b.farthest.iter().copied())?;
+                let done = done.fetch_add(b.positions.len(), Ordering::Relaxed);
+                relay.tick((done + b.positions.len()) as f64 / n as f64)
+            })
+        })
     })?;
     let order = &searched.order;
     // the mean nearest-neighbour spacing, summed in caller order as on the table path
-    let h = mean_nearest(nearest.into_iter());
+    let h = mean_of(nearest.into_iter());
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
@@ -382,9 +397,15 @@ fn normals_in_tree_order(
 /// `geometry::neighbors::mean_spacing_of`'s value bit for bit (the same sum in index order)
 /// without its median.
 fn mean_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> f64 {
+    mean_of(nearest_sq_dist.map(|d| d.map(f64::sqrt)))
+}
+
+/// The mean of the distances given (`None` for a point without neighbours), summed in the
+/// order given: [`mean_nearest`] of their squares.
+fn mean_of(distances: impl Iterator<Item = Option<f64>>) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
-    for d in nearest_sq_dist.flatten() {
-        sum += d.sqrt();
+    for d in distances.flatten() {
+        sum += d;
         n += 1;
     }
     if n == 0 {

@@ -15,6 +15,7 @@
 //! - `spacing.rs`: the nearest-neighbour spacing `h`, [`KdTree::spacing`];
 //! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
 
+mod blocks;
 mod build;
 mod construct;
 pub(crate) mod group_search;
@@ -42,6 +43,7 @@ use crate::query::result_set::{
 };
 use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::{Scalar, ScalarType};
+pub(crate) use blocks::Blocks;
 use node::{Descent, Node};
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
 pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};

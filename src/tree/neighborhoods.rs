@@ -2,8 +2,6 @@
 //! batch of query points ([`KdTree::neighborhoods_of`]) as a [`NeighborTable`], computed in
 //! parallel in an order that keeps the cache warm and written back in the caller's order.
 
-use std::ops::Range;
-
 use rayon::prelude::*;
 
 use super::search::TreeView;
@@ -13,7 +11,7 @@ use crate::parallel::with_threads;
 use crate::points::PointsView;
 use crate::query::{NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
-use crate::table::{check_knn_total, rows_in_work_order, NeighborTable, TableOptions, CHUNK};
+use crate::table::{check_knn_total, rows_in_work_order, NeighborTable, TableOptions};
 
 impl<T: Scalar> KdTree<T> {
     /// The neighbourhood of every point of the tree, as compressed rows in the caller's
@@ -90,65 +88,6 @@ impl<T: Scalar> KdTree<T> {
                 },
             )
         })?
-    }
-
-    /// The neighbourhoods of the tree's own points, a block of about `block` consecutive tree
-    /// positions at a time: `each(positions, table)` gets the rows of the points at
-    /// `positions`, row `r` for the point at tree position `positions.start + r`, the same rows
-    /// as [`KdTree::neighborhoods`] gives them (`exclude_self` as its option). For callers that
-    /// work in tree order and cannot hold the table of every point at once.
-    pub(crate) fn neighborhoods_by_blocks(
-        &self,
-        nbhd: Neighborhood<T>,
-        exclude_self: bool,
-        block: usize,
-        each: &mut dyn FnMut(Range<usize>, NeighborTable<T>) -> Result<()>,
-    ) -> Result<()> {
-        nbhd.validate()?;
-        match self.dim {
-            3 => return self.grouped_blocks::<3>(nbhd, exclude_self, block, each),
-            2 => return self.grouped_blocks::<2>(nbhd, exclude_self, block, each),
-            1 => return self.grouped_blocks::<1>(nbhd, exclude_self, block, each),
-            _ => {}
-        }
-        let block = block.max(1);
-        for start in (0..self.len()).step_by(block) {
-            let positions = start..(start + block).min(self.len());
-            let table = rows_in_work_order(
-                positions.len(),
-                positions.len(),
-                |w| w,
-                |w, row, _| {
-                    let pos = start + w;
-                    let exclude = exclude_self.then_some(self.ids[pos]);
-                    self.search_resolved(self.point_at(pos), exclude, nbhd, row);
-                    Ok(())
-                },
-            )?;
-            each(positions, table)?;
-        }
-        Ok(())
-    }
-
-    /// [`KdTree::neighborhoods_by_blocks`] by the grouped search, blocks of whole chunks.
-    fn grouped_blocks<const D: usize>(
-        &self,
-        nbhd: Neighborhood<T>,
-        exclude_self: bool,
-        block: usize,
-        each: &mut dyn FnMut(Range<usize>, NeighborTable<T>) -> Result<()>,
-    ) -> Result<()> {
-        let view = self.view();
-        let plan = group_search::Plan::<T, D>::new(&view, nbhd, exclude_self);
-        let chunks_per_block = block.div_ceil(CHUNK).max(1);
-        for first in (0..plan.chunks()).step_by(chunks_per_block) {
-            let chunks = first..(first + chunks_per_block).min(plan.chunks());
-            let positions = plan.positions(chunks.clone());
-            let start = positions.start;
-            let table = plan.rows(chunks, positions.len(), |pos| pos - start)?;
-            each(positions, table)?;
-        }
-        Ok(())
     }
 
     /// The query indices of `queries` ordered by the first tree position of the leaf each falls
