@@ -70,10 +70,11 @@
  *   one shared pool with a thread per core.
  *   - The `threads` option of every call is 0 (the shared pool) or 1 .. NBHD_MAX_THREADS (1024);
  *     a larger value fails with NBHD_STATUS_INVALID_OPTION, naming it, before any thread starts.
- *   - A call with threads = n runs on a pool of n threads. The most recently used such pool is
- *     kept for the next call if n is at most the number of cores; any other pool is the call's
- *     own, and its threads have exited when the call returns. So nbhd's idle threads are the
- *     shared pool (once threads = 0 was used) plus at most one pool of at most a thread per core.
+ *   - A call with threads = n runs on a pool of n threads. The two most recently used such
+ *     pools are kept for the next calls if n is at most the number of cores; any other pool is
+ *     the call's own, and its threads have exited when the call returns. So nbhd's idle threads
+ *     are the shared pool (once threads = 0 was used) plus at most two pools of at most a thread
+ *     per core each.
  *   - fork(): a child forked after nbhd ran in the parent may call nbhd. The parent's worker
  *     threads do not exist in the child, so nbhd notices the fork (the process id changed), never
  *     uses or frees a pool made before it, and gives the child pools of its own (threads = 0 then
