@@ -23,10 +23,21 @@
 // to 2. --write FILE saves the torus as raw little-endian float32 x y z records, so that
 // scripts/bench_normals_open3d.py times Open3D's estimate_normals on the very same points
 // (scripts/bench-normals.sh runs both).
+//
+// Then the principal curvatures, the same way: nbhd_estimate_curvatures (k = 15, epsilon = 1e30
+// ABSOLUTE; the Weingarten estimate of k1, k2 and their directions, with the normals and every
+// other per-point value of nbhd_point_geometry) on 1 and T threads in alternation, against PCL's
+// pipeline for principal curvatures: NormalEstimation (or NormalEstimationOMP on T threads) and
+// then PrincipalCurvaturesEstimation, both with setKSearch(16) on one pcl::search::KdTree (its
+// build included). PCL's pc1/pc2 are the eigenvalues of the covariance of the neighbours'
+// normals projected on the tangent plane, not curvatures in 1/length: the rows time the same
+// job (principal curvatures and directions of every point), not the same estimator, so only the
+// times are compared (and nbhd's 1- and T-thread results checked identical).
 #include <nbhd.h>
 
 #include <pcl/features/normal_3d.h>
 #include <pcl/features/normal_3d_omp.h>
+#include <pcl/features/principal_curvatures.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -35,6 +46,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -107,6 +119,77 @@ bool nbhd_normals(const Cloud& c, std::size_t threads, pcl::PointCloud<pcl::Norm
                              &out[0].curvature, sizeof(pcl::Normal), nullptr};
     if (nbhd_estimate_normals(&pts, &o, &w) != NBHD_STATUS_OK) {
         std::fprintf(stderr, "nbhd: %s\n", nbhd_last_error_message());
+        return false;
+    }
+    return true;
+}
+
+bool nbhd_curvatures(const Cloud& c, std::size_t threads, std::vector<nbhd_point_geometry>& out) {
+    out.resize(c.size());
+    nbhd_points pts = {c.points.data(), c.size(), 3, sizeof(pcl::PointXYZ), NBHD_SCALAR_TYPE_F32};
+    nbhd_smooth_options o = nbhd_smooth_options_default();
+    o.k = 15;
+    o.epsilon = 1e30;
+    o.epsilon_units = NBHD_UNITS_ABSOLUTE;
+    o.threads = threads;
+    if (nbhd_estimate_curvatures(&pts, &o, out.data(), nullptr) != NBHD_STATUS_OK) {
+        std::fprintf(stderr, "nbhd: %s\n", nbhd_last_error_message());
+        return false;
+    }
+    return true;
+}
+
+// PCL's principal curvatures: normals, then PrincipalCurvaturesEstimation over them, on one tree.
+template <class NE>
+void pcl_curvatures(const Cloud::Ptr& c, NE& ne, pcl::PointCloud<pcl::PrincipalCurvatures>& out) {
+    pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
+    pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>);
+    ne.setInputCloud(c);
+    ne.setSearchMethod(tree);
+    ne.setKSearch(16);
+    ne.compute(*normals);
+    pcl::PrincipalCurvaturesEstimation<pcl::PointXYZ, pcl::Normal, pcl::PrincipalCurvatures> pc;
+    pc.setInputCloud(c);
+    pc.setInputNormals(normals);
+    pc.setSearchMethod(tree);
+    pc.setKSearch(16);
+    pc.compute(out);
+}
+
+// The principal curvatures' rows (see the file's comment).
+bool bench_curvatures(const Cloud::Ptr& c, int reps, int threads) {
+    std::vector<nbhd_point_geometry> ours, ours_t;
+    pcl::PointCloud<pcl::PrincipalCurvatures> ref, reft;
+    bool ok = true;
+    auto nbhd = interleaved_median_ms(reps, {[&] { ok = nbhd_curvatures(*c, 1, ours) && ok; },
+                                             [&] { ok = nbhd_curvatures(*c, threads, ours_t) && ok; }});
+    Times pcl1 = median_ms(reps, [&] {
+        pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
+        pcl_curvatures(c, ne, ref);
+    });
+    Times pclt = median_ms(reps, [&] {
+        pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(threads);
+        pcl_curvatures(c, ne, reft);
+    });
+    std::printf("\nprincipal curvatures, %zu points, 16-point neighbourhoods, median of %d\n"
+                "| method | wall ms | PCL 1-thread pipeline / this (wall) | CPU ms | PCL 1-thread pipeline / this (CPU) |\n"
+                "|---|---:|---:|---:|---:|\n",
+                c->size(), reps);
+    auto row = [&](const std::string& name, Times t) {
+        std::printf("| %s | %.0f | %.2f | %.0f | %.2f |\n", name.c_str(), t.wall, pcl1.wall / t.wall, t.cpu,
+                    pcl1.cpu / t.cpu);
+    };
+    row("nbhd_estimate_curvatures 1 thread", nbhd[0]);
+    row("nbhd_estimate_curvatures " + std::to_string(threads) + " threads", nbhd[1]);
+    row("PCL NormalEstimation + PrincipalCurvaturesEstimation", pcl1);
+    row("PCL NormalEstimationOMP " + std::to_string(threads) + " threads + PrincipalCurvaturesEstimation", pclt);
+    std::printf("nbhd curvatures scaling 1 -> %d threads (wall): %.2fx\n", threads, nbhd[0].wall / nbhd[1].wall);
+    std::size_t same = 0;
+    for (std::size_t i = 0; ok && i < c->size(); ++i)
+        same += std::memcmp(&ours[i], &ours_t[i], offsetof(nbhd_point_geometry, normal_flags) + 3) == 0;
+    std::printf("nbhd curvatures, 1- and %d-thread results identical: %zu of %zu\n", threads, same, c->size());
+    if (!ok || same != c->size() || ref.size() != c->size()) {
+        std::fprintf(stderr, "bench_normals: nbhd's curvatures failed or differ between thread counts\n");
         return false;
     }
     return true;
@@ -214,6 +297,7 @@ int main(int argc, char** argv) {
             if (std::fclose(f) != 0) return 2;
         }
         ok = bench("torus " + std::to_string(generated), t, reps, threads) && ok;
+        ok = bench_curvatures(t, reps, threads) && ok;
     }
     for (const auto& f : files) {
         Cloud::Ptr raw(new Cloud), c(new Cloud);

@@ -270,9 +270,13 @@ impl Outputs {
             unsafe { write_coords(scalar, stride, &result.points, self.coords) };
         }
         if !self.geometry.is_null() {
-            let g: Vec<nbhd_point_geometry> = result.outputs.iter().map(Into::into).collect();
-            // SAFETY: non-NULL and aligned (checked by the constructors), writable (caller).
-            unsafe { write_all(self.geometry, &g) };
+            // straight into the caller's array: a copy of a million elements first would be
+            // another 150 MB to allocate and write
+            for (i, o) in result.outputs.iter().enumerate() {
+                // SAFETY: element `i` of the caller's array, non-NULL and aligned (checked by
+                // the constructors) and writable for `result.outputs.len()` elements (caller).
+                unsafe { self.geometry.add(i).write(o.into()) };
+            }
         }
         if !self.summary.is_null() {
             // SAFETY: as above.

@@ -5,7 +5,6 @@
 use crate::error::{NbhdError, Result};
 use crate::query::Neighborhood;
 use crate::table::{NeighborTable, TableOptions};
-use crate::tree::Spacing;
 use crate::{BuildOptions, KdTree, PointsView};
 use glam::DVec3;
 
@@ -70,9 +69,10 @@ pub fn mean_spacing_of(table: &NeighborTable<f64>) -> f64 {
 }
 
 /// [`mean_spacing_of`] from each point's squared distance to its nearest other point, in index
-/// order (`None` for a point without neighbours): the mean of [`Spacing::from_nearest`].
+/// order (`None` for a point without neighbours): [`crate::tree::Spacing::mean`], without its
+/// median.
 pub(crate) fn mean_spacing_of_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> f64 {
-    Spacing::from_nearest(nearest_sq_dist).mean
+    crate::tree::mean_distance(nearest_sq_dist.flatten().map(f64::sqrt))
 }
 
 #[cfg(test)]

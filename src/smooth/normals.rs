@@ -15,6 +15,7 @@ use super::{
     Stage,
 };
 use crate::error::{NbhdError, Result};
+use crate::geometry::neighbors::mean_spacing_of;
 use crate::geometry::normals::{NormalCovariance, FLAG_SKIPPED};
 use crate::geometry::orientation::orient_normals_with_progress;
 use crate::geometry::orientation::Orientation;
@@ -111,7 +112,7 @@ fn normals_finite(
         return normals_in_tree_order(points, options, &mut report);
     }
     let (knn, _) = knn_rows(points, neighbors, options.k)?;
-    let h = mean_nearest((0..knn.len()).map(|i| knn.sq_dists_of(i).first().copied()));
+    let h = mean_spacing_of(&knn);
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
@@ -343,7 +344,7 @@ fn normals_in_tree_order(
     })?;
     let order = &searched.order;
     // the mean nearest-neighbour spacing, summed in caller order as on the table path
-    let h = mean_of(nearest.into_iter());
+    let h = crate::tree::mean_distance(nearest.into_iter().flatten());
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
@@ -392,34 +393,9 @@ fn normals_in_tree_order(
     })
 }
 
-/// The mean distance of a point to its nearest other point from each point's squared distance
-/// to it, in index order (`None` for a point without neighbours):
-/// `geometry::neighbors::mean_spacing_of`'s value bit for bit (the same sum in index order)
-/// without its median.
-fn mean_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> f64 {
-    mean_of(nearest_sq_dist.map(|d| d.map(f64::sqrt)))
-}
-
-/// The mean of the distances given (`None` for a point without neighbours), summed in the
-/// order given: [`mean_nearest`] of their squares.
-fn mean_of(distances: impl Iterator<Item = Option<f64>>) -> f64 {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for d in distances.flatten() {
-        sum += d;
-        n += 1;
-    }
-    if n == 0 {
-        0.0
-    } else {
-        sum / n as f64
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::neighbors::{mean_spacing_of, neighbor_table};
-    use crate::query::Neighborhood;
     use crate::shapes::{sample, Shape, Torus};
     use crate::smooth::analyze;
 
@@ -468,11 +444,6 @@ mod tests {
     fn equals_the_full_analysis_bit_for_bit_for_any_threads() {
         let torus = Torus::new(1.0, 0.4);
         let s = sample(&torus, 3000, 7);
-        let table = neighbor_table(&s.points, Neighborhood::Knn { k: 15 }, true).unwrap();
-        assert_eq!(
-            mean_nearest((0..table.len()).map(|i| table.sq_dists_of(i).first().copied())),
-            mean_spacing_of(&table)
-        );
         for (orientation, eps) in [
             (Orientation::Unoriented, Length::Relative(6.0)),
             // the fused tree-order path with rows cut by ε (searched again)

@@ -49,6 +49,7 @@ pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE}
 pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
 pub use range::IndexRows;
 use search::TreeView;
+pub(crate) use spacing::mean_distance;
 pub use spacing::Spacing;
 
 /// Shape and memory of a built tree.
