@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The normals benchmark in one command (a benchmark, not a test; not run by scripts/test.sh):
-# nbhd_estimate_normals against PCL's NormalEstimation / NormalEstimationOMP
-# (cpp_examples/bench_normals.cpp) and Open3D's estimate_normals (scripts/bench_normals_open3d.py,
+# nbhd_estimate_normals against PCL's NormalEstimation / NormalEstimationOMP and
+# nbhd_estimate_curvatures against PCL's NormalEstimation + PrincipalCurvaturesEstimation
+# (cpp_examples/bench_normals.cpp), and Open3D's estimate_normals (scripts/bench_normals_open3d.py,
 # Open3D installed from PyPI into a venv under the target directory, once), on the same torus of
 # N points, one thread and T threads, median of R repetitions.
 #
