@@ -107,36 +107,42 @@ std::vector<Times> interleaved_median_ms(int reps, const std::vector<std::functi
 
 Times median_ms(int reps, const std::function<void()>& f) { return interleaved_median_ms(reps, {f})[0]; }
 
-bool nbhd_normals(const Cloud& c, std::size_t threads, pcl::PointCloud<pcl::Normal>& out) {
-    out.resize(c.size());
-    nbhd_points pts = {c.points.data(), c.size(), 3, sizeof(pcl::PointXYZ), NBHD_SCALAR_TYPE_F32};
-    nbhd_normal_options o = nbhd_normal_options_default();
+// The cloud as nbhd sees it: the pcl::PointXYZ records in place.
+nbhd_points points_of(const Cloud& c) {
+    return {c.points.data(), c.size(), 3, sizeof(pcl::PointXYZ), NBHD_SCALAR_TYPE_F32};
+}
+
+// The neighbourhoods of every nbhd row (normal or smoothing options): the point and its 15
+// nearest others, no radius cut, on `threads` threads.
+template <class Options>
+Options neighbourhoods(Options o, std::size_t threads) {
     o.k = 15;
     o.epsilon = 1e30;
     o.epsilon_units = NBHD_UNITS_ABSOLUTE;
     o.threads = threads;
+    return o;
+}
+
+// Whether an nbhd call succeeded (its message printed when not).
+bool succeeded(nbhd_status s) {
+    if (s != NBHD_STATUS_OK) std::fprintf(stderr, "nbhd: %s\n", nbhd_last_error_message());
+    return s == NBHD_STATUS_OK;
+}
+
+bool nbhd_normals(const Cloud& c, std::size_t threads, pcl::PointCloud<pcl::Normal>& out) {
+    out.resize(c.size());
+    nbhd_points pts = points_of(c);
+    nbhd_normal_options o = neighbourhoods(nbhd_normal_options_default(), threads);
     nbhd_normals_output w = {&out[0].normal_x, sizeof(pcl::Normal), NBHD_SCALAR_TYPE_F32,
                              &out[0].curvature, sizeof(pcl::Normal), nullptr};
-    if (nbhd_estimate_normals(&pts, &o, &w) != NBHD_STATUS_OK) {
-        std::fprintf(stderr, "nbhd: %s\n", nbhd_last_error_message());
-        return false;
-    }
-    return true;
+    return succeeded(nbhd_estimate_normals(&pts, &o, &w));
 }
 
 bool nbhd_curvatures(const Cloud& c, std::size_t threads, std::vector<nbhd_point_geometry>& out) {
     out.resize(c.size());
-    nbhd_points pts = {c.points.data(), c.size(), 3, sizeof(pcl::PointXYZ), NBHD_SCALAR_TYPE_F32};
-    nbhd_smooth_options o = nbhd_smooth_options_default();
-    o.k = 15;
-    o.epsilon = 1e30;
-    o.epsilon_units = NBHD_UNITS_ABSOLUTE;
-    o.threads = threads;
-    if (nbhd_estimate_curvatures(&pts, &o, out.data(), nullptr) != NBHD_STATUS_OK) {
-        std::fprintf(stderr, "nbhd: %s\n", nbhd_last_error_message());
-        return false;
-    }
-    return true;
+    nbhd_points pts = points_of(c);
+    nbhd_smooth_options o = neighbourhoods(nbhd_smooth_options_default(), threads);
+    return succeeded(nbhd_estimate_curvatures(&pts, &o, out.data(), nullptr));
 }
 
 // PCL's principal curvatures: normals, then PrincipalCurvaturesEstimation over them, on one tree.
