@@ -33,5 +33,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         .find(|f| f.name == "x")
         .map(|f| Precision::of_type(f.ty));
     cloud.grid = header.grid;
+    cloud.metadata.viewpoint = header.viewpoint;
+    cloud.metadata.comments = header.comments;
     Ok(cloud)
 }

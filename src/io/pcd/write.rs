@@ -5,7 +5,7 @@ use std::io::Write;
 use super::lzf;
 use crate::io::columns::{ColorStyle, Columns, Store};
 use crate::io::error::{Fail, PResult};
-use crate::io::{Encoding, PointCloud};
+use crate::io::{Encoding, PointCloud, Viewpoint};
 
 pub(crate) fn write(
     w: &mut impl Write,
@@ -57,14 +57,26 @@ fn write_header(
         size.push(s);
         ty.push(t);
     }
+    writeln!(w, "# .PCD v0.7 - Point Cloud Data file format")?;
+    for c in &cloud.metadata.comments {
+        writeln!(w, "# {}", c.replace(['\n', '\r'], " "))?;
+    }
+    let vp = cloud.metadata.viewpoint.unwrap_or(Viewpoint::IDENTITY);
+    let vp: Vec<String> = vp
+        .origin
+        .iter()
+        .chain(&vp.orientation)
+        .map(|&v| crate::io::value::fmt_num(v, false))
+        .collect();
     write!(
         w,
-        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\n\
-         COUNT {}\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n",
+        "VERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\n\
+         COUNT {}\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT {}\nPOINTS {n}\nDATA {data}\n",
         cols.names().join(" "),
         size.join(" "),
         ty.join(" "),
         vec!["1"; cols.len()].join(" "),
+        vp.join(" "),
     )?;
     Ok(())
 }

@@ -13,7 +13,7 @@ pub(crate) fn write(
     single: bool,
 ) -> PResult<()> {
     let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels);
-    w.write_all(header(&cols, cloud.len(), enc, single).as_bytes())?;
+    w.write_all(header(&cols, cloud, enc, single).as_bytes())?;
     let mut buf = Vec::new();
     let mut line = String::new();
     let be = enc == Encoding::BinaryBigEndian;
@@ -32,8 +32,10 @@ pub(crate) fn write(
     Ok(())
 }
 
-/// The header of `n` vertices with the properties `cols`.
-fn header(cols: &Columns<'_>, n: usize, enc: Encoding, single: bool) -> String {
+/// The header of the vertices of `cloud` with the properties `cols`, and the comments it
+/// carries.
+fn header(cols: &Columns<'_>, cloud: &PointCloud, enc: Encoding, single: bool) -> String {
+    let n = cloud.len();
     let fmt = match enc {
         Encoding::Ascii => "ascii",
         Encoding::Binary => "binary_little_endian",
@@ -42,9 +44,17 @@ fn header(cols: &Columns<'_>, n: usize, enc: Encoding, single: bool) -> String {
     };
     let float = if single { "float" } else { "double" };
     let mut h = format!(
-        "ply\nformat {fmt} 1.0\ncomment written by nbhd {}\nelement vertex {n}\n",
+        "ply\nformat {fmt} 1.0\ncomment written by nbhd {}\n",
         env!("CARGO_PKG_VERSION"),
     );
+    for c in &cloud.metadata.comments {
+        let c = c.replace(['\n', '\r'], " ");
+        match c.strip_prefix("obj_info ") {
+            Some(info) => h.push_str(&format!("obj_info {info}\n")),
+            None => h.push_str(&format!("comment {c}\n")),
+        }
+    }
+    h.push_str(&format!("element vertex {n}\n"));
     for (c, name) in cols.names().iter().enumerate() {
         let ty = match cols.store(c) {
             Store::Float => float,
