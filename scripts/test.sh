@@ -18,6 +18,9 @@ command -v cc >/dev/null 2>&1 || missing+=(gcc libc6-dev)
 command -v valgrind >/dev/null 2>&1 || missing+=(valgrind)
 command -v python3 >/dev/null 2>&1 || missing+=(python3)
 python3 -c 'import ensurepip' >/dev/null 2>&1 || missing+=(python3-venv)  # Debian's venv
+# cli/tests/cloudcompare.rs: Debian's CloudCompare opens nbhd's files on its command line (Xvfb)
+command -v CloudCompare >/dev/null 2>&1 || missing+=(cloudcompare)
+command -v xvfb-run >/dev/null 2>&1 || missing+=(xvfb)
 if [ -f cpp_examples/CMakeLists.txt ]; then
     command -v cmake >/dev/null 2>&1 || missing+=(cmake)
     command -v c++ >/dev/null 2>&1 || missing+=(g++)
@@ -47,6 +50,7 @@ cargo clippy --workspace --all-targets -- -D warnings
 echo "== cargo test"
 # valgrind was installed above: its memcheck runs of the C ABI tests must not be skipped.
 export NBHD_REQUIRE_VALGRIND=1
+export NBHD_REQUIRE_CLOUDCOMPARE=1  # installed above: its test must not be skipped
 cargo test --workspace
 
 # --- the Python package (python/): built with maturin, installed by pip, tested by pytest ----
