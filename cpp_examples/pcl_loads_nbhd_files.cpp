@@ -23,6 +23,7 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -75,7 +76,9 @@ Table read_table(const fs::path& p) {
     std::ifstream in(p);
     std::string line;
     std::getline(in, line);
-    std::istringstream h(line.substr(1));
+    // nbhd's header line: `//x y z ...` (CloudCompare's form; `# x y z ...` before)
+    const std::size_t names_at = std::min(line.find_first_not_of("/#"), line.size());
+    std::istringstream h(line.substr(names_at));
     for (std::string n; h >> n;) t.names.push_back(n);
     while (std::getline(in, line)) {
         if (line.empty()) continue;
