@@ -874,3 +874,45 @@ property list uchar int extra\nelement face 1\nproperty list uchar int vertex_in
         info.not_carried
     );
 }
+
+/// Integer fields keep their type: a PCD `label` (`U 4`, PCL's `PointXYZL`) above 2^24, which a
+/// float would round, comes back exact as `U 4`, and as `uint` in PLY; an averaged (non-integer)
+/// value falls back to a float.
+#[test]
+fn integer_fields_keep_their_type() {
+    let pcd =
+        b"VERSION 0.7\nFIELDS x y z label ring\nSIZE 4 4 4 4 2\nTYPE F F F U I\nCOUNT 1 1 1 1 1\n\
+WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n0 0 0 16777217 -3\n1 0 0 7 12\n";
+    let c = io::read_bytes(pcd, Format::Pcd).unwrap();
+    assert_eq!(c.scalar("label").unwrap(), [16777217.0, 7.0]);
+    for enc in [
+        Encoding::Ascii,
+        Encoding::Binary,
+        Encoding::BinaryCompressed,
+    ] {
+        let opts = WriteOptions {
+            encoding: Some(enc),
+            ..WriteOptions::default()
+        };
+        let bytes = io::write_bytes(&c, Format::Pcd, &opts).unwrap();
+        let head = String::from_utf8_lossy(&bytes[..160]).to_string();
+        assert!(
+            head.contains("SIZE 4 4 4 4 2\nTYPE F F F U I\n"),
+            "{enc:?}: {head}"
+        );
+        let back = io::read_bytes(&bytes, Format::Pcd).unwrap();
+        assert_eq!(back.scalars, c.scalars, "{enc:?}");
+    }
+    let ply = io::write_bytes(&c, Format::Ply, &WriteOptions::ascii()).unwrap();
+    let text = String::from_utf8_lossy(&ply).to_string();
+    assert!(
+        text.contains("property uint label\nproperty short ring\n"),
+        "{text}"
+    );
+    assert!(text.contains("\n0 0 0 16777217 -3\n"), "{text}");
+    let mut avg = c.clone();
+    avg.set_scalar("label", vec![0.5, 7.0]).unwrap();
+    let bytes = io::write_bytes(&avg, Format::Pcd, &WriteOptions::ascii()).unwrap();
+    let head = String::from_utf8_lossy(&bytes[..160]).to_string();
+    assert!(head.contains("TYPE F F F F I\n"), "{head}");
+}

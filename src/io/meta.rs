@@ -65,6 +65,31 @@ pub struct LasHeader {
     pub evlrs: Vec<LasVlr>,
 }
 
+/// How a file stored a per-point field (PLY property and PCD field types).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldType {
+    /// 8-bit signed integer (PLY `char`, PCD `I 1`).
+    I8,
+    /// 8-bit unsigned integer (PLY `uchar`, PCD `U 1`).
+    U8,
+    /// 16-bit signed integer.
+    I16,
+    /// 16-bit unsigned integer.
+    U16,
+    /// 32-bit signed integer.
+    I32,
+    /// 32-bit unsigned integer (PCL's `label`).
+    U32,
+    /// 64-bit signed integer (PCD only).
+    I64,
+    /// 64-bit unsigned integer (PCD only).
+    U64,
+    /// 32-bit float.
+    F32,
+    /// 64-bit float.
+    F64,
+}
+
 /// What a file said about its cloud as a whole; see the module docs.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Metadata {
@@ -76,4 +101,18 @@ pub struct Metadata {
     pub comments: Vec<String>,
     /// The LAS header, for a cloud read from LAS/LAZ.
     pub las: Option<LasHeader>,
+    /// How a PLY or PCD file stored its scalar fields, by name: the PLY and PCD writers store a
+    /// field of an integer type in that type again while its values fit it (a PCD `label`
+    /// stays `U 4`, a PLY `uchar` stays `uchar`); floats follow the precision asked for.
+    pub field_types: Vec<(String, FieldType)>,
+}
+
+impl Metadata {
+    /// The type the file stored the field `name` as, if it said.
+    pub fn field_type(&self, name: &str) -> Option<FieldType> {
+        self.field_types
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|&(_, t)| t)
+    }
 }

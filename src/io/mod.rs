@@ -76,7 +76,7 @@ mod xyz;
 pub use cloud::{Aabb, Grid, PointCloud, ScalarField};
 pub use error::{IoError, IoErrorKind, Location};
 pub use format::{Encoding, Format, Precision};
-pub use meta::{LasHeader, LasVlr, Metadata, Viewpoint};
+pub use meta::{FieldType, LasHeader, LasVlr, Metadata, Viewpoint};
 pub use read::{
     read, read_as, read_bytes, read_bytes_with, read_with, ReadInfo, ReadOptions, TextColumns,
 };

@@ -17,7 +17,93 @@ pub(crate) enum Ty {
     F64,
 }
 
+impl From<Ty> for super::FieldType {
+    fn from(t: Ty) -> Self {
+        use super::FieldType as F;
+        match t {
+            Ty::I8 => F::I8,
+            Ty::U8 => F::U8,
+            Ty::I16 => F::I16,
+            Ty::U16 => F::U16,
+            Ty::I32 => F::I32,
+            Ty::U32 => F::U32,
+            Ty::I64 => F::I64,
+            Ty::U64 => F::U64,
+            Ty::F32 => F::F32,
+            Ty::F64 => F::F64,
+        }
+    }
+}
+
+impl From<super::FieldType> for Ty {
+    fn from(t: super::FieldType) -> Self {
+        use super::FieldType as F;
+        match t {
+            F::I8 => Ty::I8,
+            F::U8 => Ty::U8,
+            F::I16 => Ty::I16,
+            F::U16 => Ty::U16,
+            F::I32 => Ty::I32,
+            F::U32 => Ty::U32,
+            F::I64 => Ty::I64,
+            F::U64 => Ty::U64,
+            F::F32 => Ty::F32,
+            F::F64 => Ty::F64,
+        }
+    }
+}
+
 impl Ty {
+    /// The smallest and largest value of an integer type (64-bit ones as far as an `f64`
+    /// holds every integer exactly), `None` for floats.
+    pub fn int_range(self) -> Option<(f64, f64)> {
+        Some(match self {
+            Ty::I8 => (i8::MIN as f64, i8::MAX as f64),
+            Ty::U8 => (0.0, u8::MAX as f64),
+            Ty::I16 => (i16::MIN as f64, i16::MAX as f64),
+            Ty::U16 => (0.0, u16::MAX as f64),
+            Ty::I32 => (i32::MIN as f64, i32::MAX as f64),
+            Ty::U32 => (0.0, u32::MAX as f64),
+            Ty::I64 => (-(2f64.powi(53)), 2f64.powi(53)),
+            Ty::U64 => (0.0, 2f64.powi(53)),
+            Ty::F32 | Ty::F64 => return None,
+        })
+    }
+
+    /// Whether every value of `values` is an integer this (integer) type holds.
+    pub fn holds_all(self, values: &[f64]) -> bool {
+        self.int_range().is_some_and(|(lo, hi)| {
+            values
+                .iter()
+                .all(|&v| (lo..=hi).contains(&v) && v.fract() == 0.0)
+        })
+    }
+
+    /// Appends the integer `v` in this type's bytes.
+    pub fn put_int(self, v: f64, buf: &mut Vec<u8>, big_endian: bool) {
+        macro_rules! put {
+            ($x:expr) => {
+                if big_endian {
+                    buf.extend_from_slice(&$x.to_be_bytes())
+                } else {
+                    buf.extend_from_slice(&$x.to_le_bytes())
+                }
+            };
+        }
+        match self {
+            Ty::I8 => buf.push(v as i8 as u8),
+            Ty::U8 => buf.push(v as u8),
+            Ty::I16 => put!(v as i16),
+            Ty::U16 => put!(v as u16),
+            Ty::I32 => put!(v as i32),
+            Ty::U32 => put!(v as u32),
+            Ty::I64 => put!(v as i64),
+            Ty::U64 => put!(v as u64),
+            Ty::F32 => put!(v as f32),
+            Ty::F64 => put!(v),
+        }
+    }
+
     pub fn size(self) -> usize {
         match self {
             Ty::I8 | Ty::U8 => 1,

@@ -203,7 +203,7 @@ fn guess(values: &[f64], nc: usize) -> (Vec<String>, String) {
 }
 
 pub(crate) fn write(w: &mut impl Write, cloud: &PointCloud, single: bool) -> PResult<()> {
-    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels);
+    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels, 8);
     // CloudCompare's header (`//X Y Z ...`): its text reader takes a `#` as a column and
     // reads no point of a file with a `# x y z` line.
     writeln!(w, "//{}", cols.names().join(" "))?;

@@ -17,6 +17,7 @@ pub(crate) fn write(
         cloud,
         ["normal_x", "normal_y", "normal_z"],
         ColorStyle::PackedFloat,
+        8,
     );
     write_header(w, cloud, &cols, enc, single)?;
     match enc {
@@ -53,6 +54,14 @@ fn write_header(
             // (1.13) writes it as the unsigned integer of those bits, typed U, and reads it so.
             Store::RgbBits if enc == Encoding::Ascii => ("4", "U"),
             Store::RgbBits => ("4", "F"),
+            Store::Int(t) => {
+                let kind = if t.int_range().is_some_and(|(lo, _)| lo < 0.0) {
+                    "I"
+                } else {
+                    "U"
+                };
+                (["1", "2", "", "4", "", "", "", "8"][t.size() - 1], kind)
+            }
         };
         size.push(s);
         ty.push(t);

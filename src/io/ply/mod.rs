@@ -45,6 +45,16 @@ pub(crate) fn read(data: &[u8]) -> PResult<(PointCloud, Vec<String>)> {
     }
     let mut cloud = b.finish();
     cloud.metadata.comments = header.comments.clone();
+    // The scalar fields' types.
+    let types = vertex
+        .props
+        .iter()
+        .filter_map(|(name, p)| match p {
+            Prop::Scalar(t) if cloud.scalar(name).is_some() => Some((name.clone(), (*t).into())),
+            _ => None,
+        })
+        .collect();
+    cloud.metadata.field_types = types;
     cloud.source_precision = vertex.props.iter().find_map(|(name, p)| match p {
         Prop::Scalar(t) if name == "x" => Some(Precision::of_type(*t)),
         _ => None,

@@ -4,6 +4,7 @@ use std::io::Write;
 
 use crate::io::columns::{ColorStyle, Columns, Store};
 use crate::io::error::PResult;
+use crate::io::value::Ty;
 use crate::io::{Encoding, PointCloud};
 
 pub(crate) fn write(
@@ -12,7 +13,7 @@ pub(crate) fn write(
     enc: Encoding,
     single: bool,
 ) -> PResult<()> {
-    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels);
+    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels, 4);
     w.write_all(header(&cols, cloud, enc, single).as_bytes())?;
     let mut buf = Vec::new();
     let mut line = String::new();
@@ -60,6 +61,14 @@ fn header(cols: &Columns<'_>, cloud: &PointCloud, enc: Encoding, single: bool) -
             Store::Float => float,
             Store::U8 => "uchar",
             Store::RgbBits => "uint",
+            Store::Int(t) => match t {
+                Ty::I8 => "char",
+                Ty::U8 => "uchar",
+                Ty::I16 => "short",
+                Ty::U16 => "ushort",
+                Ty::I32 => "int",
+                _ => "uint",
+            },
         };
         h.push_str(&format!("property {ty} {name}\n"));
     }
