@@ -156,7 +156,10 @@ fn records(path: &std::path::Path) -> (Vec<u8>, las::Header) {
 /// The VLRs of a header but LAZ's own and the extra-bytes description.
 fn other_vlrs(h: &las::Header) -> Vec<las::Vlr> {
     h.all_vlrs()
-        .filter(|v| !las::laz::is_laszip_vlr(v) && !(v.user_id == "LASF_Spec" && v.record_id == 4))
+        .filter(|v| {
+            let extra_bytes = v.user_id == "LASF_Spec" && v.record_id == 4;
+            !(las::laz::is_laszip_vlr(v) || extra_bytes)
+        })
         .cloned()
         .collect()
 }

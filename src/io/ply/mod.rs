@@ -25,9 +25,13 @@ pub(crate) fn read(data: &[u8]) -> PResult<(PointCloud, Vec<String>)> {
         .map(|e| format!("{} {} element(s)", e.count, e.name))
         .collect();
     let vertex = header.vertex();
-    not_carried.extend(vertex.props.iter().filter_map(|(name, p)| {
-        matches!(p, Prop::List(..)).then(|| format!("the vertices' list property '{name}'"))
-    }));
+    not_carried.extend(
+        vertex
+            .props
+            .iter()
+            .filter(|(_, p)| matches!(p, Prop::List(..)))
+            .map(|(name, _)| format!("the vertices' list property '{name}'")),
+    );
     // Vertex columns: scalar properties; list properties are skipped.
     let names: Vec<String> = vertex
         .props
