@@ -788,6 +788,24 @@ fn text_columns_by_header_option_or_values_and_said() {
     assert_eq!(e.location, Some(Location::Line(2)), "{e}");
 }
 
+/// `c` written as PCD in each encoding.
+fn pcd_encodings(c: &PointCloud) -> Vec<(Encoding, Vec<u8>)> {
+    [
+        Encoding::Ascii,
+        Encoding::Binary,
+        Encoding::BinaryCompressed,
+    ]
+    .into_iter()
+    .map(|enc| {
+        let opts = WriteOptions {
+            encoding: Some(enc),
+            ..WriteOptions::default()
+        };
+        (enc, io::write_bytes(c, Format::Pcd, &opts).unwrap())
+    })
+    .collect()
+}
+
 /// Issue 41 item 5: a PCD's `VIEWPOINT` (office1.pcd: `0 0 0 0 1 0 0`, a half turn about x)
 /// and header comments come back in every PCD encoding; PLY, which has no place for the
 /// viewpoint, names it in `not_written`.
@@ -801,16 +819,7 @@ fn pcd_viewpoint_and_comments_come_back() {
     };
     assert_eq!(c.metadata.viewpoint, Some(turned));
     c.metadata.comments = vec!["scanned by a Kinect".into()];
-    for enc in [
-        Encoding::Ascii,
-        Encoding::Binary,
-        Encoding::BinaryCompressed,
-    ] {
-        let opts = WriteOptions {
-            encoding: Some(enc),
-            ..WriteOptions::default()
-        };
-        let bytes = io::write_bytes(&c, Format::Pcd, &opts).unwrap();
+    for (enc, bytes) in pcd_encodings(&c) {
         let head = String::from_utf8_lossy(&bytes[..300]).to_string();
         assert!(
             head.contains("\nVIEWPOINT 0 0 0 0 1 0 0\n"),
@@ -885,16 +894,7 @@ fn integer_fields_keep_their_type() {
 WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n0 0 0 16777217 -3\n1 0 0 7 12\n";
     let c = io::read_bytes(pcd, Format::Pcd).unwrap();
     assert_eq!(c.scalar("label").unwrap(), [16777217.0, 7.0]);
-    for enc in [
-        Encoding::Ascii,
-        Encoding::Binary,
-        Encoding::BinaryCompressed,
-    ] {
-        let opts = WriteOptions {
-            encoding: Some(enc),
-            ..WriteOptions::default()
-        };
-        let bytes = io::write_bytes(&c, Format::Pcd, &opts).unwrap();
+    for (enc, bytes) in pcd_encodings(&c) {
         let head = String::from_utf8_lossy(&bytes[..160]).to_string();
         assert!(
             head.contains("SIZE 4 4 4 4 2\nTYPE F F F U I\n"),

@@ -116,7 +116,6 @@ impl<'a> Columns<'a> {
             let int = cloud
                 .metadata
                 .field_type(&s.name)
-                .map(Ty::from)
                 .filter(|t| t.size() <= max_int && t.holds_all(&s.values));
             let col = match int {
                 Some(t) => Col::Int(&s.values, t),

@@ -2,61 +2,14 @@
 
 use super::error::{Fail, PResult};
 
-/// A stored scalar type.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Ty {
-    I8,
-    U8,
-    I16,
-    U16,
-    I32,
-    U32,
-    I64,
-    U64,
-    F32,
-    F64,
-}
-
-impl From<Ty> for super::FieldType {
-    fn from(t: Ty) -> Self {
-        use super::FieldType as F;
-        match t {
-            Ty::I8 => F::I8,
-            Ty::U8 => F::U8,
-            Ty::I16 => F::I16,
-            Ty::U16 => F::U16,
-            Ty::I32 => F::I32,
-            Ty::U32 => F::U32,
-            Ty::I64 => F::I64,
-            Ty::U64 => F::U64,
-            Ty::F32 => F::F32,
-            Ty::F64 => F::F64,
-        }
-    }
-}
-
-impl From<super::FieldType> for Ty {
-    fn from(t: super::FieldType) -> Self {
-        use super::FieldType as F;
-        match t {
-            F::I8 => Ty::I8,
-            F::U8 => Ty::U8,
-            F::I16 => Ty::I16,
-            F::U16 => Ty::U16,
-            F::I32 => Ty::I32,
-            F::U32 => Ty::U32,
-            F::I64 => Ty::I64,
-            F::U64 => Ty::U64,
-            F::F32 => Ty::F32,
-            F::F64 => Ty::F64,
-        }
-    }
-}
+/// A stored scalar type: [`FieldType`](super::FieldType), the type a file stores a field as;
+/// its methods here are the readers' and writers' own.
+pub(crate) type Ty = super::FieldType;
 
 impl Ty {
     /// The smallest and largest value of an integer type (64-bit ones as far as an `f64`
     /// holds every integer exactly), `None` for floats.
-    pub fn int_range(self) -> Option<(f64, f64)> {
+    pub(crate) fn int_range(self) -> Option<(f64, f64)> {
         Some(match self {
             Ty::I8 => (i8::MIN as f64, i8::MAX as f64),
             Ty::U8 => (0.0, u8::MAX as f64),
@@ -71,7 +24,7 @@ impl Ty {
     }
 
     /// Whether every value of `values` is an integer this (integer) type holds.
-    pub fn holds_all(self, values: &[f64]) -> bool {
+    pub(crate) fn holds_all(self, values: &[f64]) -> bool {
         self.int_range().is_some_and(|(lo, hi)| {
             values
                 .iter()
@@ -80,7 +33,7 @@ impl Ty {
     }
 
     /// Appends the integer `v` in this type's bytes.
-    pub fn put_int(self, v: f64, buf: &mut Vec<u8>, big_endian: bool) {
+    pub(crate) fn put_int(self, v: f64, buf: &mut Vec<u8>, big_endian: bool) {
         macro_rules! put {
             ($x:expr) => {
                 if big_endian {
@@ -104,7 +57,7 @@ impl Ty {
         }
     }
 
-    pub fn size(self) -> usize {
+    pub(crate) fn size(self) -> usize {
         match self {
             Ty::I8 | Ty::U8 => 1,
             Ty::I16 | Ty::U16 => 2,
@@ -115,7 +68,7 @@ impl Ty {
 
     /// A number read from text, rounded to this type as a binary file would hold it
     /// (a `float` property written as `0.33333334` is the `f32` nearest to it).
-    pub fn round_text(self, v: f64) -> f64 {
+    pub(crate) fn round_text(self, v: f64) -> f64 {
         if self == Ty::F32 {
             v as f32 as f64
         } else {
@@ -124,7 +77,7 @@ impl Ty {
     }
 
     /// Reads one value from the first `size()` bytes of `b`.
-    pub fn read(self, b: &[u8], big_endian: bool) -> f64 {
+    pub(crate) fn read(self, b: &[u8], big_endian: bool) -> f64 {
         macro_rules! rd {
             ($t:ty, $n:expr) => {{
                 let a: [u8; $n] = b[..$n].try_into().unwrap();

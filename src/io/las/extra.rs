@@ -233,8 +233,8 @@ impl Dim {
     }
 
     /// Whether every value of `values` can be stored.
-    pub fn holds(&self, values: &[f64]) -> bool {
-        values.iter().all(|&v| self.unscaled(v).is_some())
+    pub fn holds(&self, mut values: impl Iterator<Item = f64>) -> bool {
+        values.all(|v| self.unscaled(v).is_some())
     }
 
     /// Appends `v` in the record's form; `holds` must have accepted it.
@@ -256,7 +256,7 @@ impl Dim {
 
     /// The 192-byte description, with the min and max of `values` if the options ask for
     /// them.
-    fn descriptor(&self, values: &[f64]) -> [u8; DESCRIPTOR_LEN] {
+    fn descriptor(&self, values: impl Iterator<Item = f64> + Clone) -> [u8; DESCRIPTOR_LEN] {
         let mut d = [0u8; DESCRIPTOR_LEN];
         d[2] = self.ty;
         d[3] = self.options;
@@ -264,9 +264,9 @@ impl Dim {
         d[40..48].copy_from_slice(&self.no_data);
         let raws = || {
             values
-                .iter()
+                .clone()
                 .filter(|v| !v.is_nan())
-                .filter_map(|&v| self.unscaled(v))
+                .filter_map(|v| self.unscaled(v))
         };
         let as_raw = |r: f64| -> [u8; 8] {
             if is_float(self.ty) {
@@ -301,11 +301,13 @@ fn put_text(field: &mut [u8], s: &str) {
     field[..end].copy_from_slice(&s.as_bytes()[..end]);
 }
 
-/// The extra-bytes VLR describing `dims`, whose values per point are `values` (one slice per
-/// dimension).
-pub(super) fn vlr(dims: &[Dim], values: &[&[f64]]) -> LasVlr {
-    let mut data = Vec::with_capacity(dims.len() * DESCRIPTOR_LEN);
-    for (d, v) in dims.iter().zip(values) {
+/// The extra-bytes VLR describing each dimension, given with its values per point.
+pub(super) fn vlr<'d, I>(dims: impl IntoIterator<Item = (&'d Dim, I)>) -> LasVlr
+where
+    I: Iterator<Item = f64> + Clone,
+{
+    let mut data = Vec::new();
+    for (d, v) in dims {
         data.extend_from_slice(&d.descriptor(v));
     }
     LasVlr {

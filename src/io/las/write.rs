@@ -21,10 +21,35 @@ enum Colour<'a> {
     Eight(Vec<[u8; 3]>),
 }
 
+/// The values of an extra-bytes dimension, read from the cloud as they are written.
+#[derive(Clone, Copy)]
+enum Values<'a> {
+    Field(&'a [f64]),
+    /// Component `j` of the normals.
+    Normal(&'a [[f64; 3]], usize),
+}
+
+impl<'a> Values<'a> {
+    fn get(self, i: usize) -> f64 {
+        match self {
+            Values::Field(v) => v[i],
+            Values::Normal(n, j) => n[i][j],
+        }
+    }
+
+    fn iter(self) -> impl Iterator<Item = f64> + Clone + 'a {
+        let n = match self {
+            Values::Field(v) => v.len(),
+            Values::Normal(v, _) => v.len(),
+        };
+        (0..n).map(move |i| self.get(i))
+    }
+}
+
 /// An extra-bytes value of every point: its description and its values.
 struct Extra<'a> {
     dim: Dim,
-    values: std::borrow::Cow<'a, [f64]>,
+    values: Values<'a>,
 }
 
 /// How a cloud is written as LAS, and what of it is not.
@@ -185,9 +210,9 @@ fn extra_name(name: &str) -> (String, &'static str) {
 
 /// The description of an extra-bytes value named `name`: the input's (any case) if it holds
 /// `values`, else a new `f32`/`f64` one.
-fn describe(src: &[Dim], name: &str, what: &str, values: &[f64], single: bool) -> Dim {
+fn describe(src: &[Dim], name: &str, what: &str, values: Values<'_>, single: bool) -> Dim {
     match src.iter().find(|d| d.name.eq_ignore_ascii_case(name)) {
-        Some(d) if d.holds(values) => d.clone(),
+        Some(d) if d.holds(values.iter()) => d.clone(),
         Some(d) => Dim::float(&d.name, &d.description, single),
         None => Dim::float(name, what, single),
     }
@@ -264,12 +289,9 @@ impl<'a> Plan<'a> {
         });
         if let Some(n) = &cloud.normals {
             for (j, name) in ["NormalX", "NormalY", "NormalZ"].iter().enumerate() {
-                let values: Vec<f64> = n.iter().map(|v| v[j]).collect();
-                let dim = describe(&src_dims, name, "normal", &values, single);
-                self.extra.push(Extra {
-                    dim,
-                    values: values.into(),
-                });
+                let values = Values::Normal(n, j);
+                let dim = describe(&src_dims, name, "normal", values, single);
+                self.extra.push(Extra { dim, values });
             }
         }
         let colour = self.colour.is_some();
@@ -291,11 +313,9 @@ impl<'a> Plan<'a> {
                 ));
                 continue;
             }
-            let dim = describe(&src_dims, &name, what, &s.values, single);
-            self.extra.push(Extra {
-                dim,
-                values: s.values.as_slice().into(),
-            });
+            let values = Values::Field(&s.values);
+            let dim = describe(&src_dims, &name, what, values, single);
+            self.extra.push(Extra { dim, values });
         }
     }
 
@@ -365,9 +385,8 @@ impl<'a> Plan<'a> {
                 .collect();
         }
         if !self.extra.is_empty() {
-            let dims: Vec<Dim> = self.extra.iter().map(|e| e.dim.clone()).collect();
-            let values: Vec<&[f64]> = self.extra.iter().map(|e| &*e.values).collect();
-            vlrs.push(to_las(&extra::vlr(&dims, &values)));
+            let dims = self.extra.iter().map(|e| (&e.dim, e.values.iter()));
+            vlrs.push(to_las(&extra::vlr(dims)));
         }
         let mut b = las::Builder::new(raw).map_err(|e| las_err("LAS header", e))?;
         b.point_format.is_compressed = compressed;
@@ -396,7 +415,7 @@ impl<'a> Plan<'a> {
             };
             (p.x, p.y, p.z) = (inv(&t.x, q[0])?, inv(&t.y, q[1])?, inv(&t.z, q[2])?);
             for e in &self.extra {
-                e.dim.encode(e.values[i], &mut p.extra_bytes);
+                e.dim.encode(e.values.get(i), &mut p.extra_bytes);
             }
             p.write_to(&mut bytes, &format)
                 .map_err(|e| las_err(&format!("LAS point {i}"), e))?;

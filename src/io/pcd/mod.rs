@@ -42,7 +42,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         .iter()
         .zip(&cols.types)
         .filter(|(n, _)| cloud.scalar(n).is_some() && !is_packed_name(n))
-        .map(|(n, &t)| (n.clone(), t.into()))
+        .map(|(n, &t)| (n.clone(), t))
         .collect();
     cloud.metadata.field_types = types;
     Ok(cloud)

@@ -54,7 +54,7 @@ pub(crate) fn read(data: &[u8]) -> PResult<(PointCloud, Vec<String>)> {
         .props
         .iter()
         .filter_map(|(name, p)| match p {
-            Prop::Scalar(t) if cloud.scalar(name).is_some() => Some((name.clone(), (*t).into())),
+            Prop::Scalar(t) if cloud.scalar(name).is_some() => Some((name.clone(), *t)),
             _ => None,
         })
         .collect();
