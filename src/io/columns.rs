@@ -175,28 +175,14 @@ impl<'a> Columns<'a> {
 
     /// Appends column `c` of point `i` in binary.
     pub fn put(&self, buf: &mut Vec<u8>, c: usize, i: usize, single: bool, big_endian: bool) {
-        macro_rules! put {
-            ($v:expr) => {
-                if big_endian {
-                    buf.extend_from_slice(&$v.to_be_bytes())
-                } else {
-                    buf.extend_from_slice(&$v.to_le_bytes())
-                }
-            };
-        }
-        match self.cols[c] {
-            Col::Channel(k) => buf.push(self.colors[i][k]),
-            Col::Rgb => put!(self.packed[i]),
-            Col::Int(v, t) => t.put_int(v[i], buf, big_endian),
-            _ => {
-                let v = self.get(c, i);
-                if single {
-                    put!(v as f32)
-                } else {
-                    put!(v)
-                }
-            }
-        }
+        let (v, ty) = match self.cols[c] {
+            Col::Channel(k) => (f64::from(self.colors[i][k]), Ty::U8),
+            Col::Rgb => (f64::from(self.packed[i]), Ty::U32),
+            Col::Int(v, t) => (v[i], t),
+            _ if single => (self.get(c, i), Ty::F32),
+            _ => (self.get(c, i), Ty::F64),
+        };
+        ty.put(v, buf, big_endian);
     }
 
     /// One text line of point `i`, columns separated by a space.

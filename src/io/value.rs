@@ -32,8 +32,8 @@ impl Ty {
         })
     }
 
-    /// Appends the integer `v` in this type's bytes.
-    pub(crate) fn put_int(self, v: f64, buf: &mut Vec<u8>, big_endian: bool) {
+    /// Appends `v` in this type's bytes (an integer type's: `v` is an integer it holds).
+    pub(crate) fn put(self, v: f64, buf: &mut Vec<u8>, big_endian: bool) {
         macro_rules! put {
             ($x:expr) => {
                 if big_endian {
