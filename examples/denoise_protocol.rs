@@ -6,12 +6,13 @@
 //! taken both ways, ×10⁴, averaged over the meshes.
 //!
 //! ```sh
-//! denoise_protocol [--sizes 10000,50000] [--noise 1,2,3] [--seed 1] [--per-shape] MESH.off...
+//! denoise_protocol [--sizes 10000,50000] [--noise 1,2,3] [--seed 1] [--per-shape] MESH...
 //! denoise_protocol --prepare DIR ...   # also write every clean/noisy cloud and mesh to DIR
 //! denoise_protocol --evaluate DIR ...  # and measure the clouds the peers left there
 //! ```
 //!
-//! `--prepare` writes `DIR/<shape>-<n>-<pct>.noisy.f64` (raw little-endian `f64` triples) and
+//! A MESH is an OFF file or `cube` / `torus` (the analytic shapes of `src/shapes`, the torus
+//! of radii 1 and 0.4 as 720 × 240 quadrilaterals). `--prepare` writes `DIR/<shape>-<n>-<pct>.noisy.f64` (raw little-endian `f64` triples) and
 //! the list `DIR/clouds.txt` for `cpp_examples/bench_denoise`, which writes one
 //! `<cloud>.<method>.f64` per method and `<cloud>.times.txt`; `--evaluate` reads them back and
 //! prints the table of every method. Without either, only the robust mode runs (in process),
@@ -130,9 +131,14 @@ fn main() {
     let mut table = Table::new();
     let threads = std::env::var("RAYON_NUM_THREADS").unwrap_or_default();
     for path in &a.meshes {
-        let text = std::fs::read_to_string(path).unwrap();
-        let mesh = TriangleMesh::from_off(&text).unwrap().normalized();
+        // the analytic shapes of src/shapes by name, every other argument an OFF file
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        let mesh = match path.to_str() {
+            Some("cube") => TriangleMesh::cube(),
+            Some("torus") => TriangleMesh::torus(1.0, 0.4, 720, 240),
+            _ => TriangleMesh::from_off(&std::fs::read_to_string(path).unwrap()).unwrap(),
+        }
+        .normalized();
         for &n in &a.sizes {
             for &pct in &a.noise {
                 let (clean, noisy) = cloud(&mesh, n, pct, a.seed);
@@ -197,13 +203,17 @@ fn main() {
                 let r = smooth_robust_report(&noisy, &a.options, &mut |_, _| true).unwrap();
                 let secs = t.elapsed().as_secs_f64();
                 let note = format!(
-                    "wide {} dim {:?} it {} noise {:?}",
+                    "wide {} dim {:?} it {} moved {:?} noise {:?}",
                     r.wide_iterations,
                     r.dimension
                         .iter()
                         .map(|v| (v * 100.0).round() / 100.0)
                         .collect::<Vec<_>>(),
                     r.moved.len(),
+                    r.moved
+                        .iter()
+                        .map(|v| (v * 100.0).round() / 100.0)
+                        .collect::<Vec<_>>(),
                     r.noise
                         .iter()
                         .map(|v| (v * 100.0).round() / 100.0)

@@ -112,6 +112,58 @@ impl TriangleMesh {
         Self::new(vertices, triangles)
     }
 
+    /// The cube [−1, 1]³ in twelve triangles (its analytic surface exactly).
+    pub fn cube() -> Self {
+        let vertices = (0..8)
+            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, (i >> 2) as f64) * 2.0 - 1.0)
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        Self {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// The torus of major radius `big` and tube radius `small` around the z axis, `around` ×
+    /// `across` quadrilaterals split in two (its surface to within the chord error
+    /// `(big + small)(1 − cos(π/around))`).
+    pub fn torus(big: f64, small: f64, around: u32, across: u32) -> Self {
+        let tau = std::f64::consts::TAU;
+        let vertices = (0..around * across)
+            .map(|i| {
+                let (u, v) = (
+                    tau * (i / across) as f64 / around as f64,
+                    tau * (i % across) as f64 / across as f64,
+                );
+                let r = big + small * v.cos();
+                DVec3::new(r * u.cos(), r * u.sin(), small * v.sin())
+            })
+            .collect();
+        let at = |a: u32, b: u32| (a % around) * across + b % across;
+        let triangles = (0..around)
+            .flat_map(|a| (0..across).map(move |b| (a, b)))
+            .flat_map(|(a, b)| {
+                let q = [at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)];
+                [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+            })
+            .collect();
+        Self {
+            vertices,
+            triangles,
+        }
+    }
+
     /// The mesh moved and scaled into the unit sphere as the protocol does: the centre of the
     /// bounding box to the origin, the farthest vertex at distance 1.
     pub fn normalized(&self) -> Self {
@@ -457,22 +509,15 @@ mod tests {
     use super::*;
 
     fn cube() -> TriangleMesh {
-        let v: Vec<DVec3> = (0..8)
-            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, (i >> 2) as f64) * 2.0 - 1.0)
-            .collect();
-        let quads = [
-            [0, 1, 3, 2],
-            [4, 6, 7, 5],
-            [0, 4, 5, 1],
-            [2, 3, 7, 6],
-            [0, 2, 6, 4],
-            [1, 5, 7, 3],
-        ];
-        let t = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
-        TriangleMesh::new(v, t).unwrap()
+        TriangleMesh::cube()
+    }
+
+    #[test]
+    fn analytic_meshes_lie_on_their_surfaces() {
+        let t = TriangleMesh::torus(1.0, 0.4, 64, 32);
+        let area = 4.0 * std::f64::consts::PI.powi(2) * 0.4;
+        assert!((t.area() / area - 1.0).abs() < 0.01);
+        assert!((TriangleMesh::cube().area() - 24.0).abs() < 1e-12);
     }
 
     #[test]
