@@ -248,7 +248,8 @@ pub struct RobustReport {
     pub moved: Vec<f64>,
     /// The noise scale (`robust/scales.rs`): the local dimension of the cloud (2 a surface, 3
     /// a ball of noise) as measured before the first iteration and, while it read as a ball of
-    /// noise, before each later one (empty with `noise_scale: false` or a caller's table).
+    /// noise, before each later one (empty with `noise_scale: false`; a caller's table is
+    /// measured but never widened).
     pub dimension: Vec<f64>,
     /// How many of the iterations used the wide neighbourhoods (`k` and `k_plane` tripled).
     pub wide_iterations: usize,
@@ -403,9 +404,10 @@ fn robust_finite(
     finish(st, it, h, eps, min_neighbors, options, report)
 }
 
-/// Item 0 of the module documentation: where the call searches and the cloud reads as a ball of
-/// noise (`robust/scales.rs`), the rows of `st` searched again, `WIDE` times as long. Returns
-/// the local dimension measured and whether the rows are wide.
+/// Item 0 of the module documentation: the local dimension of the input (`robust/scales.rs`),
+/// and where it reads as a ball of noise and the call searches (a caller's table is measured,
+/// never widened), the rows of `st` searched again, `WIDE` times as long. Returns the local
+/// dimension and whether the rows are wide.
 fn noise_scale(
     points: &[DVec3],
     st: &mut Stored,
@@ -413,11 +415,12 @@ fn noise_scale(
     eps: f64,
     options: &RobustOptions,
 ) -> Result<(Option<f64>, bool)> {
-    if !options.noise_scale || matches!(neighbors, Neighbors::Table(_)) {
+    if !options.noise_scale {
         return Ok((None, false));
     }
     let ratio = scales::distance_ratio(&st.cur, &st.rows, options.k_plane);
-    let wide = scales::is_ball(ratio, false);
+    // a caller's table has the rows it has: measured, never widened
+    let wide = scales::is_ball(ratio, false) && !matches!(neighbors, Neighbors::Table(_));
     if wide {
         let (mut w, _) = search_rows(points, neighbors, options.k_plane * scales::WIDE)?;
         w.rows.cut(&w.cur, &w.order, eps);
