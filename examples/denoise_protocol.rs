@@ -156,31 +156,7 @@ fn main() {
                     }
                     add(&mut table, (key.0, key.1, method), cd, p2m, secs);
                 };
-                let dim = if std::env::var("DIM").is_ok() {
-                    let t = nbhd::geometry::neighbors::neighbor_table(
-                        &noisy,
-                        nbhd::Neighborhood::Knn { k: 96 },
-                        true,
-                    )
-                    .unwrap();
-                    let ratio = |a: usize, b: usize| {
-                        let mut r: Vec<f64> = (0..t.len())
-                            .map(|i| (t.sq_dists_of(i)[b - 1] / t.sq_dists_of(i)[a - 1]).sqrt())
-                            .collect();
-                        let m = r.len() / 2;
-                        r.select_nth_unstable_by(m, f64::total_cmp);
-                        (4f64.ln() / r[m].ln() * 100.0).round() / 100.0
-                    };
-                    format!(
-                        "D12-48 {} D24-96 {} D6-24 {}",
-                        ratio(12, 48),
-                        ratio(24, 96),
-                        ratio(6, 24)
-                    )
-                } else {
-                    String::new()
-                };
-                measure("noisy", &noisy, 0.0, dim);
+                measure("noisy", &noisy, 0.0, String::new());
                 if let Some(dir) = &a.prepare {
                     std::fs::create_dir_all(dir).unwrap();
                     write_f64(&dir.join(format!("{cell}.noisy.f64")), &noisy);
@@ -220,25 +196,6 @@ fn main() {
                         .collect::<Vec<_>>()
                 );
                 measure("robust", &r.result.points, secs, note);
-                if std::env::var("TWO_STAGE").is_ok() {
-                    let o0 = RobustOptions {
-                        max_iterations: 0,
-                        ..a.options
-                    };
-                    let p0 = smooth_robust_report(&noisy, &o0, &mut |_, _| true).unwrap();
-                    let o1 = RobustOptions {
-                        noise_scale: false,
-                        ..a.options
-                    };
-                    let p1 =
-                        smooth_robust_report(&p0.result.points, &o1, &mut |_, _| true).unwrap();
-                    measure(
-                        "two-stage",
-                        &p1.result.points,
-                        0.0,
-                        format!("{:?}", p1.noise),
-                    );
-                }
             }
         }
     }
