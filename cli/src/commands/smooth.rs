@@ -412,7 +412,7 @@ fn barely_moved_hint(
     opts: &RobustOptions,
 ) -> String {
     let h = res.spacing;
-    if !(h > 0.0) || points.is_empty() {
+    if h.is_nan() || h <= 0.0 || points.is_empty() {
         return String::new();
     }
     let ms = res
