@@ -25,7 +25,7 @@ if [ -f cpp_examples/CMakeLists.txt ]; then
     command -v cmake >/dev/null 2>&1 || missing+=(cmake)
     command -v c++ >/dev/null 2>&1 || missing+=(g++)
     command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)  # cpp-test.sh checks nbhd.pc
-    for pkg in libflann-dev libpcl-dev libopenmesh-dev libnanoflann-dev libeigen3-dev liblz4-dev; do
+    for pkg in libflann-dev libpcl-dev libopenmesh-dev libnanoflann-dev libeigen3-dev liblz4-dev libcgal-dev; do
         dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
     done
 fi
