@@ -1222,6 +1222,23 @@ void nbhd_tree_free(nbhd_tree *tree);
 nbhd_status nbhd_tree_stats(const nbhd_tree *tree, nbhd_stats *out_stats);
 
 /**
+ * Copies the coordinates the tree holds for the point with index `index` (an index of the
+ * points given to nbhd_tree_build) to `out_coords`: `dim` values of the tree's scalar type
+ * (nbhd_stats.scalar_type). A wrapper that answers "around point i" through the index path
+ * (nbhd_tree_knn_index, ...) compares them with the caller's current coordinates first, so
+ * that a point moved since the build is searched where it is now (as nbhd_pcl.hpp does).
+ *
+ * Errors: NULL_POINTER (`tree`, `out_coords`), MISALIGNED_POINTER, INDEX_OUT_OF_RANGE
+ * (`index` >= nbhd_stats.source_points), SKIPPED_POINT (a point skipped at build time, or
+ * not listed to nbhd_tree_build_indices). Nothing is written on an error.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `out_coords` NULL or writable for `dim` values of the
+ * tree's scalar type.
+ */
+nbhd_status nbhd_tree_point(const nbhd_tree *tree, size_t index, void *out_coords);
+
+/**
  * Writes `tree` to the file `path` (created, or truncated if it exists) in the saved-tree
  * format (docs/tree-file-format.md): a versioned header with checksums, then the tree as
  * built. nbhd_tree_load reads it back into a tree that answers every query exactly as

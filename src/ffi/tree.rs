@@ -1,8 +1,9 @@
 //! The tree handle: build options, build, free, statistics.
 
-use super::args::{check_ptr, deref, init_out};
+use super::args::{check_aligned, check_ptr, deref, init_out};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::{nbhd_build_options, nbhd_points, nbhd_stats, read_build_options, PointsArg};
+use crate::error::NbhdError;
 use crate::scalar::ScalarType;
 use crate::tree::{BuildOptions, KdTree};
 use crate::NeighborSearch;
@@ -212,4 +213,53 @@ pub unsafe extern "C" fn nbhd_tree_stats(
         unsafe { out.write(stats) };
         Ok(())
     })
+}
+
+/// Copies the coordinates the tree holds for the point with index `index` (an index of the
+/// points given to nbhd_tree_build) to `out_coords`: `dim` values of the tree's scalar type
+/// (nbhd_stats.scalar_type). A wrapper that answers "around point i" through the index path
+/// (nbhd_tree_knn_index, ...) compares them with the caller's current coordinates first, so
+/// that a point moved since the build is searched where it is now (as nbhd_pcl.hpp does).
+///
+/// Errors: NULL_POINTER (`tree`, `out_coords`), MISALIGNED_POINTER, INDEX_OUT_OF_RANGE
+/// (`index` >= nbhd_stats.source_points), SKIPPED_POINT (a point skipped at build time, or
+/// not listed to nbhd_tree_build_indices). Nothing is written on an error.
+///
+/// # Safety
+/// `tree` must be NULL or a live handle; `out_coords` NULL or writable for `dim` values of the
+/// tree's scalar type.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_tree_point(
+    tree: *const nbhd_tree,
+    index: usize,
+    out_coords: *mut std::ffi::c_void,
+) -> nbhd_status {
+    guard("nbhd_tree_point", || {
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: `out_coords` is NULL or writable for `dim` values of the tree's type (caller).
+        with_tree!(&tree.inner, t => unsafe { copy_point(t, index, out_coords) })
+    })
+}
+
+/// Copies the coordinates of caller index `index` to `out`, or fails as a query around it would.
+///
+/// # Safety
+/// `out` NULL or writable for `dim` values of `T`.
+unsafe fn copy_point<T: crate::Scalar>(
+    t: &KdTree<T>,
+    index: usize,
+    out: *mut std::ffi::c_void,
+) -> Result<(), FfiError> {
+    check_aligned(out.cast_const(), std::mem::align_of::<T>(), "out_coords")?;
+    let count = t.source_len();
+    let coords = u32::try_from(index)
+        .ok()
+        .filter(|&i| (i as usize) < count)
+        .ok_or(NbhdError::IndexOutOfRange { index, count })
+        .and_then(|i| t.point(i).ok_or(NbhdError::SkippedPoint { index }))?;
+    // SAFETY: `out` is non-NULL and aligned for `T` (checked above) and writable for `dim`
+    // values of `T` (caller); `coords` holds `dim` values and cannot overlap a caller's buffer.
+    unsafe { std::ptr::copy_nonoverlapping(coords.as_ptr(), out.cast::<T>(), coords.len()) };
+    Ok(())
 }

@@ -542,6 +542,24 @@ static void test_non_finite(void) {
         CHECK_STATUS(nbhd_tree_knn_radius_index(tree, 43, false, 2, 0.1, idx_buf, NULL, 3,
                                                 &count),
                      NBHD_STATUS_SKIPPED_POINT);
+        /* The tree's copy of a point: exactly the caller's coordinates; none for a skipped
+           point or an index past the points; nothing written on an error. */
+        {
+            double xyz[DIM] = {7.0, 7.0, 7.0};
+            CHECK_STATUS(nbhd_tree_point(tree, 41, xyz), NBHD_STATUS_OK);
+            CHECK(memcmp(xyz, &bad[41 * DIM], sizeof xyz) == 0);
+            xyz[0] = 7.0;
+            CHECK_STATUS(nbhd_tree_point(tree, 42, xyz), NBHD_STATUS_SKIPPED_POINT);
+            CHECK_MESSAGE("point 42");
+            CHECK(xyz[0] == 7.0);
+            CHECK_STATUS(nbhd_tree_point(tree, N, xyz), NBHD_STATUS_INDEX_OUT_OF_RANGE);
+            CHECK_STATUS(nbhd_tree_point(tree, (size_t)-1, xyz), NBHD_STATUS_INDEX_OUT_OF_RANGE);
+            CHECK(xyz[0] == 7.0);
+            CHECK_STATUS(nbhd_tree_point(NULL, 41, xyz), NBHD_STATUS_NULL_POINTER);
+            CHECK_STATUS(nbhd_tree_point(tree, 41, NULL), NBHD_STATUS_NULL_POINTER);
+            CHECK_STATUS(nbhd_tree_point(tree, 41, (char *)xyz + 1),
+                         NBHD_STATUS_MISALIGNED_POINTER);
+        }
         spec.kind = NBHD_NEIGHBORHOOD_KIND_KNN;
         spec.k = 4;
         spec.radius = 0.0;
