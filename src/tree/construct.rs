@@ -279,6 +279,7 @@ fn run_build<T: Scalar, L: Layout<T>>(
     let input = BuildInput {
         layout,
         options: *options,
+        guard: super::max_unbalanced_depth(items.len()),
     };
     if options.median == MedianAlgorithm::Presorted {
         return Ok(presorted::build_presorted(&input, items));

@@ -45,7 +45,9 @@ use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::{Scalar, ScalarType};
 pub(crate) use blocks::Blocks;
 use node::{Descent, Node};
-pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
+pub use options::{
+    max_unbalanced_depth, BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE,
+};
 pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
 pub use range::IndexRows;
 use search::TreeView;
