@@ -563,11 +563,13 @@ typedef struct {
  */
 typedef struct {
     /**
-     * First byte of point 0. Must not be NULL.
+     * First byte of point 0. Must not be NULL, except for no point (`count` 0).
      */
     const void *data;
     /**
-     * Number of points, 1 to 4294967295 (UINT32_MAX): indices are `uint32_t`.
+     * Number of points, 0 to 4294967295 (UINT32_MAX): indices are `uint32_t`. No point is a
+     * valid set: a tree over it finds nothing, a batch of no query gives a table of no row
+     * (functions that need points, such as smoothing, refuse it with EMPTY_INPUT).
      */
     size_t count;
     /**
@@ -1146,12 +1148,13 @@ nbhd_build_options nbhd_build_options_default(void);
  * The tree computes in `points->scalar_type` and keeps its own copy of the points, so the
  * point buffer may be changed or freed as soon as this returns. `options` may be NULL
  * for the defaults. On any error `*out_tree` is set to NULL (if `out_tree` is not NULL) and
- * nothing needs freeing.
+ * nothing needs freeing. No point (count 0, or every point skipped) gives a tree of no
+ * point: its queries find nothing and its tables have empty rows.
  *
- * Errors: NULL_POINTER (`points`, `points->data`, `out_tree`), MISALIGNED_POINTER,
- * INVALID_ARGUMENT (`points->scalar_type` not a value of the enum; `points->dim * sizeof
- * (scalar)` or `(count - 1) * stride` overflowing the address space — the message gives the
- * values passed), EMPTY_INPUT (count 0, or every point skipped), ZERO_DIMENSION,
+ * Errors: NULL_POINTER (`points`, `points->data` with a count above 0, `out_tree`),
+ * MISALIGNED_POINTER, INVALID_ARGUMENT (`points->scalar_type` not a value of the enum;
+ * `points->dim * sizeof (scalar)` or `(count - 1) * stride` overflowing the address space —
+ * the message gives the values passed), ZERO_DIMENSION,
  * STRIDE_TOO_SMALL (a stride below one point, with both sizes), TOO_MANY_POINTS, NON_FINITE
  * (the message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum
  * field out of range), THREAD_POOL. No other status is returned.
@@ -1181,8 +1184,8 @@ nbhd_status nbhd_tree_build(const nbhd_points *points,
  * the listed points, and empty rows for the others.
  *
  * Errors: those of nbhd_tree_build (NON_FINITE names the first listed non-finite point unless
- * `options->non_finite` skips them; EMPTY_INPUT when `index_count` is 0 or every listed point
- * is skipped), plus NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
+ * `options->non_finite` skips them; an `index_count` of 0 gives a tree of no point), plus
+ * NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
  * message names the first index >= `points->count`) and INVALID_ARGUMENT (an index listed
  * twice, named in the message).
  *
@@ -1190,7 +1193,8 @@ nbhd_status nbhd_tree_build(const nbhd_points *points,
  * the point buffer may be freed once this returns.
  *
  * # Safety
- * As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t.
+ * As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t
+ * (NULL is accepted for an `index_count` of 0).
  */
 nbhd_status nbhd_tree_build_indices(const nbhd_points *points,
                                     const uint32_t *indices,
@@ -1722,7 +1726,7 @@ nbhd_status nbhd_tree_neighborhoods(const nbhd_tree *tree,
  * a new table in `*out_table`: row i belongs to query point i. The query points may be of
  * either scalar type (they are converted to the tree's) but must have the tree's dimension;
  * none may be NaN or infinite. `options` may be NULL; its `exclude_self` does not apply
- * (queries are not stored points).
+ * (queries are not stored points). No query (`queries->count` 0) gives a table of no row.
  *
  * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
  *
@@ -1841,11 +1845,12 @@ nbhd_status nbhd_dynamic_create(size_t dim,
  * Inserts the points `*points` (of either scalar type, converted to the tree's; of the
  * tree's dimension) as one batch. `*out_first` (may be NULL) receives the index of the
  * first: the batch gets `first .. first + points->count - 1`, in order. The point buffer
- * may be freed as soon as this returns (the tree copies the points).
+ * may be freed as soon as this returns (the tree copies the points). A batch of no point
+ * inserts nothing (`*out_first` receives the next index).
  *
- * Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data`),
- * MISALIGNED_POINTER, the errors of a points description (see nbhd_tree_build: EMPTY_INPUT
- * for count 0, INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
+ * Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data` with a
+ * count above 0), MISALIGNED_POINTER, the errors of a points description (see
+ * nbhd_tree_build: INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
  * NON_FINITE (with options.non_finite REJECT; the message names the point's position in the
  * batch), TOO_MANY_POINTS (indices would pass UINT32_MAX - 1 over the tree's life),
  * OUT_OF_MEMORY, THREAD_POOL.

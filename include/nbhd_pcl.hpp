@@ -162,13 +162,16 @@ public:
         } else {
             s = nbhd_tree_build(&pts, &opt, &t);
         }
-        if (s == NBHD_STATUS_EMPTY_INPUT) return;  // no finite point: every query finds nothing
         if (s != NBHD_STATUS_OK)
             throw std::runtime_error(std::string("nbhd::PclSearch::setInputCloud: ") +
                                      nbhd_last_error_message());
         tree_.reset(t);
         nbhd_stats st{};
         nbhd_tree_stats(t, &st);
+        if (st.points == 0) {  // no finite point: every query finds nothing
+            tree_.reset();
+            return;
+        }
         distinct_ = st.points;
         searched_ = st.points;
         source_points_ = st.source_points;

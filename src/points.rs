@@ -22,9 +22,11 @@ pub struct PointsView<'a> {
 }
 
 impl<'a> PointsView<'a> {
-    /// Describes `count` points of dimension `dim`, `stride` bytes apart, in `bytes`.
+    /// Describes `count` points of dimension `dim`, `stride` bytes apart, in `bytes`. Zero
+    /// points are a valid description (of zero bytes): a tree over them, or a batch of them
+    /// as queries, holds or asks nothing.
     ///
-    /// Errors: [`NbhdError::EmptyInput`] for `count == 0`, [`NbhdError::ZeroDimension`],
+    /// Errors: [`NbhdError::ZeroDimension`],
     /// [`NbhdError::StrideTooSmall`], [`NbhdError::TooManyPoints`] and
     /// [`NbhdError::BufferTooSmall`] when `bytes` is shorter than the description.
     pub fn new(
@@ -59,12 +61,12 @@ impl<'a> PointsView<'a> {
     }
 
     /// The number of bytes a buffer of `count` points of dimension `dim`, `stride` bytes apart,
-    /// must hold: `(count - 1) * stride + dim * scalar.size()`, after the same geometry checks
-    /// as [`Self::new`]. Lets a caller that only has a pointer (the C ABI) know how many bytes
-    /// it may view before making the view.
+    /// must hold: `(count - 1) * stride + dim * scalar.size()` (0 for no point), after the same
+    /// geometry checks as [`Self::new`]. Lets a caller that only has a pointer (the C ABI) know
+    /// how many bytes it may view before making the view.
     ///
     /// Errors: [`NbhdError::ZeroDimension`], [`NbhdError::StrideTooSmall`],
-    /// [`NbhdError::EmptyInput`], [`NbhdError::TooManyPoints`], and
+    /// [`NbhdError::TooManyPoints`], and
     /// [`NbhdError::SizeOverflow`] when `dim × scalar size` or the buffer size overflows the
     /// address space.
     pub fn required_bytes(
@@ -92,7 +94,7 @@ impl<'a> PointsView<'a> {
             });
         }
         if count == 0 {
-            return Err(NbhdError::EmptyInput);
+            return Ok(0);
         }
         if count > MAX_POINTS {
             return Err(NbhdError::TooManyPoints {
@@ -143,7 +145,7 @@ impl<'a> PointsView<'a> {
         self.count
     }
 
-    /// Always `false`: an empty view cannot be made.
+    /// `true` for a view of no point.
     pub fn is_empty(&self) -> bool {
         self.count == 0
     }
@@ -235,9 +237,12 @@ mod tests {
             PointsView::new(b, 2, 0, 24, ScalarType::F64).unwrap_err(),
             NbhdError::ZeroDimension
         );
+        let empty = PointsView::new(b, 0, 3, 24, ScalarType::F64).unwrap();
+        assert!(empty.is_empty() && empty.dim() == 3);
+        assert!(PointsView::new(&[], 0, 3, 24, ScalarType::F64).is_ok());
         assert_eq!(
-            PointsView::new(b, 0, 3, 24, ScalarType::F64).unwrap_err(),
-            NbhdError::EmptyInput
+            PointsView::new(b, 0, 0, 24, ScalarType::F64).unwrap_err(),
+            NbhdError::ZeroDimension
         );
         assert!(matches!(
             PointsView::new(b, 2, 3, 16, ScalarType::F64),
@@ -263,10 +268,11 @@ mod tests {
             PointsView::required_bytes(1, 2, 16, ScalarType::F64),
             Ok(16)
         );
-        assert_eq!(
-            PointsView::required_bytes(0, 3, 12, ScalarType::F32),
-            Err(NbhdError::EmptyInput)
-        );
+        assert_eq!(PointsView::required_bytes(0, 3, 12, ScalarType::F32), Ok(0));
+        assert!(matches!(
+            PointsView::required_bytes(0, 3, 11, ScalarType::F32),
+            Err(NbhdError::StrideTooSmall { .. })
+        ));
         assert_eq!(
             PointsView::required_bytes(2, 0, 12, ScalarType::F32),
             Err(NbhdError::ZeroDimension)

@@ -229,7 +229,7 @@ impl PyDynamicKdTree {
     ) -> PyResult<Bound<'py, PyAny>> {
         match self.query(py, x, Some(k), None, true, threads)? {
             Answer::One(t) => Ok(t.into_any()),
-            Answer::Many(table) => table.dense(py),
+            Answer::Many(table) => table.dense(py, k.min(self.size())),
         }
     }
 

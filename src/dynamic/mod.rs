@@ -265,7 +265,8 @@ impl<T: Scalar> DynamicKdTree<T> {
     }
 
     /// Inserts the points of `view` (converted to `T`) and returns the index of the first:
-    /// the batch gets the indices `first..first + view.len()`, in order.
+    /// the batch gets the indices `first..first + view.len()`, in order. A batch of no point
+    /// inserts nothing and returns the next index.
     ///
     /// Errors, with nothing inserted: [`NbhdError::DimensionMismatch`];
     /// [`NbhdError::NonFinite`] naming the position in the batch of the first non-finite
@@ -280,7 +281,7 @@ impl<T: Scalar> DynamicKdTree<T> {
         }
         let n = view.len();
         if n == 0 {
-            return Err(NbhdError::EmptyInput);
+            return Ok(self.next);
         }
         let first = self.next;
         let end = u64::from(first) + n as u64;

@@ -110,11 +110,12 @@ pub unsafe extern "C" fn nbhd_dynamic_create(
 /// Inserts the points `*points` (of either scalar type, converted to the tree's; of the
 /// tree's dimension) as one batch. `*out_first` (may be NULL) receives the index of the
 /// first: the batch gets `first .. first + points->count - 1`, in order. The point buffer
-/// may be freed as soon as this returns (the tree copies the points).
+/// may be freed as soon as this returns (the tree copies the points). A batch of no point
+/// inserts nothing (`*out_first` receives the next index).
 ///
-/// Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data`),
-/// MISALIGNED_POINTER, the errors of a points description (see nbhd_tree_build: EMPTY_INPUT
-/// for count 0, INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
+/// Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data` with a
+/// count above 0), MISALIGNED_POINTER, the errors of a points description (see
+/// nbhd_tree_build: INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
 /// NON_FINITE (with options.non_finite REJECT; the message names the point's position in the
 /// batch), TOO_MANY_POINTS (indices would pass UINT32_MAX - 1 over the tree's life),
 /// OUT_OF_MEMORY, THREAD_POOL.

@@ -54,12 +54,13 @@ pub extern "C" fn nbhd_build_options_default() -> nbhd_build_options {
 /// The tree computes in `points->scalar_type` and keeps its own copy of the points, so the
 /// point buffer may be changed or freed as soon as this returns. `options` may be NULL
 /// for the defaults. On any error `*out_tree` is set to NULL (if `out_tree` is not NULL) and
-/// nothing needs freeing.
+/// nothing needs freeing. No point (count 0, or every point skipped) gives a tree of no
+/// point: its queries find nothing and its tables have empty rows.
 ///
-/// Errors: NULL_POINTER (`points`, `points->data`, `out_tree`), MISALIGNED_POINTER,
-/// INVALID_ARGUMENT (`points->scalar_type` not a value of the enum; `points->dim * sizeof
-/// (scalar)` or `(count - 1) * stride` overflowing the address space — the message gives the
-/// values passed), EMPTY_INPUT (count 0, or every point skipped), ZERO_DIMENSION,
+/// Errors: NULL_POINTER (`points`, `points->data` with a count above 0, `out_tree`),
+/// MISALIGNED_POINTER, INVALID_ARGUMENT (`points->scalar_type` not a value of the enum;
+/// `points->dim * sizeof (scalar)` or `(count - 1) * stride` overflowing the address space —
+/// the message gives the values passed), ZERO_DIMENSION,
 /// STRIDE_TOO_SMALL (a stride below one point, with both sizes), TOO_MANY_POINTS, NON_FINITE
 /// (the message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum
 /// field out of range), THREAD_POOL. No other status is returned.
@@ -112,8 +113,8 @@ pub unsafe extern "C" fn nbhd_tree_build(
 /// the listed points, and empty rows for the others.
 ///
 /// Errors: those of nbhd_tree_build (NON_FINITE names the first listed non-finite point unless
-/// `options->non_finite` skips them; EMPTY_INPUT when `index_count` is 0 or every listed point
-/// is skipped), plus NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
+/// `options->non_finite` skips them; an `index_count` of 0 gives a tree of no point), plus
+/// NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
 /// message names the first index >= `points->count`) and INVALID_ARGUMENT (an index listed
 /// twice, named in the message).
 ///
@@ -121,7 +122,8 @@ pub unsafe extern "C" fn nbhd_tree_build(
 /// the point buffer may be freed once this returns.
 ///
 /// # Safety
-/// As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t.
+/// As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t
+/// (NULL is accepted for an `index_count` of 0).
 #[no_mangle]
 pub unsafe extern "C" fn nbhd_tree_build_indices(
     points: *const nbhd_points,
@@ -140,15 +142,21 @@ pub unsafe extern "C" fn nbhd_tree_build_indices(
                 read_build_options(options)?,
             )
         };
-        check_ptr(indices, "indices")?;
         if index_count > isize::MAX as usize / std::mem::size_of::<u32>() {
             return Err(FfiError::InvalidArgument(format!(
                 "index_count {index_count} overflows the address space"
             )));
         }
-        // SAFETY: `indices` is non-NULL and aligned (checked above) and points to `index_count`
-        // readable values (caller), whose byte size fits in isize (checked above); only read.
-        let indices = unsafe { std::slice::from_raw_parts(indices, index_count) };
+        let indices: &[u32] = if index_count == 0 {
+            super::args::check_optional(indices, "indices")?;
+            &[]
+        } else {
+            check_ptr(indices, "indices")?;
+            // SAFETY: `indices` is non-NULL and aligned (checked above) and points to
+            // `index_count` readable values (caller), whose byte size fits in isize (checked
+            // above); only read.
+            unsafe { std::slice::from_raw_parts(indices, index_count) }
+        };
         // SAFETY: the caller's description of the point memory is true (contract above).
         let view = unsafe { arg.view() }?;
         let inner = match arg.scalar {

@@ -107,7 +107,8 @@ impl<T: Scalar> KdTree<T> {
         self.ids.len()
     }
 
-    /// Always `false`: a tree holds at least one point.
+    /// `true` for a tree over no point (none given, or every one skipped): one empty leaf,
+    /// queries find nothing and table rows are empty.
     pub fn is_empty(&self) -> bool {
         self.ids.is_empty()
     }
@@ -283,6 +284,10 @@ impl<T: Scalar> KdTree<T> {
         nbhd: Neighborhood<T>,
         out: &mut Vec<Neighbor<T>>,
     ) {
+        if self.ids.is_empty() {
+            out.clear();
+            return;
+        }
         let (k, sq_radius) = nbhd.limits();
         if k == usize::MAX {
             out.clear();

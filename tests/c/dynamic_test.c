@@ -420,8 +420,20 @@ static void test_errors(void) {
     /* inserts: NULL, zero points, dimension, NaN (rejected by default), absurd sizes */
     CHECK_STATUS(nbhd_dynamic_insert(NULL, &p, &first), NBHD_STATUS_NULL_POINTER);
     CHECK_STATUS(nbhd_dynamic_insert(dyn, NULL, &first), NBHD_STATUS_NULL_POINTER);
-    p.count = 0;
-    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_EMPTY_INPUT);
+    p.count = 0; /* no point: nothing inserted, the next index given back */
+    first = 77;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+    CHECK(first == 0);
+    p.data = NULL;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+    p.data = two;
+    {
+        nbhd_neighborhood_spec spec = {NBHD_NEIGHBORHOOD_KIND_KNN, 2, 0.0};
+        nbhd_neighborhoods *t = NULL;
+        CHECK_STATUS(nbhd_dynamic_neighborhoods_of(dyn, &p, &spec, NULL, &t), NBHD_STATUS_OK);
+        CHECK(nbhd_neighborhoods_rows(t) == 0);
+        nbhd_neighborhoods_free(t);
+    }
     p.count = (size_t)1 << 40;
     CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_TOO_MANY_POINTS);
     p.count = 2;
