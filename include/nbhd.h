@@ -1360,8 +1360,10 @@ nbhd_status nbhd_dynamic_save_to_buffer(const nbhd_dynamic_tree *tree,
  * exactly as the saved one did, and continues its indices where the saved one stopped.
  *
  * Nothing in the file is trusted: the header, every static tree and what spans them (index
- * ranges, bitmaps, kept coordinates, live count) are checked before a tree is handed out. On
- * any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
+ * ranges, bitmaps, kept coordinates, live count; a dimension whose point would not fit in
+ * memory) are checked before a tree is handed out, and the thread count the file states is
+ * not obeyed: the loaded tree builds on the shared pool (0) until nbhd_dynamic_set_threads.
+ * On any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
  *
  * Errors: NULL_POINTER (`path`, `out_tree`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
  * `path`; off Unix, not UTF-8), IO_ERROR (the file cannot be read; the message names it),
@@ -1828,8 +1830,9 @@ nbhd_status nbhd_neighborhoods_row(const nbhd_neighborhoods *table,
  * leaves it out (queries naming it fail with NBHD_STATUS_SKIPPED_POINT).
  *
  * Errors: NULL_POINTER (`out_tree`), MISALIGNED_POINTER, ZERO_DIMENSION, INVALID_ARGUMENT
- * (`scalar_type` not a value of nbhd_scalar_type), INVALID_OPTION. On error `*out_tree` is
- * NULL.
+ * (`scalar_type` not a value of nbhd_scalar_type; `dim * sizeof(scalar)` overflowing the
+ * address space, as nbhd_tree_build refuses such points), INVALID_OPTION. On error
+ * `*out_tree` is NULL.
  *
  * Ownership: the caller frees `*out_tree` with nbhd_dynamic_free.
  *
@@ -1877,6 +1880,20 @@ nbhd_status nbhd_dynamic_insert(nbhd_dynamic_tree *tree,
  * `count` readable `uint32_t`.
  */
 nbhd_status nbhd_dynamic_remove(nbhd_dynamic_tree *tree, const uint32_t *indices, size_t count);
+
+/**
+ * Sets the worker threads of the builds that later insertions and removals run: 0 the shared
+ * pool (a thread per core), 1 serially, n a pool of n threads (at most 1024), as
+ * `options->threads` of nbhd_dynamic_create. A loaded tree (nbhd_dynamic_load) starts at 0
+ * whatever its file says; this changes it. Answers do not depend on it.
+ *
+ * Errors, with nothing changed: NULL_POINTER, MISALIGNED_POINTER, INVALID_OPTION (above
+ * 1024).
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle not in use by another thread.
+ */
+nbhd_status nbhd_dynamic_set_threads(nbhd_dynamic_tree *tree, size_t threads);
 
 /**
  * Frees a dynamic tree. NULL is ignored.

@@ -8,6 +8,22 @@ use crate::scalar::{Scalar, ScalarType};
 /// The largest number of points a tree holds: indices are `u32`.
 pub const MAX_POINTS: usize = u32::MAX as usize;
 
+/// The bytes of one point of dimension `dim` in `scalar`: what every description of points
+/// (a view, a growing tree, a saved growing tree) must fit in the address space.
+///
+/// Errors: [`NbhdError::SizeOverflow`] when `dim × scalar size` exceeds `isize::MAX` bytes.
+pub fn point_bytes(dim: usize, scalar: ScalarType) -> Result<usize> {
+    dim.checked_mul(scalar.size())
+        .filter(|&b| b <= isize::MAX as usize)
+        .ok_or_else(|| NbhdError::SizeOverflow {
+            what: format!(
+                "dim {dim} times {} bytes per coordinate ({:?})",
+                scalar.size(),
+                scalar
+            ),
+        })
+}
+
 /// A borrowed, validated description of `count` points of dimension `dim` in a byte buffer.
 ///
 /// Point `i` starts at byte `i * stride`; its coordinates are `dim` consecutive values of
@@ -78,15 +94,7 @@ impl<'a> PointsView<'a> {
         if dim == 0 {
             return Err(NbhdError::ZeroDimension);
         }
-        let point_bytes =
-            dim.checked_mul(scalar.size())
-                .ok_or_else(|| NbhdError::SizeOverflow {
-                    what: format!(
-                        "dim {dim} times {} bytes per coordinate ({:?})",
-                        scalar.size(),
-                        scalar
-                    ),
-                })?;
+        let point_bytes = point_bytes(dim, scalar)?;
         if stride < point_bytes {
             return Err(NbhdError::StrideTooSmall {
                 stride,
