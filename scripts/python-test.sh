@@ -3,7 +3,7 @@
 # target directory (created once, scripts/python-env.sh), maturin, numpy, scipy and pytest
 # installed into it only when missing, the binding crate formatted and linted (a workspace of
 # its own, see python/Cargo.toml), the package built in release mode and installed with pip exactly as a user
-# does (`pip install .` at the repository root: pyproject.toml builds python/), then the pytest
+# does (the wheel scripts/wheel-build.sh builds from the sdist), then the pytest
 # suite (with nbhd.dask's tests on a LocalCluster) — with the command-line tool built, so
 # that the geometry is compared with the Rust results the CLI writes.
 #
@@ -27,9 +27,9 @@ echo "== python/: cargo fmt --check, clippy"
 cargo fmt --manifest-path python/Cargo.toml -- --check
 CARGO_TARGET_DIR="$py_target" cargo clippy --manifest-path python/Cargo.toml --all-targets -- -D warnings
 
-echo "== pip install . (maturin, release build of python/)"
-CARGO_TARGET_DIR="$py_target" python -m pip install --quiet --disable-pip-version-check \
-    --no-build-isolation --force-reinstall --no-deps .
+echo "== pip install the wheel built from the sdist (scripts/wheel-build.sh: maturin, release)"
+wheel=$(scripts/wheel-build.sh)
+python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps "$wheel"
 
 echo "== the command-line tool, for the comparisons with the Rust results"
 cargo build --quiet -p nbhd-cli

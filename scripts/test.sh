@@ -56,6 +56,7 @@ cargo test --workspace
 
 # --- the Python package (python/): built with maturin, installed by pip, tested by pytest ----
 scripts/python-test.sh
+scripts/wheel-test.sh  # the sdist and abi3 wheel: auditwheel, a fresh venv without cargo, stubs
 
 # --- fuzzing: a few seconds of each reader of nbhd::io and of the C ABI (scripts/fuzz.sh) -----
 echo "== fuzzing the file readers and the C ABI (FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"

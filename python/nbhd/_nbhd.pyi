@@ -4,7 +4,7 @@ is a plain Euclidean radius, inclusive; rows are ordered by (sq_dist, index) and
 any thread count."""
 
 import os
-from typing import Any, Literal, Optional, Sequence, TypedDict, Union
+from typing import Any, Literal, Optional, Sequence, TypedDict, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -21,9 +21,29 @@ NonFinite = Literal["reject", "skip"]
 Units = Literal["relative", "absolute"]
 OrientationName = Literal["unoriented", "toward-point", "away-from-point", "propagate"]
 
+__all__ = [
+    "KdTree",
+    "Table",
+    "DynamicKdTree",
+    "normals",
+    "curvatures",
+    "smooth",
+    "smooth_robust",
+    "read",
+    "write",
+    "_reads_in_place",
+    "MAX_THREADS",
+    "__version__",
+]
+
 MAX_THREADS: int
 __version__: str
 
+# The classes are PyO3 classes: built by __new__ and not subclassable (final). Defaults the
+# compiled module shows as `...` (lists, the library's constants) are `...` here too, with their
+# value in a comment; mypy's stubtest checks the rest against the module (scripts/wheel-test.sh).
+
+@final
 class Table:
     """Neighbourhoods as compressed rows: row i is ``indices[offsets[i]:offsets[i+1]]`` with
     its ``sq_dists``."""
@@ -38,19 +58,20 @@ class Table:
     def to_csr(self, *, distances: bool = False) -> Any:
         """A ``scipy.sparse.csr_matrix`` (rows, n_points) of squared distances (or distances)."""
 
+@final
 class KdTree:
     """A k-d tree over the rows of an (n, d) float32/float64 array."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         points: ArrayLike,
         *,
         pivot: Pivot = "sliding-midpoint",
         median: Median = "floyd-rivest",
-        leaf_size: int = 12,
+        leaf_size: int = ...,  # nbhd::tree::DEFAULT_LEAF_SIZE (12)
         non_finite: NonFinite = "reject",
         threads: int = 0,
-    ) -> None: ...
+    ) -> KdTree: ...
     @property
     def size(self) -> int:
         """Points held (skipped non-finite points not counted)."""
@@ -89,21 +110,22 @@ class KdTree:
     @classmethod
     def from_bytes(cls, data: bytes) -> KdTree: ...
 
+@final
 class DynamicKdTree:
     """A k-d tree accepting batch insertions and removals by index (nbhd::DynamicKdTree)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         dim: int,
         *,
         dtype: Literal["float32", "float64"] = "float32",
         pivot: str = "sliding-midpoint",
         median: str = "floyd-rivest",
-        leaf_size: int = 12,
+        leaf_size: int = ...,  # nbhd::tree::DEFAULT_LEAF_SIZE (12)
         non_finite: NonFinite = "reject",
         threads: int = 0,
-        growth: int = 4,
-    ) -> None: ...
+        growth: int = ...,  # nbhd::dynamic::GROWTH (4)
+    ) -> DynamicKdTree: ...
     def insert(self, points: ArrayLike) -> int:
         """Inserts a batch; returns the index of its first point."""
     def remove(self, indices: Sequence[int]) -> None: ...
@@ -164,12 +186,18 @@ class Curvatures(Outputs):
     epsilon: float
     min_neighbors: int
 
-class SmoothResult(TypedDict):
-    points: F64
-    spacing: float
-    epsilon: float
-    min_neighbors: int
-    outputs: Optional[Outputs]
+# "lambda" is a keyword, so this TypedDict is spelt as a call
+SmoothResult = TypedDict(
+    "SmoothResult",
+    {
+        "points": F64,
+        "spacing": float,
+        "epsilon": float,
+        "lambda": float,
+        "min_neighbors": int,
+        "outputs": Optional[Outputs],
+    },
+)
 
 class RobustResult(SmoothResult):
     normals: F64
@@ -183,7 +211,7 @@ def normals(
     epsilon: float = 6.0,
     epsilon_units: Units = "relative",
     orientation: OrientationName = "unoriented",
-    orientation_point: Sequence[float] = (0.0, 0.0, 0.0),
+    orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
     non_finite: NonFinite = "reject",
     threads: int = 0,
 ) -> tuple[F64, F64, npt.NDArray[np.uint8]]:
@@ -196,7 +224,7 @@ def curvatures(
     epsilon: float = 6.0,
     epsilon_units: Units = "relative",
     orientation: OrientationName = "unoriented",
-    orientation_point: Sequence[float] = (0.0, 0.0, 0.0),
+    orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
     density: Literal["abs-linear", "quadratic"] = "abs-linear",
     formula: Literal["eq2.25", "exact-moments"] = "eq2.25",
     non_finite: NonFinite = "reject",
@@ -220,7 +248,7 @@ def smooth(
     constrain_interior: Optional[float] = None,
     update_neighbors: bool = False,
     orientation: OrientationName = "unoriented",
-    orientation_point: Sequence[float] = (0.0, 0.0, 0.0),
+    orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
     non_finite: NonFinite = "reject",
     outputs: bool = False,
     threads: int = 0,
@@ -238,7 +266,7 @@ def smooth_robust(
     feature_angle: float = 20.0,
     tau: float = 1.0,
     orientation: OrientationName = "unoriented",
-    orientation_point: Sequence[float] = (0.0, 0.0, 0.0),
+    orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
     non_finite: NonFinite = "reject",
     outputs: bool = False,
     threads: int = 0,
