@@ -44,9 +44,12 @@ for d in "${dirs[@]}"; do
     [ -x "$d/cargo" ] || [ -x "$d/rustc" ] || [ "$d" = "$CARGO_TARGET_DIR/pyenv/bin" ] && continue
     path="$path${path:+:}$d"
 done
+# the command-line tool scripts/python-test.sh built, if any: the geometry tests compare with it
+cli="$CARGO_TARGET_DIR/debug/nbhd"
 (
     export PATH="$venv/bin:$path"
-    unset NBHD_PYTHON CARGO_TARGET_DIR
+    unset NBHD_PYTHON CARGO_TARGET_DIR NBHD_CLI
+    if [ -x "$cli" ]; then export NBHD_CLI="$cli"; fi
     if command -v cargo >/dev/null 2>&1 || command -v rustc >/dev/null 2>&1; then
         echo "a Rust toolchain is still on PATH" >&2
         exit 1
