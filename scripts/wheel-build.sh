@@ -21,6 +21,7 @@ cd "$(dirname "$0")/.."
 root=$PWD
 target="${CARGO_TARGET_DIR:-$root/target}"
 case "$target" in /*) ;; *) target="$root/$target" ;; esac
+export CARGO_TARGET_DIR="$target"  # maturin sdist runs cargo too: not into python/target
 out="$target/wheel"
 dist="$out/dist"
 rm -rf "$dist" "$out/unpacked"

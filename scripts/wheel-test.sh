@@ -49,6 +49,7 @@ cli="$CARGO_TARGET_DIR/debug/nbhd"
 (
     export PATH="$venv/bin:$path"
     unset NBHD_PYTHON CARGO_TARGET_DIR NBHD_CLI
+    export MYPY_CACHE_DIR="$out/mypy-cache"  # not .mypy_cache in the repository
     if [ -x "$cli" ]; then export NBHD_CLI="$cli"; fi
     if command -v cargo >/dev/null 2>&1 || command -v rustc >/dev/null 2>&1; then
         echo "a Rust toolchain is still on PATH" >&2
@@ -61,8 +62,9 @@ cli="$CARGO_TARGET_DIR/debug/nbhd"
     echo "== pytest python/tests against the wheel"
     python -m pytest -q -p no:cacheprovider --rootdir python --basetemp "$out/pytest" python/tests
     echo "== mypy --strict python/tests/test_stubs.py: its annotated use against the stubs"
-    python -m mypy --strict --no-incremental python/tests/test_stubs.py
+    python -m mypy --strict python/tests/test_stubs.py
     echo "== stubtest: python/nbhd/_nbhd.pyi against the compiled module"
-    python -m mypy.stubtest --concise --allowlist python/tests/stubtest-allowlist.txt nbhd._nbhd
+    # from target/wheel: stubtest keeps its cache in .mypy_cache of the working directory
+    (cd "$out" && python -m mypy.stubtest --concise --allowlist "$root/python/tests/stubtest-allowlist.txt" nbhd._nbhd)
 )
 echo "== the wheel installs and passes without a compiler"
