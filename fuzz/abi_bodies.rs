@@ -902,6 +902,7 @@ pub fn smoothing(data: &[u8]) {
                 addr_of_mut!((*p).non_finite)
                     .cast::<c_int>()
                     .write(inp.raw_enum(2));
+                addr_of_mut!((*p).noise_scale).cast::<u8>().write(inp.u8());
             }
             let opts = if with_options { o.as_ptr() } else { null() };
             // SAFETY: as for nbhd_smooth.

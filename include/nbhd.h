@@ -1100,6 +1100,12 @@ typedef struct {
      * NaN geometry with `normal_flags` 8), as nbhd_smooth_options.non_finite.
      */
     nbhd_non_finite_policy non_finite;
+    /**
+     * Scale from the noise: while the cloud's neighbourhoods read as balls of noise (noise of
+     * about two spacings or more), iterate with k and k_plane tripled. Clouds with noise up to
+     * about 1.5 spacings are smoothed as without it. Default true.
+     */
+    bool noise_scale;
 } nbhd_robust_options;
 
 #ifdef __cplusplus

@@ -371,6 +371,10 @@ void FilterNbhdPlugin::initParameterSet(QAction* a, MeshModel& m, RichParameterL
         par.addParam(RichFloat("feature_angle", float(dr.feature_angle), "Feature angle (degrees)",
                                "Angle at which a neighbour counts as across a feature (> 0)."));
         par.addParam(RichFloat("tau", float(dr.tau), "tau (step size)", "Step size in (0, 1]."));
+        par.addParam(RichBool("noise_scale", dr.noise_scale, "Scale from the noise",
+                              "While the cloud reads as a ball of noise (noise of about two "
+                              "spacings or more), iterate with k and k_plane tripled. Clouds "
+                              "with less noise are smoothed the same either way."));
         addOrientation(par, 1, m);
         break;
     default: break;
@@ -444,6 +448,7 @@ bool FilterNbhdPlugin::applyFilter(QAction* a, MeshDocument& md, const RichParam
         o.inlier_width = double(par.getFloat("inlier_width"));
         o.feature_angle = double(par.getFloat("feature_angle"));
         o.tau = double(par.getFloat("tau"));
+        o.noise_scale = par.getBool("noise_scale");
         readOrientation(par, o.orientation, o.orientation_point);
         o.progress = &Progress::call;
         o.progress_user_data = &progress;

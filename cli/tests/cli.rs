@@ -792,6 +792,8 @@ fn robust_smoothing_is_the_default_and_matches_the_library() {
                 "30",
                 "--tau",
                 "0.8",
+                "--noise-scale",
+                "false",
                 "--orient",
                 "none",
             ],
@@ -804,6 +806,7 @@ fn robust_smoothing_is_the_default_and_matches_the_library() {
                 inlier_width: 4.0,
                 feature_angle: 30.0,
                 tau: 0.8,
+                noise_scale: false,
                 ..RobustOptions::default()
             },
         ),
@@ -820,6 +823,7 @@ fn robust_smoothing_is_the_default_and_matches_the_library() {
         assert_eq!(cloud.positions, want, "{args:?}");
         assert_eq!(v["k"], opts.k as u64);
         assert_eq!(v["k_plane"], opts.k_plane as u64);
+        assert_eq!(v["noise_scale"], opts.noise_scale);
         assert!(v["iterations"].as_u64().unwrap() <= opts.max_iterations as u64);
         let after = rms(&cloud.positions);
         assert!(after < 0.5 * before, "{args:?}: RMS {after} vs {before}");
@@ -830,6 +834,10 @@ fn robust_smoothing_is_the_default_and_matches_the_library() {
         (vec!["--lambda", "0.2/h"], "--lambda"),
         (vec!["--steps", "3"], "--steps"),
         (vec!["-m", "anisotropic", "--k-plane", "30"], "--k-plane"),
+        (
+            vec!["-m", "isotropic", "--noise-scale", "false"],
+            "--noise-scale",
+        ),
         (
             vec!["-m", "isotropic", "--weighting", "cont"],
             "--weighting",

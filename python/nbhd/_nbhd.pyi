@@ -203,6 +203,8 @@ class RobustResult(SmoothResult):
     normals: F64
     noise: F64
     moved: F64
+    dimension: F64
+    wide_iterations: int
 
 def normals(
     points: ArrayLike,
@@ -265,6 +267,7 @@ def smooth_robust(
     inlier_width: float = 5.0,
     feature_angle: float = 20.0,
     tau: float = 1.0,
+    noise_scale: Optional[bool] = None,
     orientation: OrientationName = "unoriented",
     orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
     non_finite: NonFinite = "reject",

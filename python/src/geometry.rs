@@ -291,13 +291,19 @@ pub fn smooth<'py>(
 /// planes scaled by the estimated noise σ̂, and a stopping rule; one default setting for every
 /// shape and noise level.
 ///
+/// `noise_scale` (None: the library's default, on) widens the neighbourhoods while the cloud
+/// reads as a ball of noise (noise of about two spacings or more).
+///
 /// Returns the dict of `smooth()` plus `normals` (the robust normals of the last step),
-/// `noise` (σ̂ of each iteration's input, in h) and `moved` (RMS displacement per iteration,
-/// in h).
+/// `noise` (σ̂ of each iteration's input, in h), `moved` (RMS displacement per iteration,
+/// in h), `dimension` (the local dimension of each check of the noise scale: 2 a surface, 3
+/// a ball of noise) and `wide_iterations` (the iterations that used the wide
+/// neighbourhoods).
 #[pyfunction]
 #[pyo3(signature = (points, *, k = 24, k_plane = 48, epsilon = 12.0, epsilon_units = "relative",
                     max_iterations = 10, tolerance = 0.05, inlier_width = 5.0,
-                    feature_angle = 20.0, tau = 1.0, orientation = "unoriented",
+                    feature_angle = 20.0, tau = 1.0, noise_scale = None,
+                    orientation = "unoriented",
                     orientation_point = [0.0, 0.0, 0.0], non_finite = "reject",
                     outputs = false, threads = 0))]
 #[allow(clippy::too_many_arguments)]
@@ -313,12 +319,14 @@ pub fn smooth_robust<'py>(
     inlier_width: f64,
     feature_angle: f64,
     tau: f64,
+    noise_scale: Option<bool>,
     orientation: &str,
     orientation_point: [f64; 3],
     non_finite: &str,
     outputs: bool,
     threads: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let defaults = RobustOptions::default();
     let opts = RobustOptions {
         k,
         k_plane,
@@ -328,12 +336,11 @@ pub fn smooth_robust<'py>(
         inlier_width,
         feature_angle,
         tau,
+        noise_scale: noise_scale.unwrap_or(defaults.noise_scale),
         orientation: options::orientation(orientation, orientation_point)?,
         outputs,
         non_finite: options::non_finite(non_finite)?,
         threads,
-        // what Python does not set (the noise scale) stays the library's default
-        ..RobustOptions::default()
     };
     let pts = dvec3s(points)?;
     let r = py
@@ -343,5 +350,7 @@ pub fn smooth_robust<'py>(
     d.set_item("normals", dvec3_array(py, &r.normals)?)?;
     d.set_item("noise", vec1(py, r.noise.clone()))?;
     d.set_item("moved", vec1(py, r.moved.clone()))?;
+    d.set_item("dimension", vec1(py, r.dimension.clone()))?;
+    d.set_item("wide_iterations", r.wide_iterations)?;
     Ok(d)
 }

@@ -64,6 +64,20 @@ def test_smoothing_reduces_noise_on_a_sphere(method, factor):
     assert r["points"].shape == (5000, 3) and r["spacing"] > 0 and r["outputs"] is None
 
 
+def test_robust_noise_scale_widens_only_noise_of_several_spacings():
+    # 0.02 is about 0.4 spacings: no ball of noise, the same bits either way
+    calm = sphere(5000, R, noise=0.02)
+    on, off = nbhd.smooth_robust(calm), nbhd.smooth_robust(calm, noise_scale=False)
+    assert on["points"].tobytes() == off["points"].tobytes()
+    assert on["wide_iterations"] == 0 and len(on["dimension"]) == 1
+    assert off["wide_iterations"] == 0 and len(off["dimension"]) == 0
+    # 0.2 is about four spacings (h ≈ 0.05 at 20,000 points): widened, and closer to the sphere
+    wild = sphere(20000, R, noise=0.2)
+    on, off = nbhd.smooth_robust(wild), nbhd.smooth_robust(wild, noise_scale=False)
+    assert on["wide_iterations"] > 0 and on["dimension"][0] > 2.75, on["dimension"]
+    assert rms_to_sphere(on["points"]) < rms_to_sphere(off["points"])
+
+
 def test_smoothing_is_identical_for_any_thread_count():
     noisy = sphere(3000, R, noise=0.02)
     for fn in (nbhd.smooth, nbhd.smooth_robust):

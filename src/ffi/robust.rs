@@ -55,6 +55,10 @@ pub struct nbhd_robust_options {
     /// Points with a NaN or infinite coordinate: REJECT (the default) or SKIP (left unmoved,
     /// NaN geometry with `normal_flags` 8), as nbhd_smooth_options.non_finite.
     pub non_finite: nbhd_non_finite_policy,
+    /// Scale from the noise: while the cloud's neighbourhoods read as balls of noise (noise of
+    /// about two spacings or more), iterate with k and k_plane tripled. Clouds with noise up to
+    /// about 1.5 spacings are smoothed as without it. Default true.
+    pub noise_scale: bool,
 }
 
 /// The C form of the core's options, with no progress callback.
@@ -78,6 +82,7 @@ impl From<RobustOptions> for nbhd_robust_options {
             progress: None,
             progress_user_data: std::ptr::null_mut(),
             non_finite: d.non_finite.into(),
+            noise_scale: d.noise_scale,
         }
     }
 }
@@ -113,6 +118,7 @@ pub(super) unsafe fn read_options(
         orientation: c_field!(o.orientation as enum)?.to_core(c_field!(o.orientation_point))?,
         non_finite: c_field!(o.non_finite as enum)?.into(),
         threads: c_field!(o.threads),
+        noise_scale: c_field!(o.noise_scale as bool),
         ..RobustOptions::default()
     };
     let progress = Progress::new(c_field!(o.progress), c_field!(o.progress_user_data));

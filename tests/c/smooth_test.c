@@ -269,6 +269,7 @@ static void test_threads_agree(size_t n) {
 static void test_robust(size_t n) {
     double *p = malloc(3 * n * sizeof *p);
     double *out = malloc(3 * n * sizeof *out);
+    double *out2 = malloc(3 * n * sizeof *out2);
     nbhd_robust_options o = nbhd_robust_options_default();
     nbhd_smooth_summary summary;
     nbhd_points pts;
@@ -276,6 +277,7 @@ static void test_robust(size_t n) {
 
     CHECK(o.k == 24 && o.k_plane == 48 && o.epsilon == 12.0 && o.epsilon_units == NBHD_UNITS_RELATIVE);
     CHECK(o.max_iterations == 10 && o.tau == 1.0 && o.progress == NULL && o.threads == 0);
+    CHECK(o.noise_scale);
 
     sphere(p, n, 0.5 * spacing(n));
     pts = describe(p, n, 0, NBHD_SCALAR_TYPE_F64);
@@ -289,6 +291,12 @@ static void test_robust(size_t n) {
                 r_before, r_after, spacing(n));
     CHECK(summary.spacing > 0.0 && summary.lambda > 0.0);
 
+    /* noise of half a spacing is no ball of noise: the noise scale leaves it as without it */
+    o.noise_scale = false;
+    CHECK_STATUS(nbhd_smooth_robust(&pts, &o, out2, NULL, NULL), NBHD_STATUS_OK);
+    CHECK(memcmp(out, out2, 3 * n * sizeof *out) == 0);
+
+    o = nbhd_robust_options_default();
     o.k_plane = 10;
     CHECK_STATUS(nbhd_smooth_robust(&pts, &o, out, NULL, NULL), NBHD_STATUS_INVALID_OPTION);
     CHECK_MESSAGE("k_plane");
@@ -299,6 +307,7 @@ static void test_robust(size_t n) {
     CHECK_STATUS(nbhd_smooth_robust(&pts, NULL, NULL, NULL, NULL), NBHD_STATUS_NULL_POINTER);
     free(p);
     free(out);
+    free(out2);
 }
 
 static void test_errors(void) {

@@ -11,7 +11,9 @@ use crate::output::{num, Output};
 use crate::progress::Progress;
 use crate::read::finite_points;
 use crate::write;
-use nbhd::smooth::robust::{smooth_robust_report, RobustOptions};
+use nbhd::smooth::robust::{
+    smooth_robust_report, RobustOptions, NOISE_SCALE_DIMENSION, NOISE_SCALE_FACTOR,
+};
 use nbhd::smooth::{
     smooth_with_progress, Curvature, FeatureCriterion, Length, SmoothOptions, SmoothResult,
     Weighting,
@@ -147,6 +149,13 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     pub feature_angle: Option<f64>,
 
+    /// Robust: scale the neighbourhoods from the noise [default: true]: while the cloud reads
+    /// as a ball of noise (noise of about two spacings or more, as in dense scans of noisy
+    /// sensors), iterate with k and --k-plane tripled; clouds with noise up to about 1.5
+    /// spacings are smoothed the same either way. false keeps k and --k-plane as given
+    #[arg(long)]
+    pub noise_scale: Option<bool>,
+
     /// Thesis' methods: number of steps [default: 2 isotropic, 3 anisotropic]
     #[arg(long, short)]
     pub steps: Option<usize>,
@@ -213,6 +222,7 @@ impl Args {
             ("--tolerance", self.tolerance.is_some()),
             ("--inlier-width", self.inlier_width.is_some()),
             ("--feature-angle", self.feature_angle.is_some()),
+            ("--noise-scale", self.noise_scale.is_some()),
         ];
         let thesis_only = [
             ("--steps", self.steps.is_some()),
@@ -288,6 +298,7 @@ impl Args {
             inlier_width: self.inlier_width.unwrap_or(d.inlier_width),
             feature_angle: self.feature_angle.unwrap_or(d.feature_angle),
             tau: self.tau.unwrap_or(d.tau),
+            noise_scale: self.noise_scale.unwrap_or(d.noise_scale),
             outputs: true,
             ..d
         }
@@ -384,6 +395,9 @@ fn robust_text(
 
 /// The noise scale's line: the local dimension measured, and the iterations it widened.
 fn noise_scale_text(dimension: &[f64], wide: usize, opts: &RobustOptions) -> String {
+    if !opts.noise_scale {
+        return "noise scale: off (--noise-scale false): the neighbourhoods as given\n".to_string();
+    }
     let Some(first) = dimension.first() else {
         return String::new();
     };
@@ -391,15 +405,15 @@ fn noise_scale_text(dimension: &[f64], wide: usize, opts: &RobustOptions) -> Str
         format!(
             "{} with the {} nearest (planes over {}) while the cloud read as a ball of noise",
             count(wide, "iteration"),
-            3 * opts.k,
-            3 * opts.k_plane
+            NOISE_SCALE_FACTOR * opts.k,
+            NOISE_SCALE_FACTOR * opts.k_plane
         )
     } else {
         "a surface at this scale: the usual neighbourhoods".to_string()
     };
     format!(
         "noise scale: local dimension {first:.2} (2 a surface, 3 a ball of noise; wider \
-         neighbourhoods from 2.75): {then}\n"
+         neighbourhoods from {NOISE_SCALE_DIMENSION}): {then}\n"
     )
 }
 
@@ -465,6 +479,7 @@ fn run_robust(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run> {
         "inlier_width": num(opts.inlier_width),
         "feature_angle": num(opts.feature_angle),
         "tau": num(opts.tau),
+        "noise_scale": opts.noise_scale,
         "noise_h": rep.noise.iter().map(|&v| num(v)).collect::<Vec<_>>(),
         "local_dimension": rep.dimension.iter().map(|&v| num(v)).collect::<Vec<_>>(),
         "wide_iterations": rep.wide_iterations,

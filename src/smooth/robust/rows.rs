@@ -153,22 +153,25 @@ impl Rows {
             .par_chunks_mut(width)
             .zip(self.len.par_iter_mut())
             .enumerate()
-            .for_each_init(Vec::new, |sq_dist, (s, (index, len))| {
-                if whole(s) {
-                    *len = candidates[s];
-                    return;
-                }
-                let index = &mut index[..candidates[s] as usize];
-                let p = points[s];
-                sq_dist.clear();
-                sq_dist.extend(
-                    index
-                        .iter()
-                        .map(|&j| points[j as usize].distance_squared(p)),
-                );
-                sort_row(index, sq_dist, order);
-                *len = sq_dist.iter().take_while(|&&d| d <= e2).count() as u32;
-            });
+            .for_each_init(
+                Default::default,
+                |(sq_dist, keys): &mut (Vec<f64>, Vec<(f64, u32)>), (s, (index, len))| {
+                    if whole(s) {
+                        *len = candidates[s];
+                        return;
+                    }
+                    let index = &mut index[..candidates[s] as usize];
+                    let p = points[s];
+                    sq_dist.clear();
+                    sq_dist.extend(
+                        index
+                            .iter()
+                            .map(|&j| points[j as usize].distance_squared(p)),
+                    );
+                    sort_row(index, sq_dist, order, keys);
+                    *len = sq_dist.iter().take_while(|&&d| d <= e2).count() as u32;
+                },
+            );
     }
 
     /// The first `k` neighbours of every point within ε as a table over the caller's indices
@@ -196,14 +199,18 @@ impl Rows {
     }
 }
 
-/// Insertion sort of one row by `(sq_dist, caller's index)`: rows are nearly sorted already
-/// (points move a fraction of a spacing per iteration), so this is about one pass.
-/// The caller's indices are looked up only where two distances tie.
-fn sort_row(index: &mut [u32], sq_dist: &mut [f64], order: &[u32]) {
+/// Sorts one row by `(sq_dist, caller's index)`. Rows are nearly sorted after a step that moved
+/// points by a fraction of a spacing, so an insertion sort is about one pass; after a step of a
+/// spacing or more (the first ones on noise of several spacings, with rows of 144) the rows are
+/// shuffled, and an insertion sort costs up to n²/4 moves. It is given [`SORT_MOVES`]·n moves,
+/// then the row is sorted by a comparison sort instead: the keys are distinct (the caller's
+/// indices break ties), so both give the same order. `scratch` holds the keys of that sort.
+fn sort_row(index: &mut [u32], sq_dist: &mut [f64], order: &[u32], scratch: &mut Vec<(f64, u32)>) {
     let before = |a: (f64, u32), b: (f64, u32)| {
         a.0 < b.0 || (a.0 == b.0 && order[a.1 as usize] < order[b.1 as usize])
     };
     let n = index.len().min(sq_dist.len());
+    let mut budget = SORT_MOVES * n;
     for i in 1..n {
         let item = (sq_dist[i], index[i]);
         // in place already (the common case): nothing to move
@@ -218,6 +225,33 @@ fn sort_row(index: &mut [u32], sq_dist: &mut [f64], order: &[u32]) {
         }
         sq_dist[j] = item.0;
         index[j] = item.1;
+        budget = budget.saturating_sub(i - j);
+        if budget == 0 {
+            return comparison_sort(&mut index[..n], &mut sq_dist[..n], order, scratch);
+        }
+    }
+}
+
+/// Moves per entry an insertion sort of a row may take before [`sort_row`] turns to a
+/// comparison sort.
+const SORT_MOVES: usize = 4;
+
+/// [`sort_row`] by a comparison sort of `(sq_dist, caller's index)` pairs.
+fn comparison_sort(
+    index: &mut [u32],
+    sq_dist: &mut [f64],
+    order: &[u32],
+    keys: &mut Vec<(f64, u32)>,
+) {
+    keys.clear();
+    keys.extend(sq_dist.iter().zip(index.iter()).map(|(&d, &j)| (d, j)));
+    keys.sort_unstable_by(|a, b| {
+        a.0.partial_cmp(&b.0)
+            .unwrap_or(std::cmp::Ordering::Equal)
+            .then(order[a.1 as usize].cmp(&order[b.1 as usize]))
+    });
+    for ((d, j), &(kd, kj)) in sq_dist.iter_mut().zip(index.iter_mut()).zip(keys.iter()) {
+        (*d, *j) = (kd, kj);
     }
 }
 
@@ -250,5 +284,30 @@ mod tests {
         assert_eq!(t.indices_of(1), &[0, 2]);
         assert_eq!(t.sq_dists_of(1), &[0.25, 1.0]);
         assert_eq!(rows.min_narrow_len(5), 1);
+    }
+
+    /// Nearly sorted rows (insertion sort within its budget) and shuffled ones (the
+    /// comparison sort after it), with ties: both the order of `(sq_dist, caller's index)`.
+    #[test]
+    fn sort_row_orders_any_row_with_ties_by_caller_index() {
+        let n = 144u32;
+        // caller's index of stored point j: a permutation, so ties are broken by it
+        let order: Vec<u32> = (0..n).map(|j| (j * 89) % n).collect();
+        let mut keys = Vec::new();
+        for shuffle in [1u32, 7, 61] {
+            // shuffle 1 leaves the row nearly sorted: each entry a few places off
+            let index: Vec<u32> = (0..n).map(|j| (j * shuffle + j % 3) % n).collect();
+            let dist = |j: u32| f64::from(j / 4 + (j % 5 == 0) as u32);
+            let mut want: Vec<(f64, u32)> = index.iter().map(|&j| (dist(j), j)).collect();
+            want.sort_by(|a, b| {
+                a.0.total_cmp(&b.0)
+                    .then(order[a.1 as usize].cmp(&order[b.1 as usize]))
+            });
+            let mut idx = index.clone();
+            let mut sq: Vec<f64> = index.iter().map(|&j| dist(j)).collect();
+            sort_row(&mut idx, &mut sq, &order, &mut keys);
+            let got: Vec<(f64, u32)> = sq.into_iter().zip(idx).collect();
+            assert_eq!(got, want, "shuffle {shuffle}");
+        }
     }
 }

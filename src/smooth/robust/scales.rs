@@ -39,12 +39,12 @@ use rayon::prelude::*;
 
 /// Factor of `k` and `k_plane` while the cloud reads as a ball of noise (see the module
 /// documentation for 2 against 3).
-pub(super) const WIDE: usize = 3;
+pub const WIDE: usize = 3;
 
 /// The local dimension from which neighbourhoods are balls of noise (see the module
 /// documentation for the values measured: 2.71 at most where widening did not help, 2.74 at
 /// least where it did).
-pub(super) const BALL_DIMENSION: f64 = 2.75;
+pub const BALL_DIMENSION: f64 = 2.75;
 
 /// The median over the points of `d₄ₘ / dₘ` on `points` (stored order) with the rows `rows`,
 /// m = `k_plane`/4 (rows shorter than `k_plane` use their own length); points with fewer than
