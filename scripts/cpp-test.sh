@@ -14,6 +14,7 @@
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$repo"
+. scripts/step.sh
 
 target_dir="${CARGO_TARGET_DIR:-$repo/target}"
 case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
@@ -31,7 +32,7 @@ for tool in cmake c++ pkg-config; do
     command -v "$tool" >/dev/null 2>&1 || { echo "cpp-test.sh: $tool is missing (scripts/test.sh installs it)" >&2; exit 1; }
 done
 
-echo "== installing nbhd into $prefix"
+step "installing nbhd into $prefix (scripts/install.sh)"
 scripts/install.sh "$prefix"
 
 # Installs are release-grade (scripts/install.sh): no debug sections in either library, the
@@ -63,11 +64,11 @@ done
 ls -l "$so_file" "$prefix/lib/libnbhd.a" | awk '{ print "   " $5 " bytes  " $NF }'
 
 # The command-line tool writes the files that pcl_loads_nbhd_files loads with PCL.
-echo "== building the nbhd command-line tool (release)"
+step "building the nbhd command-line tool (release)"
 cargo build --release -p nbhd-cli --quiet
 nbhd_cli="$target_dir/release/nbhd"
 
-echo "== configuring cpp_examples (Release, -O2, no -march=native)"
+step "configuring cpp_examples (Release, -O2, no -march=native)"
 cmake -S cpp_examples -B "$build" \
     -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_PREFIX_PATH="$prefix" \
@@ -76,7 +77,7 @@ cmake -S cpp_examples -B "$build" \
 grep -E "nbhd [0-9]|Found PCL|Found flann" "$build.configure.log" || true
 
 jobs="$(nproc 2>/dev/null || echo 2)"
-echo "== building cpp_examples"
+step "building cpp_examples"
 cmake --build "$build" -j "$jobs"
 
 # The pkg-config file must give a working link line too: build a C program with it alone.
@@ -120,6 +121,7 @@ for exe in "$build/link_shared" "$build/compare_neighbors" "$pc_out"; do
     fi
 done
 
-echo "== ctest"
+step "ctest"
 cd "$build"
 ctest --output-on-failure -j "${CTEST_PARALLEL:-$jobs}" "$@"
+step_end
