@@ -63,10 +63,12 @@ for h in nbhd.h nbhd.hpp nbhd_pcl.hpp; do
 done
 ls -l "$so_file" "$prefix/lib/libnbhd.a" | awk '{ print "   " $5 " bytes  " $NF }'
 
-# The command-line tool writes the files that pcl_loads_nbhd_files loads with PCL.
-step "building the nbhd command-line tool (release)"
-cargo build --release -p nbhd-cli --quiet
-nbhd_cli="$target_dir/release/nbhd"
+# The command-line tool writes the files that pcl_loads_nbhd_files loads with PCL. The `dist`
+# profile is what the README's `cargo install --path cli --profile dist` builds (and
+# cli/tests/readme.rs under scripts/test.sh), so the two share one build.
+step "building the nbhd command-line tool (dist profile)"
+cargo build --profile dist -p nbhd-cli --quiet
+nbhd_cli="$target_dir/dist/nbhd"
 
 step "configuring cpp_examples (Release, -O2, no -march=native)"
 cmake -S cpp_examples -B "$build" \

@@ -53,6 +53,9 @@ step "cargo test"
 # valgrind was installed above: its memcheck runs of the C ABI tests must not be skipped.
 export NBHD_REQUIRE_VALGRIND=1
 export NBHD_REQUIRE_CLOUDCOMPARE=1  # installed above: its test must not be skipped
+# cli/tests/readme.rs runs the README's `cargo install --path cli --profile dist` (the dist
+# build of the tool that scripts/cpp-test.sh reuses below)
+export NBHD_TEST_INSTALL=1
 cargo test --workspace
 
 # --- the Python package (python/): built with maturin, installed by pip, tested by pytest ----
