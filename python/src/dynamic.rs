@@ -164,6 +164,19 @@ impl PyDynamicKdTree {
         with_dyn!(&mut self.tree, t, _T => py.detach(|| t.remove(&indices)).or_raise())
     }
 
+    /// Worker threads of the builds that `insert` and `remove` run: 0 a thread per core, 1
+    /// serially, n a pool of n (at most 1024). A tree read by `from_bytes` (or unpickled)
+    /// starts at 0 whatever the bytes say: saved data is untrusted input.
+    #[getter]
+    fn threads(&self) -> usize {
+        with_dyn!(&self.tree, t, _T => t.options().threads)
+    }
+
+    #[setter]
+    fn set_threads(&mut self, threads: usize) -> PyResult<()> {
+        with_dyn!(&mut self.tree, t, _T => t.set_threads(threads).or_raise())
+    }
+
     /// Live points.
     #[getter]
     fn size(&self) -> usize {
@@ -229,7 +242,7 @@ impl PyDynamicKdTree {
     ) -> PyResult<Bound<'py, PyAny>> {
         match self.query(py, x, Some(k), None, true, threads)? {
             Answer::One(t) => Ok(t.into_any()),
-            Answer::Many(table) => table.dense(py),
+            Answer::Many(table) => table.dense(py, k.min(self.size())),
         }
     }
 

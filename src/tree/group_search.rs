@@ -828,6 +828,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         out: &mut RowsChunk<'_, T>,
     ) -> T {
         let (tree, boxes) = (self.tree, self.boxes);
+        let sse = crate::simd::sse();
         let m = g.len();
         let Members {
             q,
@@ -884,7 +885,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
                         let mut start = a;
                         while start < b {
                             let d = self.soa.block_sq_dists(qi, start);
-                            let mut hits = below_mask(&d, bound[i]);
+                            let mut hits = below_mask(&d, bound[i], sse);
                             if b - start < BLOCK {
                                 hits &= (1 << (b - start)) - 1;
                             }

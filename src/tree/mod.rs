@@ -45,7 +45,9 @@ use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
 use crate::scalar::{Scalar, ScalarType};
 pub(crate) use blocks::Blocks;
 use node::{Descent, Node};
-pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
+pub use options::{
+    max_unbalanced_depth, BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE,
+};
 pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
 pub use range::IndexRows;
 use search::TreeView;
@@ -105,7 +107,8 @@ impl<T: Scalar> KdTree<T> {
         self.ids.len()
     }
 
-    /// Always `false`: a tree holds at least one point.
+    /// `true` for a tree over no point (none given, or every one skipped): one empty leaf,
+    /// queries find nothing and table rows are empty.
     pub fn is_empty(&self) -> bool {
         self.ids.is_empty()
     }
@@ -281,6 +284,10 @@ impl<T: Scalar> KdTree<T> {
         nbhd: Neighborhood<T>,
         out: &mut Vec<Neighbor<T>>,
     ) {
+        if self.ids.is_empty() {
+            out.clear();
+            return;
+        }
         let (k, sq_radius) = nbhd.limits();
         if k == usize::MAX {
             out.clear();

@@ -32,6 +32,7 @@ impl<T: Scalar> KdTree<T> {
             })?
         };
         match self.dim {
+            _ if self.is_empty() => {} // no point: `source_len` empty rows, below
             3 => return grouped(group_search::table::<T, 3>),
             2 => return grouped(group_search::table::<T, 2>),
             1 => return grouped(group_search::table::<T, 1>),
@@ -55,6 +56,7 @@ impl<T: Scalar> KdTree<T> {
 
     /// The neighbourhoods of a batch of query points (row `i` for query `i`), computed in
     /// parallel. `options.exclude_self` does not apply (the queries are not stored points).
+    /// A batch of no query gives a table of no row.
     ///
     /// The queries are answered in the order of the leaves they fall into, so that consecutive
     /// queries walk the same nodes and leaves (a scan's points arrive in no useful order, and a
@@ -93,6 +95,9 @@ impl<T: Scalar> KdTree<T> {
     /// The query indices of `queries` ordered by the first tree position of the leaf each falls
     /// into, ties by index (a counting sort: two passes over the queries).
     fn leaf_order(&self, queries: &PointsView<'_>) -> Vec<u32> {
+        if self.is_empty() {
+            return (0..queries.len() as u32).collect(); // one leaf, of no point
+        }
         let leaf_of: Vec<u32> = (0..queries.len())
             .into_par_iter()
             .map_init(Vec::new, |q, i| {
