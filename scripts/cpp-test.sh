@@ -32,7 +32,7 @@ for tool in cmake c++ pkg-config; do
     command -v "$tool" >/dev/null 2>&1 || { echo "cpp-test.sh: $tool is missing (scripts/test.sh installs it)" >&2; exit 1; }
 done
 
-step "installing nbhd into $prefix (scripts/install.sh)"
+step "installing nbhd into $prefix (scripts/install.sh)" "a dist build, the first time a few CPU-minutes"
 scripts/install.sh "$prefix"
 
 # Installs are release-grade (scripts/install.sh): no debug sections in either library, the

@@ -28,7 +28,7 @@ step "python/: cargo fmt --check, clippy"
 cargo fmt --manifest-path python/Cargo.toml -- --check
 CARGO_TARGET_DIR="$py_target" cargo clippy --manifest-path python/Cargo.toml --all-targets -- -D warnings
 
-step "pip install . (maturin, release build of python/)"
+step "pip install . (maturin, release build of python/)" "the first time about 3 CPU-minutes (docs/setup-costs.md)"
 CARGO_TARGET_DIR="$py_target" python -m pip install --quiet --disable-pip-version-check \
     --no-build-isolation --force-reinstall --no-deps .
 

@@ -73,7 +73,7 @@ if [ -f cpp_examples/CMakeLists.txt ]; then
     scripts/cpp-test.sh
     # The headers' ctests and the C ABI tests once more under AddressSanitizer +
     # UndefinedBehaviorSanitizer (the library cpp-test.sh installed; any report fails).
-    echo "== the C and C++ surfaces under the sanitizers"
+    step "the C and C++ surfaces under the sanitizers (scripts/sanitize-test.sh)"
     scripts/sanitize-test.sh
 fi
 step "the MeshLab plugin (scripts/meshlab-test.sh)"
