@@ -11,7 +11,8 @@
 // NBHD_STATUS_BUFFER_TOO_SMALL), so the C header's documentation applies unchanged. It depends on
 // nothing but nbhd.h and the C++ standard library; with the CMake package (nbhd::nbhd) or
 // pkg-config (`pkg-config --cflags nbhd`) it is found as <nbhd.hpp>. The C ABI's compatibility
-// rules (README.md, "ABI policy") apply to it too: it is inline code compiled into your program.
+// rules (cpp_examples/README.md, "ABI policy") apply to it too: it is inline code compiled into
+// your program.
 #pragma once
 
 #include <nbhd.h>

@@ -22,7 +22,7 @@ build="$target_dir/cpp/build"
 scripts/install.sh "$prefix" >/dev/null
 # NBHD_CLI only registers a ctest (scripts/cpp-test.sh passes the real tool); not built here
 cmake -S cpp_examples -B "$build" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release \
-    -DNBHD_CLI="${NBHD_CLI:-$target_dir/release/nbhd}" >/dev/null
+    -DNBHD_CLI="${NBHD_CLI:-$target_dir/dist/nbhd}" >/dev/null
 cmake --build "$build" --target bench_normals -j "$(nproc)" >/dev/null
 
 points="$target_dir/bench-normals-torus.f32"

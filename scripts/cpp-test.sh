@@ -14,6 +14,7 @@
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$repo"
+. scripts/step.sh
 
 target_dir="${CARGO_TARGET_DIR:-$repo/target}"
 case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
@@ -31,7 +32,7 @@ for tool in cmake c++ pkg-config; do
     command -v "$tool" >/dev/null 2>&1 || { echo "cpp-test.sh: $tool is missing (scripts/test.sh installs it)" >&2; exit 1; }
 done
 
-echo "== installing nbhd into $prefix"
+step "installing nbhd into $prefix (scripts/install.sh)" "a dist build, the first time a few CPU-minutes"
 scripts/install.sh "$prefix"
 
 # Installs are release-grade (scripts/install.sh): no debug sections in either library, the
@@ -62,12 +63,14 @@ for h in nbhd.h nbhd.hpp nbhd_pcl.hpp; do
 done
 ls -l "$so_file" "$prefix/lib/libnbhd.a" | awk '{ print "   " $5 " bytes  " $NF }'
 
-# The command-line tool writes the files that pcl_loads_nbhd_files loads with PCL.
-echo "== building the nbhd command-line tool (release)"
-cargo build --release -p nbhd-cli --quiet
-nbhd_cli="$target_dir/release/nbhd"
+# The command-line tool writes the files that pcl_loads_nbhd_files loads with PCL. The `dist`
+# profile is what the README's `cargo install --path cli --profile dist` builds (and
+# cli/tests/readme.rs under scripts/test.sh), so the two share one build.
+step "building the nbhd command-line tool (dist profile)"
+cargo build --profile dist -p nbhd-cli --quiet
+nbhd_cli="$target_dir/dist/nbhd"
 
-echo "== configuring cpp_examples (Release, -O2, no -march=native)"
+step "configuring cpp_examples (Release, -O2, no -march=native)"
 cmake -S cpp_examples -B "$build" \
     -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_PREFIX_PATH="$prefix" \
@@ -76,7 +79,7 @@ cmake -S cpp_examples -B "$build" \
 grep -E "nbhd [0-9]|Found PCL|Found flann" "$build.configure.log" || true
 
 jobs="$(nproc 2>/dev/null || echo 2)"
-echo "== building cpp_examples"
+step "building cpp_examples"
 cmake --build "$build" -j "$jobs"
 
 # The pkg-config file must give a working link line too: build a C program with it alone.
@@ -120,6 +123,7 @@ for exe in "$build/link_shared" "$build/compare_neighbors" "$pc_out"; do
     fi
 done
 
-echo "== ctest"
+step "ctest"
 cd "$build"
 ctest --output-on-failure -j "${CTEST_PARALLEL:-$jobs}" "$@"
+step_end

@@ -20,9 +20,10 @@
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$repo"
+. scripts/step.sh
 
 if ! cargo fuzz --version >/dev/null 2>&1; then
-    echo "== installing cargo-fuzz"
+    step "installing cargo-fuzz (cargo install, into ~/.cargo/bin)"
     cargo install --locked cargo-fuzz
 fi
 
@@ -36,9 +37,10 @@ if [ "${#targets[@]}" -eq 0 ]; then
         abi_build_query abi_tables abi_smoothing load_tree simd_search simd_robust)
 fi
 
-echo "== building the fuzz targets"
+step "building the fuzz targets"
 RUSTC_BOOTSTRAP=1 cargo fuzz build --fuzz-dir fuzz -s none >/dev/null
 
+step "fuzzing ${#targets[@]} targets, ${seconds}s each"
 for t in "${targets[@]}"; do
     seeds="tests/data/fuzz-seeds/${t#read_}"
     corpus="$target_dir/fuzz-corpus/$t"
@@ -54,4 +56,5 @@ for t in "${targets[@]}"; do
     fi
     grep -E "^Done|stat::number_of_executed_units|stat::peak_rss_mb" "$log" || true
 done
+step_end
 echo "== fuzzing passed"

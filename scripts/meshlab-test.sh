@@ -17,6 +17,7 @@
 #   platform gives none, and MeshLab aborts with "GLEW initialization failed").
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/step.sh
 root=$(pwd)
 target="${CARGO_TARGET_DIR:-$root/target}"
 work="$target/meshlab"
@@ -32,7 +33,7 @@ for pkg in meshlab qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev libpc
     dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 if [ "${#missing[@]}" -gt 0 ]; then
-    echo "== installing Debian packages: ${missing[*]}"
+    step "installing Debian packages: ${missing[*]}"
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
@@ -44,6 +45,7 @@ if [ ! -f "$src_stamp" ] || [ "$(cat "$src_stamp")" != "$meshlab_version" ]; the
     # Enable deb-src: a copy of the system's own Debian entry (deb822 or one-line format).
     srcfile=/etc/apt/sources.list.d/nbhd-deb-src.sources
     if ! apt-cache showsrc meshlab 2>/dev/null | grep -q '^Package: meshlab'; then
+        step "enabling Debian's source packages: a deb-src copy of the system's apt entry in /etc/apt/sources.list.d/nbhd-deb-src.*"
         if [ -f /etc/apt/sources.list.d/debian.sources ]; then
             sed -e 's/^Types:.*/Types: deb-src/' /etc/apt/sources.list.d/debian.sources \
                 | $sudo tee "$srcfile" >/dev/null
@@ -58,7 +60,7 @@ if [ ! -f "$src_stamp" ] || [ "$(cat "$src_stamp")" != "$meshlab_version" ]; the
     fi
     rm -rf "$work/src" "$work/apt-source"
     mkdir -p "$work/apt-source"
-    echo "== apt-get source meshlab=$meshlab_version"
+    step "apt-get source meshlab=$meshlab_version"
     (cd "$work/apt-source" && apt-get source -qq "meshlab=$meshlab_version" >/dev/null)
     dir=$(find "$work/apt-source" -maxdepth 1 -mindepth 1 -type d -name 'meshlab-*' | head -n1)
     mv "$dir" "$work/src"
@@ -67,7 +69,7 @@ fi
 
 # --- nbhd, installed as C/C++ users install it --------------------------------------------
 prefix="$target/cpp/prefix"
-echo "== installing nbhd into $prefix"
+step "installing nbhd into $prefix"
 scripts/install.sh "$prefix" >/dev/null
 
 # --- the plugin -------------------------------------------------------------------------------
@@ -80,7 +82,7 @@ arch=$(dpkg-architecture -qDEB_HOST_MULTIARCH)
 mlroot="$work/root"
 mllib="$mlroot/lib/$arch/meshlab"
 build="$work/build"
-echo "== building meshlab_plugin (libfilter_nbhd.so) and its checker"
+step "building meshlab_plugin (libfilter_nbhd.so) and its checker"
 mkdir -p "$mlroot/bin" "$mllib/plugins"
 for exe in meshlabserver meshlab; do
     cmp -s "/usr/bin/$exe" "$mlroot/bin/$exe" || cp "/usr/bin/$exe" "$mlroot/bin/$exe"
@@ -114,5 +116,6 @@ if [ -z "${DISPLAY:-}" ]; then
     done
     [ -n "${DISPLAY:-}" ] || { echo "meshlab-test.sh: could not start Xvfb" >&2; exit 1; }
 fi
-echo "== ctest: meshlabserver applies every nbhd filter (DISPLAY=$DISPLAY)"
+step "ctest: meshlabserver applies every nbhd filter (DISPLAY=$DISPLAY)"
 (cd "$build" && ctest --output-on-failure -j "${CTEST_PARALLEL:-$(nproc)}" "$@")
+step_end

@@ -10,6 +10,7 @@
 # Idempotent: a second run reuses the environment and cargo's incremental build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/step.sh
 root=$PWD
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
 # the venv under the target directory, shared with scripts/test.sh (scripts/python-env.sh);
@@ -23,21 +24,22 @@ nbhd_python_env maturin numpy scipy pytest "dask.array=dask[array]" distributed
 # for python/'s whenever the root built last ("expected `DVec3`, found `glam::f64::dvec3::DVec3`").
 py_target="$CARGO_TARGET_DIR/python"
 
-echo "== python/: cargo fmt --check, clippy"
+step "python/: cargo fmt --check, clippy"
 cargo fmt --manifest-path python/Cargo.toml -- --check
 CARGO_TARGET_DIR="$py_target" cargo clippy --manifest-path python/Cargo.toml --all-targets -- -D warnings
 
-echo "== pip install the wheel built from the sdist (scripts/wheel-build.sh: maturin, release)"
+step "pip install the wheel built from the sdist (scripts/wheel-build.sh: maturin, release)" "the first time about 3 CPU-minutes (docs/setup-costs.md)"
 wheel=$(scripts/wheel-build.sh)
 python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps "$wheel"
 
-echo "== the command-line tool, for the comparisons with the Rust results"
+step "the command-line tool, for the comparisons with the Rust results"
 cargo build --quiet -p nbhd-cli
 export NBHD_CLI="$CARGO_TARGET_DIR/debug/nbhd" NBHD_REQUIRE_CLI=1
 
-echo "== pytest python/tests"
+step "pytest python/tests"
 # run from the repository root: python/ itself would shadow the installed package. The tests'
 # scratch files (the Dask tests' tiles: about 1 GB) live under the target directory, which
 # pytest empties at the start of each run, not in /tmp.
 python -m pytest -q -p no:cacheprovider --rootdir python --basetemp "$CARGO_TARGET_DIR/pytest" \
     python/tests
+step_end

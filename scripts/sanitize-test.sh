@@ -17,6 +17,7 @@
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$repo"
+. scripts/step.sh
 
 target_dir="${CARGO_TARGET_DIR:-$repo/target}"
 case "$target_dir" in /*) ;; *) target_dir="$repo/$target_dir" ;; esac
@@ -39,7 +40,7 @@ eigen=(-DEIGEN_MALLOC_ALREADY_ALIGNED=1 -DEIGEN_HAS_CXX17_OVERALIGN=0)
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
 export UBSAN_OPTIONS="halt_on_error=1:abort_on_error=1:print_stacktrace=1"
 
-echo "== installing nbhd into $prefix (no-op when current)"
+step "installing nbhd into $prefix (no-op when current)"
 scripts/install.sh "$prefix" >/dev/null
 
 # --- the headers' ctests ------------------------------------------------------------------------
@@ -52,7 +53,7 @@ scripts/install.sh "$prefix" >/dev/null
 programs=(test_pcl_safety test_nbhd_hpp test_pcl_backend smooth_mesh compare_neighbors)
 tests='^(pcl_safety|nbhd_hpp|pcl_backend_torus|pcl_backend_office1|smooth_mesh_fandisk|compare_bunny_(knn|radius|knn-radius))$'
 
-echo "== configuring cpp_examples with -fsanitize=address,undefined"
+step "configuring cpp_examples with -fsanitize=address,undefined"
 cmake -S cpp_examples -B "$build" \
     -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_C_FLAGS="${san[*]}" \
@@ -63,13 +64,13 @@ cmake -S cpp_examples -B "$build" \
     -DNBHD_CLI="$target_dir/release/nbhd" >"$build.configure.log" 2>&1 ||
     { cat "$build.configure.log"; exit 1; }
 jobs="$(nproc 2>/dev/null || echo 2)"
-echo "== building ${programs[*]}"
+step "building ${programs[*]}"
 cmake --build "$build" -j "$jobs" --target "${programs[@]}"
-echo "== ctest under the sanitizers"
+step "ctest under the sanitizers"
 (cd "$build" && ctest --output-on-failure -j "$jobs" -R "$tests" "$@")
 
 # --- the C ABI tests ------------------------------------------------------------------------------
-echo "== the C ABI tests (tests/c) under the sanitizers"
+step "the C ABI tests (tests/c) under the sanitizers"
 cdir="$build/c"
 mkdir -p "$cdir/scratch"
 for src in tests/c/*.c; do
@@ -88,4 +89,5 @@ for src in tests/c/*.c; do
         exit 1
     }
 done
+step_end
 echo "== sanitizers found nothing"

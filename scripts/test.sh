@@ -5,12 +5,13 @@
 # C++ tests again under AddressSanitizer + UndefinedBehaviorSanitizer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/step.sh
 
 # --- system packages --------------------------------------------------------------------
 apt_install() {
     local sudo=""
     [ "$(id -u)" -eq 0 ] || sudo="sudo"
-    echo "== installing Debian packages: $*"
+    step "installing $# Debian packages and what they need: $*"
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "$@" >/dev/null
 }
@@ -34,6 +35,7 @@ if [ "${#missing[@]}" -gt 0 ]; then apt_install "${missing[@]}"; fi
 
 # --- Python: laspy reads nbhd's LAS/LAZ files in tests/io_las.rs -------------------------
 # into the venv under target/ that scripts/python-test.sh uses too; NBHD_PYTHON names it
+step "the Python environment for laspy (target/pyenv)"
 . scripts/python-env.sh
 nbhd_python_env "laspy=laspy[lazrs]" lazrs
 export NBHD_REQUIRE_LASPY=1
@@ -44,32 +46,38 @@ export NBHD_REQUIRE_LASPY=1
 export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 export CARGO_PROFILE_DEV_DEBUG="${CARGO_PROFILE_DEV_DEBUG:-line-tables-only}"
 export CARGO_PROFILE_TEST_DEBUG="${CARGO_PROFILE_TEST_DEBUG:-line-tables-only}"
-echo "== cargo fmt --check"
+step "cargo fmt --check"
 cargo fmt --all -- --check
-echo "== cargo clippy"
+step "cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
-echo "== cargo test"
+step "cargo test"
 # valgrind was installed above: its memcheck runs of the C ABI tests must not be skipped.
 export NBHD_REQUIRE_VALGRIND=1
 export NBHD_REQUIRE_CLOUDCOMPARE=1  # installed above: its test must not be skipped
+# cli/tests/readme.rs runs the README's `cargo install --path cli --profile dist` (the dist
+# build of the tool that scripts/cpp-test.sh reuses below)
+export NBHD_TEST_INSTALL=1
 cargo test --workspace
 
 # --- the Python package (python/): built with maturin, installed by pip, tested by pytest ----
+step "the Python package (scripts/python-test.sh)"
 scripts/python-test.sh
 scripts/wheel-test.sh  # the sdist and abi3 wheel: auditwheel, a fresh venv without cargo, stubs
 
 # --- fuzzing: a few seconds of each reader of nbhd::io and of the C ABI (scripts/fuzz.sh) -----
-echo "== fuzzing the file readers and the C ABI (FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"
+step "fuzzing the file readers and the C ABI (scripts/fuzz.sh, FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"
 scripts/fuzz.sh
 
 # --- C++ examples under ctest ---------------------------------------------------------------
 if [ -f cpp_examples/CMakeLists.txt ]; then
-    echo "== C++ examples (ctest)"
+    step "the C and C++ examples (scripts/cpp-test.sh)"
     scripts/cpp-test.sh
     # The headers' ctests and the C ABI tests once more under AddressSanitizer +
     # UndefinedBehaviorSanitizer (the library cpp-test.sh installed; any report fails).
-    echo "== the C and C++ surfaces under the sanitizers"
+    step "the C and C++ surfaces under the sanitizers (scripts/sanitize-test.sh)"
     scripts/sanitize-test.sh
 fi
+step "the MeshLab plugin (scripts/meshlab-test.sh)"
 scripts/meshlab-test.sh  # the MeshLab plugin in Debian's meshlabserver (installs what it needs)
+step_end
 echo "== all tests passed"

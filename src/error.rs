@@ -403,11 +403,16 @@ impl fmt::Display for NbhdError {
                 if *relative {
                     write!(
                         f,
-                        "; epsilon was taken relative to h (epsilon_units RELATIVE): for a \
-                         length in the points' units set epsilon_units to ABSOLUTE"
+                        "; epsilon was taken relative to h (units \"relative\", C: \
+                         NBHD_UNITS_RELATIVE): for a length in the points' units set its units \
+                         to \"absolute\" (C: NBHD_UNITS_ABSOLUTE)"
                     )
                 } else {
-                    write!(f, "; epsilon was taken in the points' units (ABSOLUTE)")
+                    write!(
+                        f,
+                        "; epsilon was taken in the points' units (units \"absolute\", C: \
+                         NBHD_UNITS_ABSOLUTE)"
+                    )
                 }
             }
             SavedTree(e) => e.fmt(f),

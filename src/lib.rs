@@ -46,3 +46,14 @@ pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::{NeighborTable, TableOptions};
 pub use tree::{BuildOptions, IndexRows, KdTree, MedianAlgorithm, PivotPolicy, Spacing, TreeStats};
+
+/// The Rust code blocks of README.md and docs/features.md, compiled and run as doctests (`cargo
+/// test --doc`), so that what the documents show keeps to the API as it is. Built for doctests
+/// only.
+#[cfg(doctest)]
+pub mod doc_examples {
+    #[doc = include_str!("../README.md")]
+    pub struct Readme;
+    #[doc = include_str!("../docs/features.md")]
+    pub struct Features;
+}

@@ -145,8 +145,10 @@ def test_geometry_errors():
     from conftest import sphere
 
     p = sphere(500)
-    with pytest.raises(nbhd.DegenerateError, match="ε|epsilon|spacing"):
+    with pytest.raises(nbhd.DegenerateError, match="ε|epsilon|spacing") as err:
         nbhd.normals(p, epsilon=0.01)  # 0.01 h: no neighbour
+    # the hint names the value as Python spells it: epsilon_units="absolute"
+    assert '"absolute"' in str(err.value), str(err.value)
     with pytest.raises(nbhd.NbhdValueError, match="dimension"):
         nbhd.normals(p[:, :2])
     with pytest.raises(nbhd.NbhdValueError, match="k must be at least 1"):

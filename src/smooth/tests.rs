@@ -735,7 +735,9 @@ fn a_relative_epsilon_meant_as_absolute_is_refused_with_its_value() {
     let text = e.to_string();
     assert!(text.contains("epsilon resolved to"), "{text}");
     assert!(text.contains("in the points' units"), "{text}");
-    assert!(text.contains("ABSOLUTE"), "{text}");
+    // the value as Python spells it (epsilon_units="absolute") and as C names it
+    assert!(text.contains("\"absolute\""), "{text}");
+    assert!(text.contains("NBHD_UNITS_ABSOLUTE"), "{text}");
     // the same number in the points' units works
     let abs = SmoothOptions {
         epsilon: Length::Absolute(0.3),
