@@ -62,7 +62,8 @@ cargo test --workspace
 # --- the Python package (python/): built with maturin, installed by pip, tested by pytest ----
 step "the Python package (scripts/python-test.sh)"
 scripts/python-test.sh
-scripts/wheel-test.sh  # the sdist and abi3 wheel: auditwheel, a fresh venv without cargo, stubs
+step "the wheel: auditwheel, a fresh venv without cargo, stubs (scripts/wheel-test.sh)"
+scripts/wheel-test.sh
 
 # --- fuzzing: a few seconds of each reader of nbhd::io and of the C ABI (scripts/fuzz.sh) -----
 step "fuzzing the file readers and the C ABI (scripts/fuzz.sh, FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"
