@@ -18,6 +18,8 @@ const LAYERS: &[&[&str]] = &[
     // queries and their baselines (brute force, PCA sweep), then tables of their answers
     &["query"],
     &["table"],
+    // the neighbour index: every query once, over what each flavour provides (Chapter 5)
+    &["index"],
     // the k-d tree (Chapters 3, 5, 6)
     &["tree"],
     // normals, curvatures (Chapter 2); files; the dynamic forest of trees; point filters (outlier removal)

@@ -3,7 +3,9 @@
 //! library's saved format.
 
 use nbhd::dynamic::{DynamicKdTree, SavedDynamicInfo};
-use nbhd::{BuildOptions, NbhdError, NeighborSearch, Query, ScalarType, TableOptions};
+use nbhd::{
+    BuildOptions, NbhdError, NeighborIndex, NeighborSearch, Query, ScalarType, TableOptions,
+};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyType};

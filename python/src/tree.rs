@@ -3,8 +3,8 @@
 
 use nbhd::tree::SavedTreeInfo;
 use nbhd::{
-    BuildOptions, KdTree, NbhdError, Neighbor, NeighborSearch, NeighborTable, Neighborhood, Query,
-    Scalar, ScalarType, TableOptions,
+    BuildOptions, KdTree, NbhdError, Neighbor, NeighborIndex, NeighborSearch, NeighborTable,
+    Neighborhood, Query, Scalar, ScalarType, TableOptions,
 };
 use numpy::{Element, PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;

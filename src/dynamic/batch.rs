@@ -24,6 +24,7 @@ use std::fmt;
 
 use super::{bit, DynamicKdTree, Part};
 use crate::error::Result;
+use crate::index::answer;
 use crate::query::result_set::{Key32, ResultSet, RowEntry, SortedRow, WithinRadius};
 use crate::query::{order, Neighbor, NeighborHeap, NeighborSearch, Neighborhood};
 use crate::scalar::{Scalar, ScalarType};
@@ -402,8 +403,7 @@ impl<T: Scalar, const D: usize> Group<'_, T, D> {
         if m == 1 {
             let at = members[0] as usize * D;
             let mut row = Vec::new();
-            self.forest
-                .search_resolved(&queries[at..at + D], None, self.nbhd, &mut row);
+            answer(self.forest, &queries[at..at + D], None, self.nbhd, &mut row);
             write_row(row.len(), row.iter().map(|nb| nb.key()), out);
             return;
         }

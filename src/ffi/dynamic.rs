@@ -13,6 +13,7 @@ use super::types::{
     read_build_options, read_table_options, NbhdArg, PointsArg,
 };
 use crate::dynamic::DynamicKdTree;
+use crate::index::NeighborIndex;
 use crate::scalar::ScalarType;
 
 /// A k-d tree that accepts insertions and removals (opaque); see nbhd_dynamic_create.

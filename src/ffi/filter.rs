@@ -10,6 +10,7 @@ use crate::filter::{
     radius_outlier_removal, statistical_outlier_removal, voxel_grid, RadiusOutlierOptions,
     StatisticalOutlierOptions, VoxelGridOptions,
 };
+use crate::index::NeighborIndex;
 use crate::scalar::ScalarType;
 
 /// The nearest-neighbour spacing of a point set: the distance of each point to its nearest

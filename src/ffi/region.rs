@@ -8,6 +8,7 @@ use super::args::{check_aligned, check_optional, check_ptr, deref, init_out};
 use super::status::{guard, nbhd_status, FfiError};
 use super::tree::{nbhd_tree, with_tree};
 use crate::error::NbhdError;
+use crate::index::NeighborIndex;
 use crate::tree::KdTree;
 use crate::Scalar;
 

@@ -9,6 +9,7 @@ use super::tree::{nbhd_tree, with_tree};
 use super::types::{
     nbhd_neighborhood_spec, nbhd_points, nbhd_table_options, read_table_options, NbhdArg, PointsArg,
 };
+use crate::index::NeighborIndex;
 use crate::table::{NeighborTable, TableOptions};
 
 /// A table of neighbourhoods (opaque): row i holds the neighbours of point i (or of query i),

@@ -1,10 +1,10 @@
 //! Statistical and radius outlier removal.
 
 use crate::error::{NbhdError, Result};
-use crate::query::{NeighborSearch, Neighborhood};
+use crate::index::NeighborIndex;
+use crate::query::Neighborhood;
 use crate::scalar::Scalar;
 use crate::table::TableOptions;
-use crate::tree::KdTree;
 
 /// The points a filter keeps.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -59,8 +59,8 @@ impl Default for StatisticalOutlierOptions {
 ///
 /// Errors: `k` = 0 ([`NbhdError::ZeroK`]); `k` not below the number of points, or a
 /// non-finite `std_ratio`, or too many threads ([`NbhdError::InvalidOption`]).
-pub fn statistical_outlier_removal<T: Scalar>(
-    tree: &KdTree<T>,
+pub fn statistical_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
     options: &StatisticalOutlierOptions,
 ) -> Result<Kept> {
     let k = options.k;
@@ -73,16 +73,16 @@ pub fn statistical_outlier_removal<T: Scalar>(
             reason: format!("{} is not finite", options.std_ratio),
         });
     }
-    if k >= tree.len() {
+    if k >= index.len() {
         return Err(NbhdError::InvalidOption {
             name: "k",
             reason: format!(
                 "{k} nearest other points need more than {k} points; the tree holds {}",
-                tree.len()
+                index.len()
             ),
         });
     }
-    let table = tree.neighborhoods(
+    let table = index.neighborhoods(
         Neighborhood::Knn { k },
         &TableOptions {
             exclude_self: true,
@@ -117,7 +117,7 @@ pub fn statistical_outlier_removal<T: Scalar>(
             .filter(|&&(_, x)| x <= threshold)
             .map(|&(i, _)| i)
             .collect(),
-        source_len: tree.source_len(),
+        source_len: index.source_len(),
     })
 }
 
@@ -140,8 +140,8 @@ pub struct RadiusOutlierOptions {
 ///
 /// Errors: a negative, NaN or infinite radius ([`NbhdError::InvalidRadius`]), one too large
 /// for the tree's type ([`NbhdError::RadiusOutOfRange`]), too many threads.
-pub fn radius_outlier_removal<T: Scalar>(
-    tree: &KdTree<T>,
+pub fn radius_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
     options: &RadiusOutlierOptions,
 ) -> Result<Kept> {
     let r = options.radius;
@@ -153,19 +153,16 @@ pub fn radius_outlier_removal<T: Scalar>(
         return Err(crate::query::radius_out_of_range::<T>(r));
     }
     let m = options.min_neighbors;
-    let positions = tree.tree_order();
     if m == 0 {
         crate::parallel::check_threads(options.threads)?;
-        let mut all = positions.to_vec();
-        all.sort_unstable();
         return Ok(Kept {
-            indices: all,
-            source_len: tree.source_len(),
+            indices: index.indices(),
+            source_len: index.source_len(),
         });
     }
     let nbhd = Neighborhood::KnnRadius { k: m, radius };
     nbhd.validate()?;
-    let table = tree.neighborhoods(
+    let table = index.neighborhoods(
         nbhd,
         &TableOptions {
             exclude_self: true,
@@ -177,6 +174,6 @@ pub fn radius_outlier_removal<T: Scalar>(
             .filter(|&i| table.indices_of(i).len() >= m)
             .map(|i| i as u32)
             .collect(),
-        source_len: tree.source_len(),
+        source_len: index.source_len(),
     })
 }

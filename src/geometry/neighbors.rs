@@ -3,6 +3,7 @@
 //! parallel all-point table.
 
 use crate::error::{NbhdError, Result};
+use crate::index::NeighborIndex;
 use crate::query::Neighborhood;
 use crate::table::{NeighborTable, TableOptions};
 use crate::{BuildOptions, KdTree, PointsView};
@@ -48,7 +49,7 @@ pub(crate) fn neighbor_table_and_order(
 }
 
 /// Mean distance of a point to its nearest other point — the spacing `h` that relative
-/// parameters and the quality metrics are measured in ([`crate::tree::Spacing`], its one
+/// parameters and the quality metrics are measured in ([`crate::index::Spacing`], its one
 /// definition). Summed in index order, so the value does not depend on the number of threads.
 /// Needs at least two points ([`NbhdError::InvalidOption`] otherwise).
 pub fn mean_spacing(points: &[DVec3]) -> Result<f64> {
@@ -69,10 +70,10 @@ pub fn mean_spacing_of(table: &NeighborTable<f64>) -> f64 {
 }
 
 /// [`mean_spacing_of`] from each point's squared distance to its nearest other point, in index
-/// order (`None` for a point without neighbours): [`crate::tree::Spacing::mean`], without its
+/// order (`None` for a point without neighbours): [`crate::index::Spacing::mean`], without its
 /// median.
 pub(crate) fn mean_spacing_of_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> f64 {
-    crate::tree::mean_distance(nearest_sq_dist.flatten().map(f64::sqrt))
+    crate::index::mean_distance(nearest_sq_dist.flatten().map(f64::sqrt))
 }
 
 #[cfg(test)]

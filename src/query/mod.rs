@@ -15,7 +15,8 @@ mod heap;
 pub(crate) mod order;
 pub mod pca_sweep;
 pub(crate) mod region;
-pub(crate) mod result_set;
+#[doc(hidden)]
+pub mod result_set;
 
 use crate::error::{NbhdError, Result};
 use crate::scalar::Scalar;

@@ -21,6 +21,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::OnceLock;
 
 use crate::error::{NbhdError, Result};
+use crate::index::NeighborIndex;
 use crate::prefetch::prefetch_at;
 use crate::query::{Neighbor, Neighborhood, Query};
 use crate::scatter::{inverse, BlockScatter, Targets};

@@ -344,7 +344,7 @@ fn normals_in_tree_order(
     })?;
     let order = &searched.order;
     // the mean nearest-neighbour spacing, summed in caller order as on the table path
-    let h = crate::tree::mean_distance(nearest.into_iter().flatten());
+    let h = crate::index::mean_distance(nearest.into_iter().flatten());
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);

@@ -7,6 +7,7 @@
 //! `(sq_dist, index)`), so the smoothing's result does not depend on the source.
 
 use crate::error::{NbhdError, Result};
+use crate::index::NeighborIndex;
 use crate::query::Neighborhood;
 use crate::table::{neighborhoods_of_all, NeighborTable};
 use crate::{BruteForce, KdTree, NeighborSearch, NonFinitePolicy, PcaSweep, PointsView};

@@ -64,9 +64,9 @@ impl<T: Scalar> KdTree<T> {
     ///
     /// Queries by stored point ([`crate::query::Query::Stored`]) take the caller's index; an
     /// index of `view` that is not listed answers [`NbhdError::SkippedPoint`], as a skipped
-    /// non-finite point does. All-point tables ([`Self::neighborhoods`]) have a row for every
-    /// point of `view` (row `i` for caller index `i`): the listed points' rows are their
-    /// neighbourhoods among the listed points, the other rows are empty.
+    /// non-finite point does. All-point tables ([`crate::NeighborIndex::neighborhoods`]) have
+    /// a row for every point of `view` (row `i` for caller index `i`): the listed points' rows
+    /// are their neighbourhoods among the listed points, the other rows are empty.
     ///
     /// Errors: as [`Self::build`] (non-finite points among the listed ones are rejected or
     /// skipped as `options.non_finite` says; [`NbhdError::EmptyInput`] if `indices` is empty or

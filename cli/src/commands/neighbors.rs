@@ -16,6 +16,7 @@ use crate::progress::Progress;
 use crate::read;
 use nbhd::io::PointCloud;
 use nbhd::smooth::Length;
+use nbhd::NeighborIndex;
 use nbhd::{
     BuildOptions, KdTree, NeighborSearch, NeighborTable, Neighborhood, TableOptions, TreeStats,
 };

@@ -1,9 +1,9 @@
 //! The spacing `h` of a point set: the distance of each point to its nearest other point,
 //! summarised by its mean and median. Every length given "relative" (ε = 6h, the robust
 //! smoothing's lengths, the CLI's `6h`) is a multiple of the mean; this file is its one
-//! definition.
+//! definition, for every index ([`NeighborIndex::spacing`]).
 
-use super::KdTree;
+use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
 use crate::query::Neighborhood;
 use crate::scalar::Scalar;
@@ -68,37 +68,37 @@ pub(crate) fn mean_distance(distances: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
-impl<T: Scalar> KdTree<T> {
-    /// The nearest-neighbour spacing of the tree's points ([`Spacing`]), from an all-point
-    /// 1-nearest table computed on `threads` workers (0: the current pool); the same value for
-    /// any thread count. Needs at least two points ([`NbhdError::InvalidOption`] otherwise).
-    pub fn spacing(&self, threads: usize) -> Result<Spacing> {
-        if self.len() < 2 {
-            return Err(NbhdError::InvalidOption {
-                name: "points",
-                reason: format!(
-                    "the spacing needs at least two (finite) points, the tree holds {}",
-                    self.len()
-                ),
-            });
-        }
-        let table = self.neighborhoods(
-            Neighborhood::Knn { k: 1 },
-            &TableOptions {
-                exclude_self: true,
-                threads,
-            },
-        )?;
-        Ok(Spacing::from_nearest(
-            (0..table.len()).map(|i| table.sq_dists_of(i).first().map(|d| d.to_f64())),
-        ))
+/// [`NeighborIndex::spacing`].
+pub(super) fn spacing<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    threads: usize,
+) -> Result<Spacing> {
+    if index.len() < 2 {
+        return Err(NbhdError::InvalidOption {
+            name: "points",
+            reason: format!(
+                "the spacing needs at least two (finite) points, the tree holds {}",
+                index.len()
+            ),
+        });
     }
+    let table = index.neighborhoods(
+        Neighborhood::Knn { k: 1 },
+        &TableOptions {
+            exclude_self: true,
+            threads,
+        },
+    )?;
+    Ok(Spacing::from_nearest(
+        (0..table.len()).map(|i| table.sq_dists_of(i).first().map(|d| d.to_f64())),
+    ))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{BuildOptions, PointsView};
+    use crate::tree::{BuildOptions, KdTree};
+    use crate::PointsView;
 
     #[test]
     fn mean_and_median_of_known_gaps() {
