@@ -46,6 +46,7 @@ mod batch;
 mod persist;
 mod search;
 
+use std::any::Any;
 use std::sync::{Arc, OnceLock};
 
 use crate::cloud::NonFinitePolicy;
@@ -78,8 +79,9 @@ struct Part<T> {
     bbox_lo: Vec<T>,
     /// Largest coordinates of the tree's points.
     bbox_hi: Vec<T>,
-    /// The tree prepared for the grouped batch search (`batch.rs`), made on first use.
-    cells: Arc<OnceLock<batch::Cells<T>>>,
+    /// The tree prepared for the grouped batch search (`batch.rs`, its cells of the forest's
+    /// dimension), made on first use.
+    cells: Arc<OnceLock<Box<dyn Any + Send + Sync>>>,
 }
 
 impl<T: Scalar> Part<T> {
@@ -96,11 +98,6 @@ impl<T: Scalar> Part<T> {
             bbox_hi,
             cells: Arc::default(),
         }
-    }
-
-    /// The tree prepared for the grouped batch search.
-    fn cells(&self) -> &batch::Cells<T> {
-        self.cells.get_or_init(|| batch::Cells::new(self))
     }
 }
 
