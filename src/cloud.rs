@@ -15,6 +15,19 @@ pub enum NonFinitePolicy {
     Skip,
 }
 
+impl NonFinitePolicy {
+    /// Both policies.
+    pub const ALL: [NonFinitePolicy; 2] = [NonFinitePolicy::Reject, NonFinitePolicy::Skip];
+
+    /// The policy's name, the one spelling of the command line and Python: `reject`, `skip`.
+    pub fn name(self) -> &'static str {
+        match self {
+            NonFinitePolicy::Reject => "reject",
+            NonFinitePolicy::Skip => "skip",
+        }
+    }
+}
+
 /// Packed coordinates plus the caller's index of every point.
 #[derive(Clone, Debug)]
 pub struct Cloud<T> {

@@ -17,6 +17,7 @@ pub mod error;
 pub mod ffi;
 pub mod filter;
 pub mod geometry;
+pub mod handle;
 pub mod index;
 #[cfg(feature = "io")]
 pub mod io;
@@ -43,7 +44,7 @@ pub use parallel::MAX_THREADS;
 pub use points::{PointsView, MAX_POINTS};
 pub use query::brute::BruteForce;
 pub use query::pca_sweep::PcaSweep;
-pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
+pub use query::{Neighbor, NeighborSearch, Neighborhood, NeighborhoodSpec, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::{NeighborTable, TableOptions};
 pub use tree::{BuildOptions, KdTree, MedianAlgorithm, PivotPolicy, TreeStats};
