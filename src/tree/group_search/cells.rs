@@ -58,10 +58,15 @@ pub(crate) struct Cells<T, const D: usize> {
 
 impl<T: Scalar, const D: usize> Cells<T, D> {
     /// The cells of `tree`, its caller indices shifted by `shift` (the first index of a tree of
-    /// a forest; 0 for a tree on its own). The leaves' boxes are made from their points in
-    /// parallel (they read every point), then the internal nodes' bottom-up over the preorder
-    /// node array (children follow their parent).
+    /// a forest; 0 for a tree on its own).
     pub(crate) fn new(tree: &TreeView<'_, T>, shift: u32) -> Self {
+        Self::boxes_of(tree, shift).with_coords(tree)
+    }
+
+    /// The nodes' tight boxes (and the shifted indices), without the coordinates yet: the
+    /// leaves' boxes are made from their points in parallel (they read every point), then the
+    /// internal nodes' bottom-up over the preorder node array (children follow their parent).
+    pub(crate) fn boxes_of(tree: &TreeView<'_, T>, shift: u32) -> Boxes<T, D> {
         let n = tree.nodes.len();
         let neg_inf = T::ZERO - T::INFINITY;
         let mut lo = vec![[T::INFINITY; D]; n];
@@ -95,12 +100,7 @@ impl<T: Scalar, const D: usize> Cells<T, D> {
             let min_id = tree.min_id.iter().map(|&i| i + shift).collect();
             (ids, min_id)
         });
-        Self {
-            lo,
-            hi,
-            soa: Soa::new(tree.coords),
-            shifted,
-        }
+        Boxes { lo, hi, shifted }
     }
 
     /// The cells as plain slices, with `tree` (the tree they were made of); `not_live` marks
@@ -123,6 +123,25 @@ impl<T: Scalar, const D: usize> Cells<T, D> {
             ids,
             soa: &self.soa,
             not_live,
+        }
+    }
+}
+
+/// The first part of a tree's [`Cells`]: the nodes' boxes and shifted indices.
+pub(crate) struct Boxes<T, const D: usize> {
+    lo: Vec<[T; D]>,
+    hi: Vec<[T; D]>,
+    shifted: Option<(Vec<u32>, Vec<u32>)>,
+}
+
+impl<T: Scalar, const D: usize> Boxes<T, D> {
+    /// The cells, with the coordinates of `tree` (the tree the boxes were made of) by dimension.
+    pub(crate) fn with_coords(self, tree: &TreeView<'_, T>) -> Cells<T, D> {
+        Cells {
+            lo: self.lo,
+            hi: self.hi,
+            soa: Soa::new(tree.coords),
+            shifted: self.shifted,
         }
     }
 }
