@@ -33,7 +33,7 @@ use crate::points::PointsView;
 use crate::query::{NeighborSearch, NeighborhoodSpec};
 use crate::scalar::ScalarType;
 use crate::table::{NeighborTable, TableOptions};
-use crate::tree::{BuildOptions, KdTree, SavedTreeInfo, TreeStats};
+use crate::tree::{BuildOptions, KdTree, Persist, SavedTreeInfo, TreeStats};
 
 /// A neighbour index whose flavour and scalar type are chosen at run time.
 #[derive(Debug)]

@@ -47,4 +47,4 @@ pub use query::pca_sweep::PcaSweep;
 pub use query::{Neighbor, NeighborSearch, Neighborhood, NeighborhoodSpec, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::{NeighborTable, TableOptions};
-pub use tree::{BuildOptions, KdTree, MedianAlgorithm, PivotPolicy, TreeStats};
+pub use tree::{BuildOptions, KdTree, MedianAlgorithm, Persist, PivotPolicy, TreeStats};

@@ -22,6 +22,7 @@ mod blocks;
 mod boxes;
 mod build;
 mod construct;
+mod envelope;
 pub(crate) mod group_search;
 mod kernel;
 mod layout;
@@ -29,7 +30,7 @@ mod neighborhoods;
 mod node;
 pub mod options;
 mod part;
-pub(crate) mod persist;
+mod persist;
 mod presorted;
 mod search;
 mod split;
@@ -45,9 +46,16 @@ use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
 use crate::table::NeighborTable;
 pub(crate) use blocks::Blocks;
+pub(crate) use envelope::{
+    check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size, u32_at,
+    u64_at, write_saved, written_by, Kind, DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
+};
+pub use envelope::{LoadOptions, Persist, FORMAT_VERSION, HEADER_LEN, MAGIC};
+#[doc(hidden)]
+pub use envelope::{SavedFormat, SavedHeader};
 use node::{Descent, Node};
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
-pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
+pub use persist::SavedTreeInfo;
 use search::TreeView;
 
 /// Shape and memory of a built tree.
