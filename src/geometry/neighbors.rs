@@ -93,3 +93,38 @@ mod tests {
         );
     }
 }
+
+/// Rows of `knn` cut to the points within `eps` (the ε-k-neighbourhood, Section 2.1.1: the
+/// k nearest among those within ε are the within-ε prefix of the k nearest).
+pub(crate) fn within(knn: &NeighborTable<f64>, eps: f64) -> NeighborTable<f64> {
+    let e2 = eps * eps;
+    let mut offsets = Vec::with_capacity(knn.len() + 1);
+    offsets.push(0);
+    let (mut idx, mut d2) = (
+        Vec::with_capacity(knn.total()),
+        Vec::with_capacity(knn.total()),
+    );
+    for i in 0..knn.len() {
+        for (&j, &d) in knn.indices_of(i).iter().zip(knn.sq_dists_of(i)) {
+            if d <= e2 {
+                idx.push(j);
+                d2.push(d);
+            }
+        }
+        offsets.push(idx.len());
+    }
+    NeighborTable::from_parts(offsets, idx, d2).unwrap_or_default()
+}
+
+/// [`within`] taking the table: rows are sorted by distance, so when every row's farthest
+/// neighbour is within ε (the usual case for the defaults) the table is returned as it is,
+/// without a copy.
+pub(crate) fn cut_to(knn: NeighborTable<f64>, eps: f64) -> NeighborTable<f64> {
+    let e2 = eps * eps;
+    let inside = |i: usize| knn.sq_dists_of(i).last().is_none_or(|&d| d <= e2);
+    if (0..knn.len()).all(inside) {
+        knn
+    } else {
+        within(&knn, eps)
+    }
+}

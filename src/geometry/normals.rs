@@ -256,6 +256,16 @@ pub(crate) fn check_table(points: &[DVec3], table: &NeighborTable<f64>) -> Resul
     Ok(())
 }
 
+/// `λ0/(λ0 + λ1 + λ2)` of ascending eigenvalues, 0 when they all vanish.
+pub(crate) fn quotient_of(values: DVec3) -> f64 {
+    let s = values.x + values.y + values.z;
+    if s > 0.0 {
+        values.x / s
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -33,8 +33,8 @@ mod tables;
 
 pub use in_box::IndexRows;
 pub(crate) use search::{answer, search};
-pub(crate) use spacing::mean_distance;
-pub use spacing::Spacing;
+pub(crate) use spacing::{check_spacing, mean_distance};
+pub use spacing::{Length, Spacing};
 
 use crate::error::Result;
 use crate::points::PointsView;

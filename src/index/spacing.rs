@@ -1,7 +1,8 @@
 //! The spacing `h` of a point set: the distance of each point to its nearest other point,
 //! summarised by its mean and median. Every length given "relative" (ε = 6h, the robust
 //! smoothing's lengths, the CLI's `6h`) is a multiple of the mean; this file is its one
-//! definition, for every index ([`NeighborIndex::spacing`]).
+//! definition, for every index ([`NeighborIndex::spacing`]), with the lengths given in it
+//! ([`Length`]).
 
 use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
@@ -66,6 +67,38 @@ pub(crate) fn mean_distance(distances: impl Iterator<Item = f64>) -> f64 {
     } else {
         sum / n as f64
     }
+}
+
+/// A length, absolute or in units of the input's mean spacing `h`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Length {
+    /// In the points' own units.
+    Absolute(f64),
+    /// Multiples of `h`.
+    Relative(f64),
+}
+
+impl Length {
+    /// The absolute value for spacing `h`.
+    pub fn resolve(self, h: f64) -> f64 {
+        match self {
+            Length::Absolute(v) => v,
+            Length::Relative(v) => v * h,
+        }
+    }
+}
+
+/// Refuses relative parameters (`relative`) when the mean spacing `h` cannot scale them
+/// (not > 0 or not finite: fewer than two distinct points).
+pub(crate) fn check_spacing(h: f64, relative: bool) -> Result<()> {
+    if relative && !(h > 0.0 && h.is_finite()) {
+        return Err(NbhdError::InvalidOption {
+            name: "epsilon",
+            reason: "relative parameters need a mean spacing > 0 (at least two distinct points)"
+                .into(),
+        });
+    }
+    Ok(())
 }
 
 /// [`NeighborIndex::spacing`].

@@ -15,6 +15,8 @@
 //!   tree's own points and for a forest of trees (`src/dynamic/`); `neighborhoods.rs` runs it
 //!   as the fast path of the tree's tables, `blocks.rs` a block of tree positions at a time;
 //! - `boxes.rs`: the descent of a box query (Algorithms 2 and 3);
+//! - `exact_knn.rs`: the fast exact k-nearest table of 3-D `f64` points, searched in `f32`
+//!   and proven exact in `f64` ([`exact_knn_table`]);
 //! - `part.rs`: what a forest reads of one of its trees;
 //! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
 
@@ -23,6 +25,7 @@ mod boxes;
 mod build;
 mod construct;
 mod envelope;
+pub(crate) mod exact_knn;
 pub(crate) mod group_search;
 mod kernel;
 mod layout;
@@ -53,6 +56,7 @@ pub(crate) use envelope::{
 pub use envelope::{LoadOptions, Persist, FORMAT_VERSION, HEADER_LEN, MAGIC};
 #[doc(hidden)]
 pub use envelope::{SavedFormat, SavedHeader};
+pub use exact_knn::exact_knn_table;
 use node::{Descent, Node};
 pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
 pub use persist::SavedTreeInfo;

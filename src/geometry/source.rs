@@ -60,7 +60,7 @@ pub(crate) fn knn_rows(
             if points.is_empty() {
                 return Err(NbhdError::EmptyInput);
             }
-            super::nearest::nearest_table(points, k)
+            crate::tree::exact_knn::nearest_table(points, k)
         }
         Neighbors::Search(method) => {
             let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
