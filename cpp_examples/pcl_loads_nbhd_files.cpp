@@ -23,6 +23,7 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -75,7 +76,9 @@ Table read_table(const fs::path& p) {
     std::ifstream in(p);
     std::string line;
     std::getline(in, line);
-    std::istringstream h(line.substr(1));
+    // nbhd's header line: `//x y z ...` (CloudCompare's form; `# x y z ...` before)
+    const std::size_t names_at = std::min(line.find_first_not_of("/#"), line.size());
+    std::istringstream h(line.substr(names_at));
     for (std::string n; h >> n;) t.names.push_back(n);
     while (std::getline(in, line)) {
         if (line.empty()) continue;
@@ -144,6 +147,17 @@ void check_normals(const fs::path& p, const Table& ref) {
                 const auto& q = c[i];
                 return k < 3 ? q.data[k] : k < 6 ? q.normal[k - 3] : q.curvature;
             });
+}
+
+// The sensor pose PCL reads from the file's VIEWPOINT: at the origin, turned by `q`.
+void check_viewpoint(const fs::path& p, const Eigen::Quaternionf& q) {
+    pcl::PointCloud<pcl::PointXYZ> c;
+    if (pcl::io::loadPCDFile(p.string(), c) != 0) return fail(p.string() + ": PCL could not load it");
+    const auto& o = c.sensor_orientation_;
+    if (c.sensor_origin_.head<3>().norm() != 0 || o.w() != q.w() || o.x() != q.x() ||
+        o.y() != q.y() || o.z() != q.z())
+        return fail(p.string() + ": PCL read another VIEWPOINT than the input's");
+    std::cout << "ok   " << p.filename().string() << ": VIEWPOINT as the input's\n";
 }
 
 void check_colour(const fs::path& p, const Table& ref) {
@@ -219,6 +233,9 @@ int main(int argc, char** argv) {
     for (auto f : {"office.pcd", "office_ascii.pcd", "office_comp.pcd", "office.ply",
                    "office_ascii.ply"})
         check_colour(work / f, office_ref);
+    // office1.pcd's VIEWPOINT 0 0 0 0 1 0 0 (a half turn about x) comes back in nbhd's PCD.
+    for (auto f : {"office.pcd", "office_ascii.pcd", "office_comp.pcd"})
+        check_viewpoint(work / f, Eigen::Quaternionf(0, 1, 0, 0));
 
     // binary_compressed against PCL's writer on the same clouds.
     compare_compressed_size(work / "office_comp.pcd", work / "office_comp_by_pcl.pcd");

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds and tests the Python package `nbhd` (python/): a virtual environment under the cargo
-# target directory (created once), maturin, numpy, scipy and pytest installed into it only when
-# missing, the binding crate formatted and linted (it is a workspace of its own, see
-# python/Cargo.toml), the package built in release mode and installed with pip exactly as a user
+# target directory (created once, scripts/python-env.sh), maturin, numpy, scipy and pytest
+# installed into it only when missing, the binding crate formatted and linted (a workspace of
+# its own, see python/Cargo.toml), the package built in release mode and installed with pip exactly as a user
 # does (`pip install .` at the repository root: pyproject.toml builds python/), then the pytest
 # suite (with nbhd.dask's tests on a LocalCluster) — with the command-line tool built, so
 # that the geometry is compared with the Rust results the CLI writes.
@@ -12,30 +12,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
-venv="$CARGO_TARGET_DIR/pyenv"
-
-if [ ! -x "$venv/bin/python" ]; then
-    echo "== creating the Python environment $venv"
-    if ! python3 -m venv "$venv" 2>/dev/null; then
-        # Debian splits venv (ensurepip) out of python3
-        sudo=""
-        [ "$(id -u)" -eq 0 ] || sudo="sudo"
-        $sudo apt-get update -qq
-        DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends python3-venv >/dev/null
-        rm -rf "$venv"
-        python3 -m venv "$venv"
-    fi
-fi
-export PATH="$venv/bin:$PATH"
-missing=()
+# the venv under the target directory, shared with scripts/test.sh (scripts/python-env.sh);
 # import name=pip requirement (dask and distributed: the tests of nbhd.dask on a LocalCluster)
-for pkg in maturin numpy scipy pytest "dask.array=dask[array]" distributed; do
-    python -c "import ${pkg%%=*}" >/dev/null 2>&1 || missing+=("${pkg#*=}")
-done
-if [ "${#missing[@]}" -gt 0 ]; then
-    echo "== installing into $venv: ${missing[*]} (pip)"
-    python -m pip install --quiet --disable-pip-version-check "${missing[@]}"
-fi
+. scripts/python-env.sh
+nbhd_python_env maturin numpy scipy pytest "dask.array=dask[array]" distributed
 
 # python/ is a Cargo workspace of its own, built in a target directory of its own: nbhd is also a
 # cdylib, so its release rlib's file name carries no hash (target/release/deps/libnbhd.rlib), and

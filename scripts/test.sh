@@ -16,6 +16,11 @@ apt_install() {
 missing=()
 command -v cc >/dev/null 2>&1 || missing+=(gcc libc6-dev)
 command -v valgrind >/dev/null 2>&1 || missing+=(valgrind)
+command -v python3 >/dev/null 2>&1 || missing+=(python3)
+python3 -c 'import ensurepip' >/dev/null 2>&1 || missing+=(python3-venv)  # Debian's venv
+# cli/tests/cloudcompare.rs: Debian's CloudCompare opens nbhd's files on its command line (Xvfb)
+command -v CloudCompare >/dev/null 2>&1 || missing+=(cloudcompare)
+command -v xvfb-run >/dev/null 2>&1 || missing+=(xvfb)
 if [ -f cpp_examples/CMakeLists.txt ]; then
     command -v cmake >/dev/null 2>&1 || missing+=(cmake)
     command -v c++ >/dev/null 2>&1 || missing+=(g++)
@@ -27,10 +32,9 @@ fi
 if [ "${#missing[@]}" -gt 0 ]; then apt_install "${missing[@]}"; fi
 
 # --- Python: laspy reads nbhd's LAS/LAZ files in tests/io_las.rs -------------------------
-if ! python3 -c "import laspy, lazrs" >/dev/null 2>&1; then
-    echo "== installing laspy with lazrs (pip)"
-    python3 -m pip install --quiet 'laspy[lazrs]'
-fi
+# into the venv under target/ that scripts/python-test.sh uses too; NBHD_PYTHON names it
+. scripts/python-env.sh
+nbhd_python_env "laspy=laspy[lazrs]" lazrs
 export NBHD_REQUIRE_LASPY=1
 
 # --- Rust ---------------------------------------------------------------------------------
@@ -46,6 +50,7 @@ cargo clippy --workspace --all-targets -- -D warnings
 echo "== cargo test"
 # valgrind was installed above: its memcheck runs of the C ABI tests must not be skipped.
 export NBHD_REQUIRE_VALGRIND=1
+export NBHD_REQUIRE_CLOUDCOMPARE=1  # installed above: its test must not be skipped
 cargo test --workspace
 
 # --- the Python package (python/): built with maturin, installed by pip, tested by pytest ----

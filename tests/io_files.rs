@@ -3,7 +3,8 @@
 #![cfg(feature = "io")]
 
 use nbhd::io::{
-    self, Encoding, Format, Grid, IoErrorKind, Location, PointCloud, Precision, WriteOptions,
+    self, Encoding, Format, Grid, IoErrorKind, Location, PointCloud, Precision, ReadOptions,
+    Viewpoint, WriteOptions,
 };
 use std::path::PathBuf;
 
@@ -785,4 +786,133 @@ fn text_columns_by_header_option_or_values_and_said() {
     };
     let e = io::read_bytes_with(b"\n1 2 3\n", Format::Xyz, &opts).unwrap_err();
     assert_eq!(e.location, Some(Location::Line(2)), "{e}");
+}
+
+/// `c` written as PCD in each encoding.
+fn pcd_encodings(c: &PointCloud) -> Vec<(Encoding, Vec<u8>)> {
+    [
+        Encoding::Ascii,
+        Encoding::Binary,
+        Encoding::BinaryCompressed,
+    ]
+    .into_iter()
+    .map(|enc| {
+        let opts = WriteOptions {
+            encoding: Some(enc),
+            ..WriteOptions::default()
+        };
+        (enc, io::write_bytes(c, Format::Pcd, &opts).unwrap())
+    })
+    .collect()
+}
+
+/// Issue 41 item 5: a PCD's `VIEWPOINT` (office1.pcd: `0 0 0 0 1 0 0`, a half turn about x)
+/// and header comments come back in every PCD encoding; PLY, which has no place for the
+/// viewpoint, names it in `not_written`.
+#[test]
+fn pcd_viewpoint_and_comments_come_back() {
+    let Some(dir) = data_dir() else { return };
+    let mut c = io::read(dir.join("pcl/office1.pcd")).unwrap();
+    let turned = Viewpoint {
+        origin: [0.0; 3],
+        orientation: [0.0, 1.0, 0.0, 0.0],
+    };
+    assert_eq!(c.metadata.viewpoint, Some(turned));
+    c.metadata.comments = vec!["scanned by a Kinect".into()];
+    for (enc, bytes) in pcd_encodings(&c) {
+        let head = String::from_utf8_lossy(&bytes[..300]).to_string();
+        assert!(
+            head.contains("\nVIEWPOINT 0 0 0 0 1 0 0\n"),
+            "{enc:?}: {head}"
+        );
+        assert!(
+            head.contains("\n# scanned by a Kinect\n"),
+            "{enc:?}: {head}"
+        );
+        let back = io::read_bytes(&bytes, Format::Pcd).unwrap();
+        assert_eq!(back.metadata, c.metadata, "{enc:?}");
+    }
+    assert_eq!(
+        io::not_written(&c, Format::Ply),
+        ["the PCD viewpoint 0 0 0 0 1 0 0"]
+    );
+    assert!(io::not_written(&c, Format::Pcd).is_empty());
+    // The identity is PCL's default, as good as no viewpoint.
+    let milk = io::read(dir.join("pcl/milk.pcd")).unwrap();
+    assert_eq!(milk.metadata.viewpoint, None);
+}
+
+/// PLY comments (and `obj_info`) come back; what the cloud does not carry, a PLY's faces and
+/// list properties or an OBJ's faces, is said by the reader.
+#[test]
+fn ply_comments_come_back_and_what_is_not_carried_is_said() {
+    let ascii = b"ply\nformat ascii 1.0\ncomment made by a scanner\nobj_info 2 cameras\n\
+element vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+property list uchar int extra\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0 1 1\n1 0 0 0\n0 1 0 1 5\n3 0 1 2\n";
+    let (c, info) = io::read_bytes_with(ascii, Format::Ply, &ReadOptions::default()).unwrap();
+    assert_eq!(
+        c.metadata.comments,
+        ["made by a scanner", "obj_info 2 cameras"]
+    );
+    assert_eq!(
+        info.not_carried,
+        ["1 face element(s)", "the vertices' list property 'extra'"]
+    );
+    let bytes = io::write_bytes(&c, Format::Ply, &WriteOptions::ascii()).unwrap();
+    let text = String::from_utf8_lossy(&bytes).to_string();
+    assert!(
+        text.contains("comment made by a scanner\nobj_info 2 cameras\n"),
+        "{text}"
+    );
+    // nbhd's own comment is not carried twice.
+    let back = io::read_bytes(&bytes, Format::Ply).unwrap();
+    assert_eq!(back.metadata.comments, c.metadata.comments);
+    assert_eq!(text.matches("written by nbhd").count(), 1);
+    assert_eq!(
+        io::not_written(&back, Format::Xyz),
+        ["2 header comment line(s)"]
+    );
+
+    let Some(dir) = data_dir() else { return };
+    let opts = ReadOptions::default();
+    let (_, info) = io::read_with(dir.join("meshes/fandisk.obj"), &opts).unwrap();
+    assert!(
+        info.not_carried.iter().any(|n| n == "12946 'f' line(s)"),
+        "{:?}",
+        info.not_carried
+    );
+}
+
+/// Integer fields keep their type: a PCD `label` (`U 4`, PCL's `PointXYZL`) above 2^24, which a
+/// float would round, comes back exact as `U 4`, and as `uint` in PLY; an averaged (non-integer)
+/// value falls back to a float.
+#[test]
+fn integer_fields_keep_their_type() {
+    let pcd =
+        b"VERSION 0.7\nFIELDS x y z label ring\nSIZE 4 4 4 4 2\nTYPE F F F U I\nCOUNT 1 1 1 1 1\n\
+WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n0 0 0 16777217 -3\n1 0 0 7 12\n";
+    let c = io::read_bytes(pcd, Format::Pcd).unwrap();
+    assert_eq!(c.scalar("label").unwrap(), [16777217.0, 7.0]);
+    for (enc, bytes) in pcd_encodings(&c) {
+        let head = String::from_utf8_lossy(&bytes[..160]).to_string();
+        assert!(
+            head.contains("SIZE 4 4 4 4 2\nTYPE F F F U I\n"),
+            "{enc:?}: {head}"
+        );
+        let back = io::read_bytes(&bytes, Format::Pcd).unwrap();
+        assert_eq!(back.scalars, c.scalars, "{enc:?}");
+    }
+    let ply = io::write_bytes(&c, Format::Ply, &WriteOptions::ascii()).unwrap();
+    let text = String::from_utf8_lossy(&ply).to_string();
+    assert!(
+        text.contains("property uint label\nproperty short ring\n"),
+        "{text}"
+    );
+    assert!(text.contains("\n0 0 0 16777217 -3\n"), "{text}");
+    let mut avg = c.clone();
+    avg.set_scalar("label", vec![0.5, 7.0]).unwrap();
+    let bytes = io::write_bytes(&avg, Format::Pcd, &WriteOptions::ascii()).unwrap();
+    let head = String::from_utf8_lossy(&bytes[..160]).to_string();
+    assert!(head.contains("TYPE F F F F I\n"), "{head}");
 }

@@ -15,7 +15,7 @@ use std::path::PathBuf;
 /// commands treat NaN points and formats differently.
 #[derive(clap::Args, Debug, Clone)]
 pub struct InputArgs {
-    /// Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv)
+    /// Input file (.ply, .pcd, .las/.laz, .obj, .xyz/.txt/.pts/.asc/.csv)
     pub input: PathBuf,
 
     /// Read the input as this format instead of recognising it

@@ -30,9 +30,10 @@ Terms of the neighbourhood and smoothing options, as in the thesis:
   h                 mean spacing: mean distance of a point to its nearest other point;
                     lengths can be given in it (6h), curvatures in 1/h (0.2/h)
 
-Files: PLY (ascii, binary), PCD (ascii, binary, binary_compressed), OBJ (vertices) and XYZ \
-text are read; PLY, PCD and XYZ are written, with normals and per-point scalar fields \
-(e.g. curvature) that MeshLab and CloudCompare can colour by. Points with NaN coordinates \
+Files: PLY (ascii, binary), PCD (ascii, binary, binary_compressed), LAS/LAZ, OBJ (vertices) \
+and XYZ text are read; PLY, PCD, LAS/LAZ and XYZ are written, with normals and per-point \
+scalar fields (e.g. curvature) that MeshLab and CloudCompare can colour by (in LAS: extra \
+bytes NormalX NormalY NormalZ, Curvature, ..., every point record kept). Points with NaN coordinates \
 (holes of organized scans) are kept, so point indices are always the file's.";
 
 /// Command line of `nbhd`.

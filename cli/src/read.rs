@@ -32,12 +32,27 @@ pub fn columns_note(info: &ReadInfo) -> Option<String> {
         .map(|t| format!("columns {} ({})", t.names.join(" "), t.from))
 }
 
-/// Reads a cloud; errors name the file. For a text input, says on standard error what its
-/// columns were read as (unless --quiet or --json).
+/// `not carried: 1200 face element(s)`: what the input holds that the cloud does not carry.
+pub fn not_carried_note(info: &ReadInfo) -> Option<String> {
+    (!info.not_carried.is_empty()).then(|| format!("not carried: {}", info.not_carried.join(", ")))
+}
+
+/// Prints a note on standard error unless --quiet or --json.
+pub fn note(s: impl AsRef<str>) {
+    if let Some((out, _)) = READ_CONTEXT.get() {
+        out.note(s);
+    }
+}
+
+/// Reads a cloud; errors name the file. Says on standard error (unless --quiet or --json) what
+/// a text input's columns were read as, and what the file holds that the cloud does not carry.
 pub fn cloud(path: &Path, format: Option<Format>) -> Result<PointCloud> {
     let (cloud, info) = cloud_info(path, format)?;
-    if let (Some(note), Some((out, _))) = (columns_note(&info), READ_CONTEXT.get()) {
-        out.note(format!("{}: {note}", path.display()));
+    for n in [columns_note(&info), not_carried_note(&info)]
+        .into_iter()
+        .flatten()
+    {
+        note(format!("{}: {n}", path.display()));
     }
     Ok(cloud)
 }

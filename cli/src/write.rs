@@ -5,7 +5,7 @@
 use crate::error::{Context, Result};
 use crate::render::{render_cloud, ColorMap, Image, RenderOptions};
 use nbhd::geometry::NormalEstimate;
-use nbhd::io::{PointCloud, Precision, WriteOptions};
+use nbhd::io::{Format, PointCloud, Precision, WriteOptions};
 use nbhd::smooth::PointOutput;
 use std::path::Path;
 
@@ -79,9 +79,20 @@ pub fn precision_text(precision: Precision, cloud: &PointCloud) -> &'static str 
 }
 
 /// Writes `cloud` to `path` (format from the extension unless `opts` names one); errors name
-/// the file. Returns `float32` or `float64`, what was written.
+/// the file. Says on standard error (unless --quiet or --json) what the format has no place
+/// for. Returns `float32` or `float64`, what was written.
 pub fn cloud(path: &Path, cloud: &PointCloud, opts: &WriteOptions) -> Result<&'static str> {
     nbhd::io::write(path, cloud, opts)?;
+    let format = opts.format.or_else(|| Format::from_path(path));
+    let dropped = format.map_or_else(Vec::new, |f| nbhd::io::not_written(cloud, f));
+    if let (false, Some(f)) = (dropped.is_empty(), format) {
+        crate::read::note(format!(
+            "{}: not written ({} has no place for them): {}",
+            path.display(),
+            f.name(),
+            dropped.join("; ")
+        ));
+    }
     Ok(precision_text(opts.precision, cloud))
 }
 

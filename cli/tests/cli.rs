@@ -1077,12 +1077,90 @@ fn text_columns_are_reported_and_las_converts() {
     assert!(nbhd(&["normals", &file, &normals, "--orient", "none"])
         .status
         .success());
-    let o = nbhd(&["convert", &normals, &tmp("nsphere.las")]);
+    // Normals and curvature go to LAS extra bytes (NormalX NormalY NormalZ, Curvature).
+    let las_out = tmp("nsphere.las");
+    let o = nbhd(&["convert", &normals, &las_out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("not written"), "{}", stderr(&o));
+    let (want, back) = (
+        nbhd::io::read(&normals).unwrap(),
+        nbhd::io::read(&las_out).unwrap(),
+    );
+    for (p, q) in want
+        .normals
+        .as_ref()
+        .unwrap()
+        .iter()
+        .zip(back.normals.as_ref().unwrap())
+    {
+        assert!((0..3).all(|j| (p[j] - q[j]).abs() <= 1e-7), "{p:?} {q:?}");
+    }
+    assert_eq!(back.scalar("curvature"), want.scalar("curvature"));
+}
+
+/// Issue 39 item 4: `nbhd smooth in.laz out.laz` on LAS 1.4 point format 6 keeps the format,
+/// the GPS times, returns, classes, intensities and the file's extra bytes, and adds normals
+/// and curvatures as extra bytes; issue 41 item 5: what a format has no place for is said.
+#[test]
+fn smoothing_a_laz_keeps_every_record() {
+    let input = data("las/full_fmt6.laz").unwrap();
+    let out = tmp("smoothed-fmt6.laz");
+    let o = nbhd(&["smooth", &input, &out, "-k", "8", "--iterations", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("not written"), "{}", stderr(&o));
+    let (a, b) = (
+        nbhd::io::read(&input).unwrap(),
+        nbhd::io::read(&out).unwrap(),
+    );
+    let (ha, hb) = (
+        a.metadata.las.clone().unwrap(),
+        b.metadata.las.clone().unwrap(),
+    );
+    assert_eq!((hb.point_format, hb.version), (6, (1, 4)));
+    assert_eq!((hb.scale, hb.offset), (ha.scale, ha.offset));
+    for f in [
+        "gps_time",
+        "return_number",
+        "number_of_returns",
+        "classification",
+        "intensity",
+        "scan_angle",
+        "point_source_id",
+        "Amplitude",
+        "PulseId",
+    ] {
+        let (x, y) = (a.scalar(f).unwrap(), b.scalar(f).unwrap());
+        assert!(
+            x.iter()
+                .zip(y)
+                .all(|(p, q)| p == q || p.is_nan() && q.is_nan()),
+            "{f}"
+        );
+    }
+    for f in [
+        "curvature",
+        "k1",
+        "k2",
+        "mean_curvature",
+        "max_abs_curvature",
+    ] {
+        assert!(b.scalar(f).is_some(), "{f}: {:?}", b.field_names());
+    }
+    assert!(b.normals.is_some());
+    assert_ne!(a.positions, b.positions);
+
+    // PCD -> PLY: the viewpoint has no place in PLY, and the command says so.
+    let o = nbhd(&[
+        "convert",
+        &data("pcl/office1.pcd").unwrap(),
+        &tmp("office1.ply"),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
-        stdout(&o).contains("note: LAS cannot hold normals, curvature; not written"),
+        stderr(&o)
+            .contains("not written (PLY has no place for them): the PCD viewpoint 0 0 0 0 1 0 0"),
         "{}",
-        stdout(&o)
+        stderr(&o)
     );
 }
 

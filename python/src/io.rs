@@ -126,7 +126,9 @@ pub fn read<'py>(
 /// (`curvature`, `intensity`, colour as `red`/`green`/`blue` or PCL's `rgb`, ...).
 /// `encoding`: "binary" (default for PLY and PCD), "ascii", "binary-big-endian" (PLY),
 /// "binary-compressed" (PCD). `precision`: "single" (default: what PCL's loaders read),
-/// "double", "keep". LAS keeps positions, intensity, classification and colour only.
+/// "double", "keep". LAS stores LAS's own fields (`intensity`, `classification`, `gps_time`,
+/// ...) in the records and normals (`NormalX NormalY NormalZ`) and other fields as extra bytes
+/// (cli/README.md, "LAS and LAZ").
 #[pyfunction]
 #[pyo3(signature = (path, positions, *, normals = None, scalars = None, format = None,
                     encoding = None, precision = "single"))]

@@ -99,6 +99,7 @@ impl Builder {
                 scalars,
                 grid: None,
                 source_precision: None,
+                metadata: Default::default(),
             },
             normals: Vec::with_capacity(if has_normals { n } else { 0 }),
             has_normals,

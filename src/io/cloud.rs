@@ -5,6 +5,7 @@ use crate::error::{NbhdError, Result as NbhdResult};
 use crate::points::PointsView;
 
 use super::format::Precision;
+use super::meta::Metadata;
 
 /// A named per-point scalar, e.g. `curvature` or `intensity`.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +61,9 @@ pub struct PointCloud {
     /// text with a coordinate that a `float` does not hold exactly; [`Precision::Single`]
     /// otherwise; `None` for a cloud made in memory. [`Precision::Keep`] writes by it.
     pub source_precision: Option<Precision>,
+    /// What the file said about the cloud as a whole (PCD viewpoint, header comments, the LAS
+    /// header), written back by the writer of the same format.
+    pub metadata: Metadata,
 }
 
 impl PointCloud {
@@ -123,7 +127,8 @@ impl PointCloud {
     }
 
     /// Per-point colours, if the cloud has them: a packed `rgb`/`rgba` field (as PCL writes
-    /// them) or `red`, `green`, `blue` fields (as PLY files have them, 0..255).
+    /// them) or `red`, `green`, `blue` fields (as PLY files have them, 0..255; 16-bit ones,
+    /// as LAS has them, by their high byte).
     pub fn colors(&self) -> Option<Vec<[u8; 3]>> {
         if let Some(v) = self.packed_color_field() {
             return Some(
@@ -140,7 +145,13 @@ impl PointCloud {
             self.scalar("green")?,
             self.scalar("blue")?,
         );
-        let ch = |v: f64| v.clamp(0.0, 255.0) as u8;
+        // 16-bit channels (LAS, PLY `ushort`): any value above 255 makes them all 16-bit,
+        // taken by their high byte (the LAS convention).
+        let wide = [r, g, b].iter().any(|c| c.iter().any(|&v| v > 255.0));
+        let ch = |v: f64| {
+            let v = if wide { v / 256.0 } else { v };
+            v.clamp(0.0, 255.0) as u8
+        };
         Some(
             (0..self.len())
                 .map(|i| [ch(r[i]), ch(g[i]), ch(b[i])])

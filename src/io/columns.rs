@@ -2,7 +2,7 @@
 //! values in text or binary.
 
 use super::cloud::PointCloud;
-use super::value;
+use super::value::{self, Ty};
 
 /// A property or field name usable in a PLY or PCD header: whitespace replaced by `_`.
 pub(crate) fn header_name(name: &str) -> String {
@@ -37,6 +37,8 @@ pub(crate) enum Store {
     U8,
     /// A packed colour: the 32 bits of a PCD `F 4` field (text: the unsigned integer).
     RgbBits,
+    /// An integer type the file read stored the field as (its values fit it).
+    Int(Ty),
 }
 
 #[derive(Clone, Copy)]
@@ -44,6 +46,7 @@ enum Col<'a> {
     Pos(usize),
     Normal(usize),
     Scalar(&'a [f64]),
+    Int(&'a [f64], Ty),
     Channel(usize),
     Rgb,
 }
@@ -59,8 +62,15 @@ pub(crate) struct Columns<'a> {
 
 impl<'a> Columns<'a> {
     /// `x y z`, the normals under `normal_names`, the colour (if the cloud has one, in
-    /// `style`), then the other scalar fields in order.
-    pub fn new(cloud: &'a PointCloud, normal_names: [&str; 3], style: ColorStyle) -> Self {
+    /// `style`), then the other scalar fields in order: in the integer type the file read
+    /// stored them as ([`Metadata::field_types`](super::Metadata::field_types)) while their
+    /// values fit it and it is at most `max_int` bytes, else as floats.
+    pub fn new(
+        cloud: &'a PointCloud,
+        normal_names: [&str; 3],
+        style: ColorStyle,
+        max_int: usize,
+    ) -> Self {
         let mut c = Columns {
             cloud,
             names: Vec::new(),
@@ -103,7 +113,15 @@ impl<'a> Columns<'a> {
             if colors.is_some() && is_color_name(&s.name) {
                 continue;
             }
-            c.push(&header_name(&s.name), Col::Scalar(&s.values));
+            let int = cloud
+                .metadata
+                .field_type(&s.name)
+                .filter(|t| t.size() <= max_int && t.holds_all(&s.values));
+            let col = match int {
+                Some(t) => Col::Int(&s.values, t),
+                None => Col::Scalar(&s.values),
+            };
+            c.push(&header_name(&s.name), col);
         }
         c
     }
@@ -128,6 +146,7 @@ impl<'a> Columns<'a> {
         match self.cols[c] {
             Col::Channel(_) => Store::U8,
             Col::Rgb => Store::RgbBits,
+            Col::Int(_, t) => Store::Int(t),
             _ => Store::Float,
         }
     }
@@ -137,7 +156,7 @@ impl<'a> Columns<'a> {
         match self.cols[c] {
             Col::Pos(j) => self.cloud.positions[i][j],
             Col::Normal(j) => self.cloud.normals.as_ref().map_or(0.0, |n| n[i][j]),
-            Col::Scalar(v) => v[i],
+            Col::Scalar(v) | Col::Int(v, _) => v[i],
             Col::Channel(k) => self.colors[i][k] as f64,
             Col::Rgb => self.packed[i] as f64,
         }
@@ -149,33 +168,21 @@ impl<'a> Columns<'a> {
         match self.cols[c] {
             Col::Channel(k) => self.colors[i][k].to_string(),
             Col::Rgb => self.packed[i].to_string(),
+            Col::Int(v, _) => format!("{}", v[i] as i64),
             _ => value::fmt_num(self.get(c, i), single),
         }
     }
 
     /// Appends column `c` of point `i` in binary.
     pub fn put(&self, buf: &mut Vec<u8>, c: usize, i: usize, single: bool, big_endian: bool) {
-        macro_rules! put {
-            ($v:expr) => {
-                if big_endian {
-                    buf.extend_from_slice(&$v.to_be_bytes())
-                } else {
-                    buf.extend_from_slice(&$v.to_le_bytes())
-                }
-            };
-        }
-        match self.cols[c] {
-            Col::Channel(k) => buf.push(self.colors[i][k]),
-            Col::Rgb => put!(self.packed[i]),
-            _ => {
-                let v = self.get(c, i);
-                if single {
-                    put!(v as f32)
-                } else {
-                    put!(v)
-                }
-            }
-        }
+        let (v, ty) = match self.cols[c] {
+            Col::Channel(k) => (f64::from(self.colors[i][k]), Ty::U8),
+            Col::Rgb => (f64::from(self.packed[i]), Ty::U32),
+            Col::Int(v, t) => (v[i], t),
+            _ if single => (self.get(c, i), Ty::F32),
+            _ => (self.get(c, i), Ty::F64),
+        };
+        ty.put(v, buf, big_endian);
     }
 
     /// One text line of point `i`, columns separated by a space.

@@ -19,10 +19,11 @@
 //!
 //! | | PLY | PCD | XYZ | LAS/LAZ |
 //! |---|---|---|---|---|
-//! | x y z | `float` (default) or `double` | `F 4` or `F 8` | text | scaled `i32` |
-//! | normals | `nx ny nz` | `normal_x normal_y normal_z` | `nx ny nz` | not stored |
-//! | colour | `uchar red green blue` | `rgb`: `F 4` holding `0x00RRGGBB` (ascii: `U 4`, the integer) | `red green blue` 0–255 | RGB ×257 |
-//! | scalars | `float`/`double` | `F 4`/`F 8` | text | `intensity`, `classification` only |
+//! | x y z | `float` (default) or `double` | `F 4` or `F 8` | text | scaled `i32`, the input's scale and offset |
+//! | normals | `nx ny nz` | `normal_x normal_y normal_z` | `nx ny nz` | extra bytes `NormalX NormalY NormalZ` |
+//! | colour | `uchar red green blue` | `rgb`: `F 4` holding `0x00RRGGBB` (ascii: `U 4`, the integer) | `red green blue` 0–255 | RGB: as read from LAS, else ×257 |
+//! | scalars | `float`/`double` | `F 4`/`F 8` | text | a record's own fields in their places; others extra bytes (`curvature` as `Curvature`) |
+//! | file metadata | `comment`, `obj_info` | `VIEWPOINT`, `#` comments | — | the LAS header and its VLRs |
 //!
 //! - [`Precision::Single`] is the default, because PCL's point types are `float` and its
 //!   loaders skip a `double` field; [`Precision::Double`] writes exact doubles;
@@ -32,10 +33,14 @@
 //!   tool writes that meaning under that name, and principal curvatures as `k1`, `k2`.
 //! - PCD `binary_compressed` is LZF field by field, as PCL writes it; the encoder (`pcd/lzf.rs`)
 //!   matches greedily over a hash table as liblzf does.
-//! - LAS/LAZ go through the `las` crate (feature `las`, on by default); see [`not_written`]
-//!   for what LAS cannot hold.
+//! - LAS/LAZ go through the `las` crate (feature `las`, on by default): every point record
+//!   comes back as read, the header in [`PointCloud::metadata`] (rules in cli/README.md, "LAS
+//!   and LAZ").
+//! - Nothing is dropped silently: [`ReadInfo::not_carried`] names what a file holds that the
+//!   cloud does not carry, [`not_written`] what a format has no place for.
 //! - Text (XYZ) columns are named by [`ReadOptions::columns`], a header line or a guess from the
-//!   values, and [`ReadInfo::text_columns`] says which.
+//!   values, and [`ReadInfo::text_columns`] says which; written files start with CloudCompare's
+//!   header line `//x y z ...`.
 //!
 //! # Hostile files
 //!
@@ -59,6 +64,7 @@ mod error;
 mod format;
 #[cfg(feature = "las")]
 mod las;
+mod meta;
 mod obj;
 mod pcd;
 mod ply;
@@ -70,6 +76,7 @@ mod xyz;
 pub use cloud::{Aabb, Grid, PointCloud, ScalarField};
 pub use error::{IoError, IoErrorKind, Location};
 pub use format::{Encoding, Format, Precision};
+pub use meta::{FieldType, LasHeader, LasVlr, Metadata, Viewpoint};
 pub use read::{
     read, read_as, read_bytes, read_bytes_with, read_with, ReadInfo, ReadOptions, TextColumns,
 };

@@ -75,6 +75,9 @@ pub struct ReadInfo {
     pub format: Format,
     /// For text (XYZ) files: the columns and what decided them.
     pub text_columns: Option<TextColumns>,
+    /// What the file holds that the cloud does not carry, in words (a PLY's faces, an OBJ's
+    /// faces and normals, LAS extra bytes without a description); empty if nothing.
+    pub not_carried: Vec<String>,
 }
 
 /// Reads a point cloud with options, and tells what was read.
@@ -120,12 +123,25 @@ pub fn read_bytes_with(
 
 fn parse(data: &[u8], format: Format, options: &ReadOptions) -> PResult<(PointCloud, ReadInfo)> {
     let mut text_columns = None;
+    let mut not_carried = Vec::new();
     let cloud = match format {
-        Format::Ply => ply::read(data)?,
+        Format::Ply => {
+            let (c, n) = ply::read(data)?;
+            not_carried = n;
+            c
+        }
         Format::Pcd => pcd::read(data)?,
-        Format::Obj => obj::read(data)?,
+        Format::Obj => {
+            let (c, n) = obj::read(data)?;
+            not_carried = n;
+            c
+        }
         #[cfg(feature = "las")]
-        Format::Las => las::read(data)?,
+        Format::Las => {
+            let (c, n) = las::read(data)?;
+            not_carried = n;
+            c
+        }
         #[cfg(not(feature = "las"))]
         Format::Las => return Err(Fail::unsupported(NO_LAS)),
         Format::Xyz => {
@@ -139,6 +155,7 @@ fn parse(data: &[u8], format: Format, options: &ReadOptions) -> PResult<(PointCl
         ReadInfo {
             format,
             text_columns,
+            not_carried,
         },
     ))
 }

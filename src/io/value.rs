@@ -2,23 +2,62 @@
 
 use super::error::{Fail, PResult};
 
-/// A stored scalar type.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Ty {
-    I8,
-    U8,
-    I16,
-    U16,
-    I32,
-    U32,
-    I64,
-    U64,
-    F32,
-    F64,
-}
+/// A stored scalar type: [`FieldType`](super::FieldType), the type a file stores a field as;
+/// its methods here are the readers' and writers' own.
+pub(crate) type Ty = super::FieldType;
 
 impl Ty {
-    pub fn size(self) -> usize {
+    /// The smallest and largest value of an integer type (64-bit ones as far as an `f64`
+    /// holds every integer exactly), `None` for floats.
+    pub(crate) fn int_range(self) -> Option<(f64, f64)> {
+        Some(match self {
+            Ty::I8 => (i8::MIN as f64, i8::MAX as f64),
+            Ty::U8 => (0.0, u8::MAX as f64),
+            Ty::I16 => (i16::MIN as f64, i16::MAX as f64),
+            Ty::U16 => (0.0, u16::MAX as f64),
+            Ty::I32 => (i32::MIN as f64, i32::MAX as f64),
+            Ty::U32 => (0.0, u32::MAX as f64),
+            Ty::I64 => (-(2f64.powi(53)), 2f64.powi(53)),
+            Ty::U64 => (0.0, 2f64.powi(53)),
+            Ty::F32 | Ty::F64 => return None,
+        })
+    }
+
+    /// Whether every value of `values` is an integer this (integer) type holds.
+    pub(crate) fn holds_all(self, values: &[f64]) -> bool {
+        self.int_range().is_some_and(|(lo, hi)| {
+            values
+                .iter()
+                .all(|&v| (lo..=hi).contains(&v) && v.fract() == 0.0)
+        })
+    }
+
+    /// Appends `v` in this type's bytes (an integer type's: `v` is an integer it holds).
+    pub(crate) fn put(self, v: f64, buf: &mut Vec<u8>, big_endian: bool) {
+        macro_rules! put {
+            ($x:expr) => {
+                if big_endian {
+                    buf.extend_from_slice(&$x.to_be_bytes())
+                } else {
+                    buf.extend_from_slice(&$x.to_le_bytes())
+                }
+            };
+        }
+        match self {
+            Ty::I8 => buf.push(v as i8 as u8),
+            Ty::U8 => buf.push(v as u8),
+            Ty::I16 => put!(v as i16),
+            Ty::U16 => put!(v as u16),
+            Ty::I32 => put!(v as i32),
+            Ty::U32 => put!(v as u32),
+            Ty::I64 => put!(v as i64),
+            Ty::U64 => put!(v as u64),
+            Ty::F32 => put!(v as f32),
+            Ty::F64 => put!(v),
+        }
+    }
+
+    pub(crate) fn size(self) -> usize {
         match self {
             Ty::I8 | Ty::U8 => 1,
             Ty::I16 | Ty::U16 => 2,
@@ -29,7 +68,7 @@ impl Ty {
 
     /// A number read from text, rounded to this type as a binary file would hold it
     /// (a `float` property written as `0.33333334` is the `f32` nearest to it).
-    pub fn round_text(self, v: f64) -> f64 {
+    pub(crate) fn round_text(self, v: f64) -> f64 {
         if self == Ty::F32 {
             v as f32 as f64
         } else {
@@ -38,7 +77,7 @@ impl Ty {
     }
 
     /// Reads one value from the first `size()` bytes of `b`.
-    pub fn read(self, b: &[u8], big_endian: bool) -> f64 {
+    pub(crate) fn read(self, b: &[u8], big_endian: bool) -> f64 {
         macro_rules! rd {
             ($t:ty, $n:expr) => {{
                 let a: [u8; $n] = b[..$n].try_into().unwrap();

@@ -9,6 +9,7 @@ use super::error::{Fail, IoError, IoErrorKind, PResult};
 use super::format::{Encoding, Format, Precision};
 #[cfg(feature = "las")]
 use super::las;
+use super::meta::Viewpoint;
 #[cfg(not(feature = "las"))]
 use super::NO_LAS;
 use super::{pcd, ply, xyz};
@@ -35,15 +36,46 @@ impl WriteOptions {
     }
 }
 
-/// The fields of `cloud` that writing it as `format` leaves out: for LAS, normals and scalar
-/// fields other than integer `intensity` and `classification` and the colour (PLY, PCD and
-/// XYZ write every field).
+/// What of `cloud` writing it as `format` leaves out, in words: per-point fields a LAS record
+/// cannot hold (values out of a standard field's range, names an extra-bytes description
+/// cannot take), and what the cloud's [`metadata`](PointCloud::metadata) holds that the
+/// format has no place for (a PCD viewpoint other than the identity, header comments, the
+/// LAS header's VLRs). PLY, PCD and XYZ write every per-point field. Empty if nothing is
+/// left out.
 pub fn not_written(cloud: &PointCloud, format: Format) -> Vec<String> {
-    match format {
+    let mut v = match format {
         #[cfg(feature = "las")]
         Format::Las => las::not_written(cloud),
         _ => Vec::new(),
+    };
+    let m = &cloud.metadata;
+    if format != Format::Pcd {
+        if let Some(vp) = m.viewpoint.filter(|vp| *vp != Viewpoint::IDENTITY) {
+            let n: Vec<String> = vp
+                .origin
+                .iter()
+                .chain(&vp.orientation)
+                .map(|c| c.to_string())
+                .collect();
+            v.push(format!("the PCD viewpoint {}", n.join(" ")));
+        }
     }
+    if matches!(format, Format::Las | Format::Xyz) && !m.comments.is_empty() {
+        v.push(format!("{} header comment line(s)", m.comments.len()));
+    }
+    if let Some(h) = m.las.as_ref().filter(|_| format != Format::Las) {
+        let vlrs: Vec<String> = h
+            .vlrs
+            .iter()
+            .chain(&h.evlrs)
+            .filter(|r| !(r.user_id == "LASF_Spec" && r.record_id == 4))
+            .map(|r| format!("{} {} ({})", r.user_id, r.record_id, r.description))
+            .collect();
+        if !vlrs.is_empty() {
+            v.push(format!("the LAS header's records: {}", vlrs.join(", ")));
+        }
+    }
+    v
 }
 
 /// Writes a point cloud: PLY (ascii, binary little or big endian), PCD (ascii, binary,
@@ -160,7 +192,7 @@ fn write_to(
         #[cfg(feature = "las")]
         Format::Las => {
             let compressed = options.encoding == Some(Encoding::BinaryCompressed);
-            Ok(w.write_all(&las::write(cloud, compressed)?)?)
+            Ok(w.write_all(&las::write(cloud, compressed, single)?)?)
         }
         #[cfg(not(feature = "las"))]
         Format::Las => unreachable!("refused by check_writable"),

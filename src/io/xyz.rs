@@ -30,14 +30,17 @@ fn comment(line: &str) -> Option<&str> {
     line.strip_prefix("//").or_else(|| line.strip_prefix('#'))
 }
 
-/// A column name as nbhd calls it.
+/// A column name as nbhd calls it: coordinates, normals and colour channels in lower case
+/// (`X` is `x`, `R` is `red`), any other name as written (`Amplitude` stays `Amplitude`).
 fn canonical(name: &str) -> String {
     let n = name.trim().to_ascii_lowercase();
     match n.as_str() {
         "r" => "red".into(),
         "g" => "green".into(),
         "b" => "blue".into(),
-        _ => n,
+        "x" | "y" | "z" | "nx" | "ny" | "nz" | "normal_x" | "normal_y" | "normal_z" | "red"
+        | "green" | "blue" => n,
+        _ => name.trim().to_string(),
     }
 }
 
@@ -200,8 +203,10 @@ fn guess(values: &[f64], nc: usize) -> (Vec<String>, String) {
 }
 
 pub(crate) fn write(w: &mut impl Write, cloud: &PointCloud, single: bool) -> PResult<()> {
-    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels);
-    writeln!(w, "# {}", cols.names().join(" "))?;
+    let cols = Columns::new(cloud, ["nx", "ny", "nz"], ColorStyle::Channels, 8);
+    // CloudCompare's header (`//X Y Z ...`): its text reader takes a `#` as a column and
+    // reads no point of a file with a `# x y z` line.
+    writeln!(w, "//{}", cols.names().join(" "))?;
     let mut line = String::new();
     for i in 0..cloud.len() {
         cols.line(&mut line, i, single);

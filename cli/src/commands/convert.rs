@@ -3,7 +3,7 @@
 use crate::args::{InputArgs, PrecisionArgs};
 use crate::error::Result;
 use crate::output::Output;
-use crate::read::columns_note;
+use crate::read::{columns_note, not_carried_note};
 use crate::write;
 use nbhd::io::{self, Encoding, Format, Precision, WriteOptions};
 use serde_json::json;
@@ -29,9 +29,11 @@ pub enum EncodingArg {
 /// otherwise (PCL's point types load float only). Normals are written as nx ny nz (PLY, XYZ)
 /// or normal_x normal_y normal_z (PCD); colour as uchar red green blue (PLY, XYZ) or PCL's
 /// packed float rgb (PCD); scalar fields such as curvature as float properties, which
-/// MeshLab and CloudCompare offer for colouring. LAS keeps intensity, classification and
-/// colour, and the command names what it cannot hold. NaN points are kept, and an organized
-/// PCD stays organized when written as PCD.
+/// MeshLab and CloudCompare offer for colouring. LAS to LAS keeps every point record and the
+/// header's records (CRS); normals and other fields go to LAS extra bytes (NormalX NormalY
+/// NormalZ, Curvature, ...). What a format has no place for (a PCD viewpoint in PLY, a PLY's
+/// faces, ...) is named on standard error. NaN points are kept, and an organized PCD stays
+/// organized when written as PCD.
 #[derive(clap::Args, Debug)]
 // `mut_arg` moves the argument to the end of the list: the explicit indices keep
 // `<INPUT> <OUTPUT>` in that order.
@@ -71,6 +73,7 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
     };
     let to_format = Format::from_path(&a.output);
     let dropped = to_format.map_or_else(Vec::new, |f| io::not_written(&cloud, f));
+    // names what `dropped` holds on standard error
     let stored = write::cloud(&a.output, &cloud, &opts)?;
     let stored = if to_format == Some(Format::Las) {
         "LAS scaled integers"
@@ -89,6 +92,7 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
         "columns": info.text_columns.as_ref().map(|t| json!({"names": t.names, "from": t.from})),
         "precision": stored,
         "not_written": dropped,
+        "not_carried": info.not_carried,
         "input_precision": match cloud.source_precision {
             Some(Precision::Double) => "float64",
             Some(_) => "float32",
@@ -104,14 +108,10 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
         to,
         cloud.field_names().join(" ")
     ));
-    if !dropped.is_empty() {
-        out.text(format!(
-            "note: {} cannot hold {}; not written",
-            to_format.map_or("?", |f| f.name()),
-            dropped.join(", ")
-        ));
-    }
-    if let Some(note) = columns_note(&info) {
+    for note in [columns_note(&info), not_carried_note(&info)]
+        .into_iter()
+        .flatten()
+    {
         out.text(format!("{}: {note}", input.display()));
     }
     if stored == "float32" && cloud.source_precision == Some(Precision::Double) {

@@ -23,7 +23,7 @@ use std::time::Instant;
 pub struct CropArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Output file (.ply, .pcd, .xyz)
+    /// Output file (.ply, .pcd, .las/.laz, .xyz)
     pub output: PathBuf,
     /// Lower corner x,y,z (a coordinate may be -inf)
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
@@ -43,7 +43,7 @@ pub struct CropArgs {
 pub struct SorArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Output file (.ply, .pcd, .xyz)
+    /// Output file (.ply, .pcd, .las/.laz, .xyz)
     pub output: PathBuf,
     /// Nearest other points averaged (PCL's setMeanK)
     #[arg(long, short, default_value_t = 50)]
@@ -63,7 +63,7 @@ pub struct SorArgs {
 pub struct RorArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Output file (.ply, .pcd, .xyz)
+    /// Output file (.ply, .pcd, .las/.laz, .xyz)
     pub output: PathBuf,
     /// Radius: a length like 0.05, or a multiple of the mean spacing h like 3h
     #[arg(long, short, value_parser = parse_length)]
@@ -85,7 +85,7 @@ pub struct RorArgs {
 pub struct VoxelArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Output file (.ply, .pcd, .xyz)
+    /// Output file (.ply, .pcd, .las/.laz, .xyz)
     pub output: PathBuf,
     /// Voxel edge: a length like 0.01, or a multiple of the mean spacing h like 3h
     #[arg(long, short, value_parser = parse_length)]
@@ -129,6 +129,7 @@ fn subset(cloud: &PointCloud, kept: &[u32]) -> PointCloud {
             .collect(),
         grid: None,
         source_precision: cloud.source_precision,
+        metadata: cloud.metadata.clone(),
     }
 }
 
@@ -290,6 +291,7 @@ fn centroid_cloud<T: nbhd::Scalar>(cloud: &PointCloud, g: &VoxelGrid<T>) -> Poin
             .collect(),
         grid: None,
         source_precision: cloud.source_precision,
+        metadata: cloud.metadata.clone(),
     }
 }
 

@@ -23,7 +23,7 @@ pub struct Args {
     #[command(flatten)]
     pub input: InputArgs,
 
-    /// Output file (.ply, .pcd, .xyz); normals and per-point scalar fields are added
+    /// Output file (.ply, .pcd, .las/.laz, .xyz); normals and per-point scalar fields are added
     pub output: PathBuf,
 
     /// Maximum valence k: at most the k nearest other points form a neighbourhood

@@ -17,7 +17,7 @@ use std::path::PathBuf;
 /// to its nearest other point: the unit of every relative length (6h).
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv)
+    /// The file (.ply, .pcd, .las/.laz, .obj, .xyz/.txt/.pts/.asc/.csv)
     pub file: PathBuf,
 
     /// Read as this format instead of recognising it by content and extension

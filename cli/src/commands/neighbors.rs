@@ -29,7 +29,7 @@ use std::time::Instant;
 /// What every neighbourhood command takes.
 #[derive(clap::Args, Debug)]
 #[command(mut_arg("input", |a| a.help(
-    "Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv); points with NaN coordinates are \
+    "Input file (.ply, .pcd, .las/.laz, .obj, .xyz/.txt/.pts/.asc/.csv); points with NaN coordinates are \
      skipped and get empty rows, the others keep their index in the file"
 )))]
 #[command(mut_arg("from", |a| a.help(

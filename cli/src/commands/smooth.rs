@@ -87,13 +87,13 @@ pub enum CriterionArg {
 // `mut_arg` moves the argument to the end of the list: the explicit indices keep
 // `<INPUT> <OUTPUT>` in that order.
 #[command(mut_arg("input", |a| a.index(1).help(
-    "Input file (.ply, .pcd, .obj, .xyz/.txt/.pts/.asc/.csv); NaN points are kept as they are"
+    "Input file (.ply, .pcd, .las/.laz, .obj, .xyz/.txt/.pts/.asc/.csv); NaN points are kept as they are"
 )))]
 pub struct Args {
     #[command(flatten)]
     pub input: InputArgs,
 
-    /// Output file (.ply, .pcd, .xyz) with normals and curvature fields of the result
+    /// Output file (.ply, .pcd, .las/.laz, .xyz) with normals and curvature fields of the result
     #[arg(index = 2)]
     pub output: PathBuf,
 

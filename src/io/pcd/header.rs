@@ -2,8 +2,8 @@
 //! against one another and against the bytes that follow before any point is read.
 
 use crate::io::error::{Fail, PResult};
-use crate::io::value::{tokens, Lines, Ty};
-use crate::io::Grid;
+use crate::io::value::{parse_num, tokens, Lines, Ty};
+use crate::io::{Grid, Viewpoint};
 
 /// How the points are stored after the header (`DATA`).
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -68,6 +68,9 @@ struct Entries {
     height: Entry<usize>,
     points: Entry<usize>,
     data: Entry<Data>,
+    viewpoint: Option<Viewpoint>,
+    /// `#` lines but PCL's first (`# .PCD v0.7 - Point Cloud Data file format`).
+    comments: Vec<String>,
 }
 
 /// The numbers of an entry (`SIZE 4 4 4`), each a non-negative integer.
@@ -78,6 +81,21 @@ fn numbers(ln: usize, what: &str, rest: &[&str]) -> PResult<Vec<usize>> {
                 .map_err(|_| Fail::line(ln, format!("{what}: '{s}' is not a non-negative integer")))
         })
         .collect()
+}
+
+/// `VIEWPOINT tx ty tz qw qx qy qz`.
+fn viewpoint(ln: usize, rest: &[&str]) -> PResult<Viewpoint> {
+    let v: Vec<f64> = rest.iter().filter_map(|s| parse_num(s)).collect();
+    if rest.len() != 7 || v.len() != 7 {
+        return Err(Fail::line(
+            ln,
+            "VIEWPOINT takes 7 numbers: tx ty tz qw qx qy qz",
+        ));
+    }
+    Ok(Viewpoint {
+        origin: [v[0], v[1], v[2]],
+        orientation: [v[3], v[4], v[5], v[6]],
+    })
 }
 
 /// The one number of an entry (`WIDTH 640`).
@@ -96,7 +114,14 @@ impl Entries {
         for item in lines.by_ref() {
             let (ln, line) = item?;
             let t = line.trim();
-            if t.is_empty() || t.starts_with('#') {
+            if let Some(c) = t.strip_prefix('#') {
+                let c = c.trim();
+                if !c.starts_with(".PCD") {
+                    e.comments.push(c.to_string());
+                }
+                continue;
+            }
+            if t.is_empty() {
                 continue;
             }
             let mut tok = tokens(t);
@@ -113,7 +138,11 @@ impl Entries {
     /// Takes the entry `key` with its values `rest`, on line `ln`.
     fn take(&mut self, ln: usize, key: &str, rest: &[&str]) -> PResult<()> {
         match key {
-            "VERSION" | "VIEWPOINT" => {}
+            "VERSION" => {}
+            // PCL's default, the identity, is as good as none.
+            "VIEWPOINT" => {
+                self.viewpoint = Some(viewpoint(ln, rest)?).filter(|v| *v != Viewpoint::IDENTITY)
+            }
             "FIELDS" | "COLUMNS" => {
                 self.names = Some((ln, rest.iter().map(|s| s.to_string()).collect()))
             }
@@ -242,6 +271,10 @@ pub(super) struct Header {
     pub end: usize,
     /// Line number of the `DATA` line.
     pub end_line: usize,
+    /// `VIEWPOINT`, if given.
+    pub viewpoint: Option<Viewpoint>,
+    /// Comment lines (`#`) but the format's first.
+    pub comments: Vec<String>,
 }
 
 impl Header {
@@ -277,6 +310,8 @@ impl Header {
             grid: e.grid(grid_points, points),
             end,
             end_line,
+            viewpoint: e.viewpoint,
+            comments: std::mem::take(&mut e.comments),
         })
     }
 }

@@ -9,6 +9,7 @@ mod lzf;
 mod write;
 
 use super::assemble::{assign_columns, Builder};
+use super::cloud::is_packed_name;
 use super::error::{Fail, PResult};
 use super::{PointCloud, Precision};
 use decode::PointColumns;
@@ -33,5 +34,16 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         .find(|f| f.name == "x")
         .map(|f| Precision::of_type(f.ty));
     cloud.grid = header.grid;
+    cloud.metadata.viewpoint = header.viewpoint;
+    cloud.metadata.comments = header.comments;
+    // The scalar fields' types (a packed colour is a colour, stored PCL's way).
+    let types = cols
+        .names
+        .iter()
+        .zip(&cols.types)
+        .filter(|(n, _)| cloud.scalar(n).is_some() && !is_packed_name(n))
+        .map(|(n, &t)| (n.clone(), t))
+        .collect();
+    cloud.metadata.field_types = types;
     Ok(cloud)
 }

@@ -5,7 +5,7 @@ use std::io::Write;
 use super::lzf;
 use crate::io::columns::{ColorStyle, Columns, Store};
 use crate::io::error::{Fail, PResult};
-use crate::io::{Encoding, PointCloud};
+use crate::io::{Encoding, PointCloud, Viewpoint};
 
 pub(crate) fn write(
     w: &mut impl Write,
@@ -17,6 +17,7 @@ pub(crate) fn write(
         cloud,
         ["normal_x", "normal_y", "normal_z"],
         ColorStyle::PackedFloat,
+        8,
     );
     write_header(w, cloud, &cols, enc, single)?;
     match enc {
@@ -53,18 +54,38 @@ fn write_header(
             // (1.13) writes it as the unsigned integer of those bits, typed U, and reads it so.
             Store::RgbBits if enc == Encoding::Ascii => ("4", "U"),
             Store::RgbBits => ("4", "F"),
+            Store::Int(t) => {
+                let kind = if t.int_range().is_some_and(|(lo, _)| lo < 0.0) {
+                    "I"
+                } else {
+                    "U"
+                };
+                (["1", "2", "", "4", "", "", "", "8"][t.size() - 1], kind)
+            }
         };
         size.push(s);
         ty.push(t);
     }
+    writeln!(w, "# .PCD v0.7 - Point Cloud Data file format")?;
+    for c in &cloud.metadata.comments {
+        writeln!(w, "# {}", c.replace(['\n', '\r'], " "))?;
+    }
+    let vp = cloud.metadata.viewpoint.unwrap_or(Viewpoint::IDENTITY);
+    let vp: Vec<String> = vp
+        .origin
+        .iter()
+        .chain(&vp.orientation)
+        .map(|&v| crate::io::value::fmt_num(v, false))
+        .collect();
     write!(
         w,
-        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\n\
-         COUNT {}\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n",
+        "VERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\n\
+         COUNT {}\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT {}\nPOINTS {n}\nDATA {data}\n",
         cols.names().join(" "),
         size.join(" "),
         ty.join(" "),
         vec!["1"; cols.len()].join(" "),
+        vp.join(" "),
     )?;
     Ok(())
 }

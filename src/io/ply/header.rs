@@ -106,6 +106,7 @@ fn ty_of(s: &str) -> Option<Ty> {
 struct Keywords {
     fmt: Option<Fmt>,
     elements: Vec<Element>,
+    comments: Vec<String>,
     ended: bool,
 }
 
@@ -118,6 +119,10 @@ impl Keywords {
             let (ln, line) = item?;
             let mut tok = tokens(line);
             let Some(key) = tok.next() else { continue };
+            if key == "comment" || key == "obj_info" {
+                k.comment(key, line);
+                continue;
+            }
             let rest: Vec<&str> = tok.collect();
             k.take(ln, key, &rest)?;
             if k.ended {
@@ -127,10 +132,20 @@ impl Keywords {
         Ok(k)
     }
 
+    /// Keeps a `comment` line's text (`obj_info` lines as `obj_info TEXT`), but nbhd's own
+    /// `written by nbhd ...`, which its writer puts anew.
+    fn comment(&mut self, key: &str, line: &str) {
+        let text = line.trim_start()[key.len()..].trim();
+        if key == "obj_info" {
+            self.comments.push(format!("obj_info {text}"));
+        } else if !text.starts_with("written by nbhd") {
+            self.comments.push(text.to_string());
+        }
+    }
+
     /// Takes the keyword `key` with its words `rest`, on line `ln`.
     fn take(&mut self, ln: usize, key: &str, rest: &[&str]) -> PResult<()> {
         match key {
-            "comment" | "obj_info" => {}
             "format" => self.fmt = Some(Fmt::parse(ln, rest.first().copied())?),
             "element" => self.elements.push(Element::parse(ln, rest)?),
             "property" => {
@@ -163,6 +178,8 @@ pub(super) struct Header {
     pub end: usize,
     /// Line number of `end_header`.
     pub end_line: usize,
+    /// `comment` lines' text, `obj_info` lines as `obj_info TEXT`.
+    pub comments: Vec<String>,
 }
 
 impl Header {
@@ -182,6 +199,7 @@ impl Header {
         let Keywords {
             fmt,
             elements,
+            comments,
             ended,
         } = Keywords::read(&mut lines)?;
         let end_line = lines.line_no();
@@ -203,6 +221,7 @@ impl Header {
             vertex,
             end: lines.offset(),
             end_line,
+            comments,
         })
     }
 

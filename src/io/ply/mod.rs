@@ -14,9 +14,24 @@ use super::{PointCloud, Precision};
 use header::{Fmt, Header, Prop};
 pub(crate) use write::write;
 
-pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
+/// Reads the vertices of a PLY file; also returns what else it holds, which the cloud does
+/// not carry (other elements such as faces, list properties of the vertices).
+pub(crate) fn read(data: &[u8]) -> PResult<(PointCloud, Vec<String>)> {
     let header = Header::parse(data)?;
+    let mut not_carried: Vec<String> = header
+        .elements
+        .iter()
+        .filter(|e| e.name != "vertex" && e.count > 0)
+        .map(|e| format!("{} {} element(s)", e.count, e.name))
+        .collect();
     let vertex = header.vertex();
+    not_carried.extend(
+        vertex
+            .props
+            .iter()
+            .filter(|(_, p)| matches!(p, Prop::List(..)))
+            .map(|(name, _)| format!("the vertices' list property '{name}'")),
+    );
     // Vertex columns: scalar properties; list properties are skipped.
     let names: Vec<String> = vertex
         .props
@@ -33,9 +48,20 @@ pub(crate) fn read(data: &[u8]) -> PResult<PointCloud> {
         Fmt::Be => decode::binary(data, &header, true, &mut b)?,
     }
     let mut cloud = b.finish();
+    cloud.metadata.comments = header.comments.clone();
+    // The scalar fields' types.
+    let types = vertex
+        .props
+        .iter()
+        .filter_map(|(name, p)| match p {
+            Prop::Scalar(t) if cloud.scalar(name).is_some() => Some((name.clone(), *t)),
+            _ => None,
+        })
+        .collect();
+    cloud.metadata.field_types = types;
     cloud.source_precision = vertex.props.iter().find_map(|(name, p)| match p {
         Prop::Scalar(t) if name == "x" => Some(Precision::of_type(*t)),
         _ => None,
     });
-    Ok(cloud)
+    Ok((cloud, not_carried))
 }
