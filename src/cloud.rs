@@ -2,6 +2,8 @@
 //! the caller's index of each. Trees and baselines keep one (the tree in its own order).
 
 use crate::error::{NbhdError, Result};
+use crate::named_option;
+use crate::names::OptionName;
 use crate::points::PointsView;
 use crate::scalar::Scalar;
 use glam::DVec3;
@@ -20,15 +22,17 @@ pub enum NonFinitePolicy {
 impl NonFinitePolicy {
     /// Both policies.
     pub const ALL: [NonFinitePolicy; 2] = [NonFinitePolicy::Reject, NonFinitePolicy::Skip];
-
-    /// The policy's name, the one spelling of the command line and Python: `reject`, `skip`.
-    pub fn name(self) -> &'static str {
-        match self {
-            NonFinitePolicy::Reject => "reject",
-            NonFinitePolicy::Skip => "skip",
-        }
-    }
 }
+
+impl OptionName for NonFinitePolicy {
+    const OPTION: &'static str = "non_finite";
+    const WHAT: &'static str = "non-finite policy";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (NonFinitePolicy::Reject, "reject"),
+        (NonFinitePolicy::Skip, "skip"),
+    ];
+}
+named_option!(NonFinitePolicy);
 
 /// Packed coordinates plus the caller's index of every point.
 #[derive(Clone, Debug)]

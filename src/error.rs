@@ -400,14 +400,18 @@ impl fmt::Display for NbhdError {
                     ": epsilon resolved to {epsilon:e} in the points' units (mean spacing h = \
                      {spacing:e})"
                 )?;
+                // the units as the command line and Python spell them (`src/names.rs`)
                 if *relative {
                     write!(
                         f,
-                        "; epsilon was taken relative to h (epsilon_units RELATIVE): for a \
-                         length in the points' units set epsilon_units to ABSOLUTE"
+                        "; epsilon was taken relative to h (units \"relative\"): for a length \
+                         in the points' units give its units as \"absolute\""
                     )
                 } else {
-                    write!(f, "; epsilon was taken in the points' units (ABSOLUTE)")
+                    write!(
+                        f,
+                        "; epsilon was taken in the points' units (units \"absolute\")"
+                    )
                 }
             }
             SavedTree(e) => e.fmt(f),

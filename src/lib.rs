@@ -22,6 +22,7 @@ pub mod index;
 #[cfg(feature = "io")]
 pub mod io;
 pub(crate) mod linalg;
+pub mod names;
 pub(crate) mod parallel;
 pub mod points;
 pub(crate) mod prefetch;

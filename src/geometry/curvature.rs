@@ -27,6 +27,8 @@
 
 use super::normals::{check_table, LocalFrame};
 use crate::error::Result;
+use crate::named_option;
+use crate::names::OptionName;
 use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -59,6 +61,16 @@ pub enum DensityForm {
     Quadratic,
 }
 
+impl OptionName for DensityForm {
+    const OPTION: &'static str = "density";
+    const WHAT: &'static str = "density";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (DensityForm::AbsLinear, "abs-linear"),
+        (DensityForm::Quadratic, "quadratic"),
+    ];
+}
+named_option!(DensityForm);
+
 /// How the principal curvatures are read off the Weingarten estimate `W_i`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum PrincipalFormula {
@@ -79,6 +91,17 @@ pub enum PrincipalFormula {
     /// one line).
     ExactMoments,
 }
+
+impl OptionName for PrincipalFormula {
+    const OPTION: &'static str = "formula";
+    const WHAT: &'static str = "formula";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (PrincipalFormula::Eq225, "eq2.25"),
+        (PrincipalFormula::ExactMoments, "exact-moments"),
+    ];
+    const ALIASES: &'static [(&'static str, Self)] = &[("eq225", PrincipalFormula::Eq225)];
+}
+named_option!(PrincipalFormula);
 
 /// Principal curvatures and directions at one point (eq. 2.25 from the eigenvalues of the
 /// Weingarten estimate restricted to the tangent plane).

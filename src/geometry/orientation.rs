@@ -4,6 +4,8 @@
 
 use super::normals::{check_table, LocalFrame};
 use crate::error::{NbhdError, Result};
+use crate::named_option;
+use crate::names::OptionName;
 use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -24,6 +26,59 @@ pub enum Orientation {
     /// along smooth paths rather than across creases. In each connected component the point with
     /// the largest z gets a normal with `n_z ≥ 0` (outward for closed surfaces).
     Propagate,
+}
+
+/// The kinds of [`Orientation`], by name (`unoriented`, `toward-point`, `away-from-point`,
+/// `propagate`): what the command line and Python pass, the point given beside it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum OrientationKind {
+    /// [`Orientation::Unoriented`].
+    #[default]
+    Unoriented,
+    /// [`Orientation::TowardViewpoint`].
+    TowardPoint,
+    /// [`Orientation::AwayFrom`].
+    AwayFromPoint,
+    /// [`Orientation::Propagate`].
+    Propagate,
+}
+
+impl OptionName for OrientationKind {
+    const OPTION: &'static str = "orientation";
+    const WHAT: &'static str = "orientation";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (OrientationKind::Unoriented, "unoriented"),
+        (OrientationKind::TowardPoint, "toward-point"),
+        (OrientationKind::AwayFromPoint, "away-from-point"),
+        (OrientationKind::Propagate, "propagate"),
+    ];
+    const ALIASES: &'static [(&'static str, Self)] = &[
+        ("none", OrientationKind::Unoriented),
+        ("toward-viewpoint", OrientationKind::TowardPoint),
+    ];
+}
+named_option!(OrientationKind);
+
+impl Orientation {
+    /// The orientation of kind `kind`, with `point` for the kinds that have one.
+    pub fn of_kind(kind: OrientationKind, point: DVec3) -> Self {
+        match kind {
+            OrientationKind::Unoriented => Orientation::Unoriented,
+            OrientationKind::TowardPoint => Orientation::TowardViewpoint(point),
+            OrientationKind::AwayFromPoint => Orientation::AwayFrom(point),
+            OrientationKind::Propagate => Orientation::Propagate,
+        }
+    }
+
+    /// The orientation's kind.
+    pub fn kind(&self) -> OrientationKind {
+        match self {
+            Orientation::Unoriented => OrientationKind::Unoriented,
+            Orientation::TowardViewpoint(_) => OrientationKind::TowardPoint,
+            Orientation::AwayFrom(_) => OrientationKind::AwayFromPoint,
+            Orientation::Propagate => OrientationKind::Propagate,
+        }
+    }
 }
 
 /// Flips normals in place as `orientation` asks. Only the sign of `frame.normal` changes (the

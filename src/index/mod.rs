@@ -34,7 +34,7 @@ mod tables;
 pub use in_box::IndexRows;
 pub(crate) use search::{answer, search};
 pub(crate) use spacing::{check_spacing, mean_distance};
-pub use spacing::{Length, Spacing};
+pub use spacing::{Length, Spacing, Units};
 
 use crate::error::Result;
 use crate::points::PointsView;

@@ -6,6 +6,8 @@
 
 use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
+use crate::named_option;
+use crate::names::OptionName;
 use crate::query::Neighborhood;
 use crate::scalar::Scalar;
 use crate::table::TableOptions;
@@ -78,7 +80,42 @@ pub enum Length {
     Relative(f64),
 }
 
+/// The units of a length or curvature given in numbers: the points' own, or relative to the
+/// mean spacing `h` ([`Spacing::mean`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Units {
+    /// The points' own units.
+    Absolute,
+    /// Multiples of `h` (lengths) or of `1/h` (curvatures).
+    #[default]
+    Relative,
+}
+
+impl OptionName for Units {
+    const OPTION: &'static str = "units";
+    const WHAT: &'static str = "units";
+    const NAMES: &'static [(Self, &'static str)] =
+        &[(Units::Relative, "relative"), (Units::Absolute, "absolute")];
+}
+named_option!(Units);
+
 impl Length {
+    /// The length `value` in `units`.
+    pub fn new(value: f64, units: Units) -> Self {
+        match units {
+            Units::Absolute => Length::Absolute(value),
+            Units::Relative => Length::Relative(value),
+        }
+    }
+
+    /// The length's units.
+    pub fn units(self) -> Units {
+        match self {
+            Length::Absolute(_) => Units::Absolute,
+            Length::Relative(_) => Units::Relative,
+        }
+    }
+
     /// The absolute value for spacing `h`.
     pub fn resolve(self, h: f64) -> f64 {
         match self {

@@ -38,7 +38,9 @@ use crate::geometry::normals::quotient_of;
 pub use crate::geometry::source;
 pub use crate::geometry::{Neighbors, SearchMethod};
 pub(crate) use crate::index::check_spacing;
-pub use crate::index::Length;
+pub use crate::index::{Length, Units};
+use crate::named_option;
+use crate::names::OptionName;
 pub(crate) use crate::progress::progress_in_units;
 pub use crate::progress::Stage;
 /// The fast exact k-nearest table the robust smoothing's rows start from (`src/tree/`).
@@ -55,6 +57,16 @@ pub enum Curvature {
     Absolute(f64),
     /// Multiples of `1/h`.
     Relative(f64),
+}
+
+impl Curvature {
+    /// The curvature `value` in `units` (relative: multiples of `1/h`).
+    pub fn new(value: f64, units: Units) -> Self {
+        match units {
+            Units::Absolute => Curvature::Absolute(value),
+            Units::Relative => Curvature::Relative(value),
+        }
+    }
 }
 
 impl Curvature {
@@ -82,6 +94,18 @@ pub enum Weighting {
     /// `g_cont` (2.32): 1 below λ, `λ²/(λ² + 10(|κ| − λ)²)` from it on.
     Continuous,
 }
+
+impl OptionName for Weighting {
+    const OPTION: &'static str = "weighting";
+    const WHAT: &'static str = "weighting";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (Weighting::Isotropic, "isotropic"),
+        (Weighting::Sharp, "sharp"),
+        (Weighting::Continuous, "continuous"),
+    ];
+    const ALIASES: &'static [(&'static str, Self)] = &[("cont", Weighting::Continuous)];
+}
+named_option!(Weighting);
 
 impl Weighting {
     /// `g_ij` of the neighbour at offset `d = x_j − p_i` of a point with unit normal `n`, for

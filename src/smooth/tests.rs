@@ -682,7 +682,7 @@ fn a_relative_epsilon_meant_as_absolute_is_refused_with_its_value() {
     let text = e.to_string();
     assert!(text.contains("epsilon resolved to"), "{text}");
     assert!(text.contains("in the points' units"), "{text}");
-    assert!(text.contains("ABSOLUTE"), "{text}");
+    assert!(text.contains("\"absolute\""), "{text}");
     // the same number in the points' units works
     let abs = SmoothOptions {
         epsilon: Length::Absolute(0.3),

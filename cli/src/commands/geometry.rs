@@ -3,7 +3,8 @@
 //! normals and scalar properties that MeshLab and CloudCompare colour by.
 
 use crate::args::{
-    length_text, orientation, parse_length, parse_vec3, InputArgs, OrientArg, PrecisionArgs,
+    length_text, orientation, parse_length, parse_orient, parse_vec3, InputArgs, OrientArg,
+    PrecisionArgs,
 };
 use crate::error::{Context, Result};
 use crate::output::{num, Output};
@@ -36,7 +37,7 @@ pub struct Args {
     pub radius: Length,
 
     /// How to orient the normals
-    #[arg(long, value_enum, default_value = "propagate")]
+    #[arg(long, value_parser = parse_orient, default_value = "propagate")]
     pub orient: OrientArg,
 
     /// Orient the normals toward this viewpoint x,y,z instead (e.g. the scanner position)
