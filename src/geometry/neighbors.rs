@@ -12,6 +12,17 @@ use glam::DVec3;
 /// The neighbourhood of every point of `points` (row `i` for point `i`), with or without the
 /// point itself, ordered by `(sq_dist, index)`. Non-finite coordinates are refused
 /// ([`NbhdError::NonFinite`]); an empty set gives [`NbhdError::EmptyInput`].
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::neighbors::neighbor_table;
+/// use nbhd::Neighborhood;
+///
+/// let points = [DVec3::ZERO, DVec3::X, DVec3::new(3.0, 0.0, 0.0)];
+/// let table = neighbor_table(&points, Neighborhood::Knn { k: 1 }, true)?;
+/// assert_eq!(table.indices(), [1, 0, 1]);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn neighbor_table(
     points: &[DVec3],
     nbhd: Neighborhood<f64>,
@@ -52,6 +63,15 @@ pub(crate) fn neighbor_table_and_order(
 /// parameters and the quality metrics are measured in ([`crate::index::Spacing`], its one
 /// definition). Summed in index order, so the value does not depend on the number of threads.
 /// Needs at least two points ([`NbhdError::InvalidOption`] otherwise).
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::neighbors::mean_spacing;
+///
+/// let points = [DVec3::ZERO, DVec3::X, DVec3::new(3.0, 0.0, 0.0)];
+/// assert_eq!(mean_spacing(&points)?, (1.0 + 1.0 + 2.0) / 3.0);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn mean_spacing(points: &[DVec3]) -> Result<f64> {
     if points.len() < 2 {
         return Err(NbhdError::InvalidOption {
@@ -74,24 +94,6 @@ pub fn mean_spacing_of(table: &NeighborTable<f64>) -> f64 {
 /// median.
 pub(crate) fn mean_spacing_of_nearest(nearest_sq_dist: impl Iterator<Item = Option<f64>>) -> f64 {
     crate::index::mean_distance(nearest_sq_dist.flatten().map(f64::sqrt))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn spacing_of_a_grid() {
-        let pts: Vec<DVec3> = (0..10)
-            .flat_map(|i| (0..10).map(move |j| DVec3::new(i as f64 * 0.5, j as f64 * 0.5, 0.0)))
-            .collect();
-        assert!((mean_spacing(&pts).unwrap() - 0.5).abs() < 1e-12);
-        assert!(mean_spacing(&pts[..1]).is_err());
-        assert_eq!(
-            neighbor_table(&[], Neighborhood::Knn { k: 1 }, true),
-            Err(NbhdError::EmptyInput)
-        );
-    }
 }
 
 /// Rows of `knn` cut to the points within `eps` (the ε-k-neighbourhood, Section 2.1.1: the
@@ -126,5 +128,23 @@ pub(crate) fn cut_to(knn: NeighborTable<f64>, eps: f64) -> NeighborTable<f64> {
         knn
     } else {
         within(&knn, eps)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spacing_of_a_grid() {
+        let pts: Vec<DVec3> = (0..10)
+            .flat_map(|i| (0..10).map(move |j| DVec3::new(i as f64 * 0.5, j as f64 * 0.5, 0.0)))
+            .collect();
+        assert!((mean_spacing(&pts).unwrap() - 0.5).abs() < 1e-12);
+        assert!(mean_spacing(&pts[..1]).is_err());
+        assert_eq!(
+            neighbor_table(&[], Neighborhood::Knn { k: 1 }, true),
+            Err(NbhdError::EmptyInput)
+        );
     }
 }

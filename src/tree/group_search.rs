@@ -202,6 +202,9 @@ fn answer_groups<T: Scalar, const D: usize, R: RowSets<T>, K: PackedKey<T>>(
     });
 }
 
+/// The single search of one query into a row (a forest's, for a group of one query).
+pub(crate) type SingleSearch<'a, T> = dyn Fn(&[T], &mut Vec<Neighbor<T>>) + Sync + 'a;
+
 /// What every group's search reads.
 struct Search<'a, T, const D: usize> {
     /// The trees, largest first: one for a tree's own table, every tree of a forest.
@@ -210,7 +213,7 @@ struct Search<'a, T, const D: usize> {
     /// Members are a tree's own points, each left out of its row.
     exclude_self: bool,
     /// Answers a group of one query on its own (batches over a forest).
-    single: Option<&'a (dyn Fn(&[T], &mut Vec<Neighbor<T>>) + Sync)>,
+    single: Option<&'a SingleSearch<'a, T>>,
 }
 
 /// The members of a group: their coordinates, the ids their rows leave out (`u32::MAX` for
@@ -235,8 +238,7 @@ impl<T: Scalar, const D: usize> Members<T, D> {
     /// Sets member `i` to the point `p`, leaving out `self_id`.
     #[inline(always)]
     fn set(&mut self, i: usize, p: &[T], self_id: u32) {
-        for j in 0..D {
-            let c = p[j];
+        for (j, &c) in p.iter().enumerate().take(D) {
             self.q[i][j] = c;
             self.lo[j] = self.lo[j].min_of(c);
             self.hi[j] = self.hi[j].max_of(c);

@@ -6,9 +6,9 @@
 use std::ops::Range;
 
 use super::cells::{CellView, Cells};
-use super::{groups, run_rows, GroupAnswer, Search, GROUP};
+use super::{groups, run_rows, GroupAnswer, Search, SingleSearch, GROUP};
 use crate::error::Result;
-use crate::query::{Neighbor, Neighborhood};
+use crate::query::Neighborhood;
 use crate::scalar::Scalar;
 use crate::table::{rows_in_chunks, NeighborTable, CHUNK};
 use crate::tree::search::TreeView;
@@ -147,7 +147,7 @@ pub(crate) fn batch_table<T: Scalar, const D: usize>(
     span: u32,
     max_group: usize,
     nbhd: Neighborhood<T>,
-    single: &(dyn Fn(&[T], &mut Vec<Neighbor<T>>) + Sync),
+    single: &SingleSearch<'_, T>,
 ) -> Result<NeighborTable<T>> {
     let max_group = max_group.clamp(1, GROUP);
     let n = order.len();
