@@ -14,6 +14,7 @@
 pub(crate) mod cloud;
 pub mod dynamic;
 pub mod error;
+#[doc(hidden)]
 pub mod ffi;
 pub mod filter;
 pub mod geometry;

@@ -268,6 +268,19 @@ impl<T: Scalar> DynamicKdTree<T> {
     /// [`NbhdError::NonFinite`] naming the position in the batch of the first non-finite
     /// point (under [`NonFinitePolicy::Reject`]); [`NbhdError::TooManyPoints`] if the indices
     /// would pass `u32::MAX - 1`; [`NbhdError::OutOfMemory`]; [`NbhdError::ThreadPool`].
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, DynamicKdTree, NeighborIndex, PointsView, Query};
+    ///
+    /// let mut tree = DynamicKdTree::<f64>::new(2, &BuildOptions::default())?;
+    /// assert_eq!(tree.insert(&PointsView::from_flat(&[0.0, 0.0, 1.0, 0.0], 2)?)?, 0);
+    /// assert_eq!(tree.insert(&PointsView::from_flat(&[5.0, 5.0], 2)?)?, 2);
+    /// tree.remove(&[1])?;
+    /// let mut out = Vec::new();
+    /// tree.knn(Query::point(&[0.9, 0.0]), 1, &mut out)?;
+    /// assert_eq!(out[0].index, 0); // index 1 is removed; the others keep theirs
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
     pub fn insert(&mut self, view: &PointsView<'_>) -> Result<u32> {
         if view.dim() != self.dim {
             return Err(NbhdError::DimensionMismatch {

@@ -59,6 +59,20 @@ impl Default for StatisticalOutlierOptions {
 ///
 /// Errors: `k` = 0 ([`NbhdError::ZeroK`]); `k` not below the number of points, or a
 /// non-finite `std_ratio`, or too many threads ([`NbhdError::InvalidOption`]).
+///
+/// ```
+/// use nbhd::filter::{statistical_outlier_removal, StatisticalOutlierOptions};
+/// use nbhd::{BuildOptions, KdTree, PointsView};
+///
+/// // a row of points one apart, and one far away
+/// let mut pts: Vec<f32> = (0..20).flat_map(|i| [i as f32, 0.0]).collect();
+/// pts.extend([5.0, 40.0]);
+/// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+/// let options = StatisticalOutlierOptions { k: 2, std_ratio: 1.0, threads: 0 };
+/// let kept = statistical_outlier_removal(&tree, &options)?;
+/// assert_eq!(kept.indices, (0..20).collect::<Vec<u32>>());
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn statistical_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
     index: &I,
     options: &StatisticalOutlierOptions,
@@ -140,6 +154,17 @@ pub struct RadiusOutlierOptions {
 ///
 /// Errors: a negative, NaN or infinite radius ([`NbhdError::InvalidRadius`]), one too large
 /// for the tree's type ([`NbhdError::RadiusOutOfRange`]), too many threads.
+///
+/// ```
+/// use nbhd::filter::{radius_outlier_removal, RadiusOutlierOptions};
+/// use nbhd::{BuildOptions, KdTree, PointsView};
+///
+/// let pts = [0.0f64, 0.0, 1.0, 0.0, 2.0, 0.0, 9.0, 9.0];
+/// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+/// let options = RadiusOutlierOptions { radius: 1.0, min_neighbors: 1, threads: 0 };
+/// assert_eq!(radius_outlier_removal(&tree, &options)?.indices, [0, 1, 2]);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn radius_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
     index: &I,
     options: &RadiusOutlierOptions,

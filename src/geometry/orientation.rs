@@ -83,6 +83,19 @@ impl Orientation {
 
 /// Flips normals in place as `orientation` asks. Only the sign of `frame.normal` changes (the
 /// tangent frame keeps `major × minor` parallel to the normal after the call).
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::{local_frames, neighbors::neighbor_table, orient, Orientation};
+/// use nbhd::Neighborhood;
+///
+/// let points: Vec<DVec3> = (0..100).map(|i| DVec3::new((i % 10) as f64, (i / 10) as f64, 0.0)).collect();
+/// let table = neighbor_table(&points, Neighborhood::Knn { k: 8 }, true)?;
+/// let mut frames = local_frames(&points, &table)?;
+/// orient(&points, &table, &mut frames, Orientation::TowardViewpoint(DVec3::new(0.0, 0.0, 10.0)))?;
+/// assert!(frames.iter().all(|f| f.normal.z > 0.0));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn orient(
     points: &[DVec3],
     table: &NeighborTable<f64>,

@@ -497,6 +497,23 @@ pub(crate) fn check_not_degenerate(
 }
 
 /// Smooths `points` with `options` (see the module documentation).
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::smooth::{smooth, SmoothOptions};
+///
+/// // a wavy patch of the plane z = 0: smoothing flattens it
+/// let points: Vec<DVec3> = (0..900)
+///     .map(|i| {
+///         let (x, y) = ((i % 30) as f64, (i / 30) as f64);
+///         DVec3::new(x, y, 0.05 * ((x + y) * 2.0).sin())
+///     })
+///     .collect();
+/// let result = smooth(&points, &SmoothOptions::isotropic())?;
+/// let spread = |p: &[DVec3]| p.iter().map(|p| p.z.abs()).sum::<f64>();
+/// assert!(spread(&result.points) < spread(&points));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn smooth(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult> {
     smooth_with_progress(points, options, &mut |_, _| true)
 }
@@ -633,6 +650,17 @@ fn smooth_finite(
 
 /// The per-point outputs (Section 7.3) of `points` themselves, without smoothing: the
 /// neighbourhoods, thresholds and orientation of `options` apply.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::smooth::{analyze, SmoothOptions};
+///
+/// let points: Vec<DVec3> = (0..400).map(|i| DVec3::new((i % 20) as f64, (i / 20) as f64, 0.0)).collect();
+/// let result = analyze(&points, &SmoothOptions::default())?;
+/// assert_eq!(result.points, points); // nothing moves
+/// assert!(result.outputs.iter().all(|o| o.max_principal_curvature < 1e-9));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn analyze(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult> {
     analyze_from(points, Neighbors::default(), options)
 }

@@ -51,6 +51,16 @@ impl<T: Scalar> KdTree<T> {
     /// coordinate (unless `options.non_finite` skips them), [`NbhdError::EmptyInput`] if no
     /// point remains, [`NbhdError::InvalidOption`] for a leaf size of 0,
     /// [`NbhdError::ThreadPool`] if a requested pool cannot be created.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, PivotPolicy, PointsView};
+    ///
+    /// let rows = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let options = BuildOptions { pivot: PivotPolicy::CyclicMedian, ..BuildOptions::default() };
+    /// let tree = KdTree::<f32>::build(&PointsView::from_rows(&rows)?, &options)?;
+    /// assert_eq!((tree.len(), tree.stats().dim), (3, 3));
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
     pub fn build(view: &PointsView<'_>, options: &BuildOptions) -> Result<Self> {
         options.validate()?;
         Self::build_selected(view, Selection::All(view.len()), options)
