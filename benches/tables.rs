@@ -3,7 +3,9 @@
 //! about 20 neighbours, the 16 nearest within it) on torus-77k, kNN k = 10 on the
 //! duplicate-heavy half-duplicates-100k, and brute force against nbhd for kNN k = 10 on a
 //! 20,000-point subsample of the torus (brute force is quadratic). One thread; every point
-//! queries its own set, itself included, and both sides write the whole table.
+//! queries its own set, itself included, and both sides write the whole table. Also the build
+//! of every pivot policy on two duplicate-heavy sets (half-duplicates-100k, and 100,000 rows
+//! of two points), nbhd only.
 //!
 //! Run: `cargo bench --bench tables` (a few minutes), or one group:
 //! `cargo bench --bench tables -- knn10`. Not run in CI. The side-by-side table over many
@@ -19,8 +21,8 @@ use nbhd::shapes::datasets::Dataset;
 use nbhd::table::neighborhoods_of_all;
 use nbhd::NeighborIndex;
 use nbhd::{
-    BruteForce, BuildOptions, KdTree, Neighborhood, NonFinitePolicy, PointsView, Query, Scalar,
-    TableOptions,
+    BruteForce, BuildOptions, KdTree, Neighborhood, NonFinitePolicy, PivotPolicy, PointsView,
+    Query, Scalar, TableOptions,
 };
 
 /// One thread for both sides.
@@ -185,6 +187,34 @@ fn build_group(c: &mut Criterion, set: &Set) {
     g.finish();
 }
 
+/// The build of every pivot policy (f32, one thread, the default median algorithm) on a
+/// duplicate-heavy set: where a policy's tie handling degenerates, its build goes quadratic
+/// (closest to middle took 27 s and depth 50,385 on the two-point set before its ties split
+/// the copies of the smallest coordinate off together; tests/tree_degenerate.rs).
+fn policy_build_group(c: &mut Criterion, name: &str, points: &[[f32; 3]]) {
+    let view = PointsView::from_rows(points).unwrap();
+    let mut g = quick_group(c, name);
+    for pivot in PivotPolicy::ALL {
+        let opts = BuildOptions {
+            pivot,
+            threads: 1,
+            ..BuildOptions::default()
+        };
+        g.bench_function(pivot.name(), |b| {
+            b.iter(|| KdTree::<f32>::build(&view, &opts).unwrap())
+        });
+    }
+    g.finish();
+}
+
+/// `n` rows holding one of two points (the case of a build of depth n/2 before the fix).
+fn two_points(n: usize) -> Vec<[f32; 3]> {
+    let mut rng = nbhd::shapes::Rng::new(37);
+    (0..n)
+        .map(|_| [if rng.below(2) == 0 { 0.0 } else { 1.0 }; 3])
+        .collect()
+}
+
 /// Brute force against nbhd, kNN k = 10, f32, on an evenly strided 20,000-point subsample.
 fn brute_group(c: &mut Criterion, torus: &Set) {
     let step = torus.f32.len() / 20_000;
@@ -227,6 +257,8 @@ fn benches(c: &mut Criterion) {
     table_group(c, "epsk/torus-77k", &torus, Op::EpsK(16, r));
     let dup = Set::new(Dataset::HalfDuplicates100k.points());
     table_group(c, "knn10/half-duplicates-100k", &dup, Op::Knn(10));
+    policy_build_group(c, "build-policies/half-duplicates-100k", &dup.f32);
+    policy_build_group(c, "build-policies/two-points-100k", &two_points(100_000));
     brute_group(c, &torus);
 }
 

@@ -237,9 +237,9 @@ use nbhd_status as S;
 /// Statuses every export may return on a hostile pointer or enum.
 const COMMON: [nbhd_status; 3] = [S::NullPointer, S::MisalignedPointer, S::InvalidArgument];
 
-/// The statuses of a points description (nbhd_tree_build's documented list).
-const POINTS: [nbhd_status; 6] = [
-    S::EmptyInput,
+/// The statuses of a points description (nbhd_tree_build's documented list; no point is a
+/// valid description).
+const POINTS: [nbhd_status; 5] = [
     S::ZeroDimension,
     S::StrideTooSmall,
     S::TooManyPoints,
@@ -374,7 +374,7 @@ pub fn build_query(data: &[u8]) {
         return;
     }
     let st = stats(tree);
-    assert!(st.points >= 1 && st.points <= points.count);
+    assert!(st.points <= points.count); // 0: no point given, or every one skipped
     assert_eq!(st.source_points, points.count);
     assert_eq!(st.dim, points.dim);
     let tree_f64 = st.scalar_type == nbhd_scalar_type::F64;

@@ -563,11 +563,13 @@ typedef struct {
  */
 typedef struct {
     /**
-     * First byte of point 0. Must not be NULL.
+     * First byte of point 0. Must not be NULL, except for no point (`count` 0).
      */
     const void *data;
     /**
-     * Number of points, 1 to 4294967295 (UINT32_MAX): indices are `uint32_t`.
+     * Number of points, 0 to 4294967295 (UINT32_MAX): indices are `uint32_t`. No point is a
+     * valid set: a tree over it finds nothing, a batch of no query gives a table of no row
+     * (functions that need points, such as smoothing, refuse it with EMPTY_INPUT).
      */
     size_t count;
     /**
@@ -1146,12 +1148,13 @@ nbhd_build_options nbhd_build_options_default(void);
  * The tree computes in `points->scalar_type` and keeps its own copy of the points, so the
  * point buffer may be changed or freed as soon as this returns. `options` may be NULL
  * for the defaults. On any error `*out_tree` is set to NULL (if `out_tree` is not NULL) and
- * nothing needs freeing.
+ * nothing needs freeing. No point (count 0, or every point skipped) gives a tree of no
+ * point: its queries find nothing and its tables have empty rows.
  *
- * Errors: NULL_POINTER (`points`, `points->data`, `out_tree`), MISALIGNED_POINTER,
- * INVALID_ARGUMENT (`points->scalar_type` not a value of the enum; `points->dim * sizeof
- * (scalar)` or `(count - 1) * stride` overflowing the address space — the message gives the
- * values passed), EMPTY_INPUT (count 0, or every point skipped), ZERO_DIMENSION,
+ * Errors: NULL_POINTER (`points`, `points->data` with a count above 0, `out_tree`),
+ * MISALIGNED_POINTER, INVALID_ARGUMENT (`points->scalar_type` not a value of the enum;
+ * `points->dim * sizeof (scalar)` or `(count - 1) * stride` overflowing the address space —
+ * the message gives the values passed), ZERO_DIMENSION,
  * STRIDE_TOO_SMALL (a stride below one point, with both sizes), TOO_MANY_POINTS, NON_FINITE
  * (the message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum
  * field out of range), THREAD_POOL. No other status is returned.
@@ -1181,8 +1184,8 @@ nbhd_status nbhd_tree_build(const nbhd_points *points,
  * the listed points, and empty rows for the others.
  *
  * Errors: those of nbhd_tree_build (NON_FINITE names the first listed non-finite point unless
- * `options->non_finite` skips them; EMPTY_INPUT when `index_count` is 0 or every listed point
- * is skipped), plus NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
+ * `options->non_finite` skips them; an `index_count` of 0 gives a tree of no point), plus
+ * NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
  * message names the first index >= `points->count`) and INVALID_ARGUMENT (an index listed
  * twice, named in the message).
  *
@@ -1190,7 +1193,8 @@ nbhd_status nbhd_tree_build(const nbhd_points *points,
  * the point buffer may be freed once this returns.
  *
  * # Safety
- * As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t.
+ * As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t
+ * (NULL is accepted for an `index_count` of 0).
  */
 nbhd_status nbhd_tree_build_indices(const nbhd_points *points,
                                     const uint32_t *indices,
@@ -1220,6 +1224,23 @@ void nbhd_tree_free(nbhd_tree *tree);
  * writable.
  */
 nbhd_status nbhd_tree_stats(const nbhd_tree *tree, nbhd_stats *out_stats);
+
+/**
+ * Copies the coordinates the tree holds for the point with index `index` (an index of the
+ * points given to nbhd_tree_build) to `out_coords`: `dim` values of the tree's scalar type
+ * (nbhd_stats.scalar_type). A wrapper that answers "around point i" through the index path
+ * (nbhd_tree_knn_index, ...) compares them with the caller's current coordinates first, so
+ * that a point moved since the build is searched where it is now (as nbhd_pcl.hpp does).
+ *
+ * Errors: NULL_POINTER (`tree`, `out_coords`), MISALIGNED_POINTER, INDEX_OUT_OF_RANGE
+ * (`index` >= nbhd_stats.source_points), SKIPPED_POINT (a point skipped at build time, or
+ * not listed to nbhd_tree_build_indices). Nothing is written on an error.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `out_coords` NULL or writable for `dim` values of the
+ * tree's scalar type.
+ */
+nbhd_status nbhd_tree_point(const nbhd_tree *tree, size_t index, void *out_coords);
 
 /**
  * Writes `tree` to the file `path` (created, or truncated if it exists) in the saved-tree
@@ -1339,8 +1360,10 @@ nbhd_status nbhd_dynamic_save_to_buffer(const nbhd_dynamic_tree *tree,
  * exactly as the saved one did, and continues its indices where the saved one stopped.
  *
  * Nothing in the file is trusted: the header, every static tree and what spans them (index
- * ranges, bitmaps, kept coordinates, live count) are checked before a tree is handed out. On
- * any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
+ * ranges, bitmaps, kept coordinates, live count; a dimension whose point would not fit in
+ * memory) are checked before a tree is handed out, and the thread count the file states is
+ * not obeyed: the loaded tree builds on the shared pool (0) until nbhd_dynamic_set_threads.
+ * On any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
  *
  * Errors: NULL_POINTER (`path`, `out_tree`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
  * `path`; off Unix, not UTF-8), IO_ERROR (the file cannot be read; the message names it),
@@ -1705,7 +1728,7 @@ nbhd_status nbhd_tree_neighborhoods(const nbhd_tree *tree,
  * a new table in `*out_table`: row i belongs to query point i. The query points may be of
  * either scalar type (they are converted to the tree's) but must have the tree's dimension;
  * none may be NaN or infinite. `options` may be NULL; its `exclude_self` does not apply
- * (queries are not stored points).
+ * (queries are not stored points). No query (`queries->count` 0) gives a table of no row.
  *
  * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
  *
@@ -1807,8 +1830,9 @@ nbhd_status nbhd_neighborhoods_row(const nbhd_neighborhoods *table,
  * leaves it out (queries naming it fail with NBHD_STATUS_SKIPPED_POINT).
  *
  * Errors: NULL_POINTER (`out_tree`), MISALIGNED_POINTER, ZERO_DIMENSION, INVALID_ARGUMENT
- * (`scalar_type` not a value of nbhd_scalar_type), INVALID_OPTION. On error `*out_tree` is
- * NULL.
+ * (`scalar_type` not a value of nbhd_scalar_type; `dim * sizeof(scalar)` overflowing the
+ * address space, as nbhd_tree_build refuses such points), INVALID_OPTION. On error
+ * `*out_tree` is NULL.
  *
  * Ownership: the caller frees `*out_tree` with nbhd_dynamic_free.
  *
@@ -1824,11 +1848,12 @@ nbhd_status nbhd_dynamic_create(size_t dim,
  * Inserts the points `*points` (of either scalar type, converted to the tree's; of the
  * tree's dimension) as one batch. `*out_first` (may be NULL) receives the index of the
  * first: the batch gets `first .. first + points->count - 1`, in order. The point buffer
- * may be freed as soon as this returns (the tree copies the points).
+ * may be freed as soon as this returns (the tree copies the points). A batch of no point
+ * inserts nothing (`*out_first` receives the next index).
  *
- * Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data`),
- * MISALIGNED_POINTER, the errors of a points description (see nbhd_tree_build: EMPTY_INPUT
- * for count 0, INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
+ * Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data` with a
+ * count above 0), MISALIGNED_POINTER, the errors of a points description (see
+ * nbhd_tree_build: INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
  * NON_FINITE (with options.non_finite REJECT; the message names the point's position in the
  * batch), TOO_MANY_POINTS (indices would pass UINT32_MAX - 1 over the tree's life),
  * OUT_OF_MEMORY, THREAD_POOL.
@@ -1855,6 +1880,20 @@ nbhd_status nbhd_dynamic_insert(nbhd_dynamic_tree *tree,
  * `count` readable `uint32_t`.
  */
 nbhd_status nbhd_dynamic_remove(nbhd_dynamic_tree *tree, const uint32_t *indices, size_t count);
+
+/**
+ * Sets the worker threads of the builds that later insertions and removals run: 0 the shared
+ * pool (a thread per core), 1 serially, n a pool of n threads (at most 1024), as
+ * `options->threads` of nbhd_dynamic_create. A loaded tree (nbhd_dynamic_load) starts at 0
+ * whatever its file says; this changes it. Answers do not depend on it.
+ *
+ * Errors, with nothing changed: NULL_POINTER, MISALIGNED_POINTER, INVALID_OPTION (above
+ * 1024).
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle not in use by another thread.
+ */
+nbhd_status nbhd_dynamic_set_threads(nbhd_dynamic_tree *tree, size_t threads);
 
 /**
  * Frees a dynamic tree. NULL is ignored.

@@ -86,7 +86,7 @@ struct Row {
     std::size_t len = 0;
 };
 
-/// Row `i` through the table's offset arrays (no call per row).
+/// Row `i` through the table's offset arrays (no call per row), bounds-checked.
 class RowsF32 {
 public:
     explicit RowsF32(const nbhd_neighborhoods* t)
@@ -95,7 +95,10 @@ public:
           idx_(nbhd_neighborhoods_indices(t)),
           sq_(static_cast<const float*>(nbhd_neighborhoods_sq_dists(t))) {}
     std::size_t rows() const { return rows_; }
+    /// Row `i`; throws std::out_of_range for `i` >= rows() (the offsets end there).
     Row operator[](std::size_t i) const {
+        if (i >= rows_) throw std::out_of_range("nbhdpp::RowsF32: row " + std::to_string(i) +
+                                                " of " + std::to_string(rows_));
         return Row{idx_ + off_[i], sq_ + off_[i], off_[i + 1] - off_[i]};
     }
 

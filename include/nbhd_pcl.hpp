@@ -34,12 +34,17 @@
 //     smallest index.
 //   - Squared distances: float, summed x, y, z in order, as FLANN's L2_Simple.
 //   - A query point with a non-finite coordinate (PCL asserts) gives 0 results and empty
-//     vectors; so does an index out of range.
-//   - Index queries go through nbhd's index path (nbhd_tree_knn_index, ...): the tree answers
-//     around its own copy of the point, without reading the cloud again. So do queries by a
-//     point that is one of the input cloud's (its address lies in the cloud's storage, as when
-//     EuclideanClusterExtraction passes cloud[i]). As for every search in PCL, a cloud changed
-//     after setInputCloud needs setInputCloud again: such a point is searched from where it was. A run of index
+//     vectors; so does an index out of range of the cloud (or of the indices) as it is now.
+//   - Queries read the query point where it is at call time, as PCL's do (pcl::search::Search
+//     reads (*input_)[index]): the points searched are those of the last setInputCloud, the
+//     point asked about is the cloud's current one. A point appended to the input cloud since
+//     setInputCloud, or moved in place, is searched around its current coordinates among the
+//     points the tree holds, exactly as pcl::search::KdTree answers it.
+//   - Index queries take nbhd's index path (nbhd_tree_knn_index, ...) while the point is still
+//     where the tree holds it (nbhd_tree_point compares its coordinates): the tree answers
+//     around its own copy. So do queries by a point that is one of the input cloud's (its
+//     address lies in the cloud's storage, as when EuclideanClusterExtraction passes
+//     cloud[i]). A run of index
 //     queries with the same k (or radius, max_nn) — what PCL's algorithms do, one per point —
 //     is served, once the run is long (max(1024, points / 32) queries), from one table of
 //     every point's answer computed at once on all cores (nbhd_tree_neighborhoods;
@@ -136,6 +141,7 @@ public:
         tree_.reset();
         searched_ = 0;
         distinct_ = 0;
+        source_points_ = 0;
         copies_.clear();
         input_ = cloud;
         indices_ = indices;
@@ -156,15 +162,19 @@ public:
         } else {
             s = nbhd_tree_build(&pts, &opt, &t);
         }
-        if (s == NBHD_STATUS_EMPTY_INPUT) return;  // no finite point: every query finds nothing
         if (s != NBHD_STATUS_OK)
             throw std::runtime_error(std::string("nbhd::PclSearch::setInputCloud: ") +
                                      nbhd_last_error_message());
         tree_.reset(t);
         nbhd_stats st{};
         nbhd_tree_stats(t, &st);
+        if (st.points == 0) {  // no finite point: every query finds nothing
+            tree_.reset();
+            return;
+        }
         distinct_ = st.points;
         searched_ = st.points;
+        source_points_ = st.source_points;
         if (!copies_.empty())  // the extra copies of listed finite points count as points
             for (std::size_t c = 0; c < copies_.size(); ++c)
                 if (copies_[c] > 1 && finite((*cloud)[c])) searched_ += copies_[c] - 1;
@@ -357,14 +367,27 @@ private:
         return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
     }
 
-    /// `cloud[index]`: through the tree's index path if `cloud` is the input cloud (the tree
-    /// knows the point unless it was skipped or not listed), else by its coordinates.
+    /// `cloud[index]` as it is now (an index out of the cloud's current range: invalid):
+    /// through the tree's index path if it is a point of the input cloud that the tree holds
+    /// at these coordinates, else by its coordinates (a point appended or moved since
+    /// setInputCloud, skipped, or not listed), as PCL reads the query at call time.
     At at(const PointCloud& cloud, pcl::index_t index) const {
         if (index < 0 || static_cast<std::size_t>(index) >= cloud.size()) return At{nullptr, 0, true};
-        const PointT& p = cloud[static_cast<std::size_t>(index)];
+        const std::size_t i = static_cast<std::size_t>(index);
+        const PointT& p = cloud[i];
         if (!finite(p)) return At{nullptr, 0, true};
-        if (&cloud == input_.get()) return At{nullptr, static_cast<std::size_t>(index), false};
+        if (&cloud == input_.get() && held_as_is(i, p)) return At{nullptr, i, false};
         return At{&p.x, 0, false};
+    }
+
+    /// Whether the tree holds cloud point `i` at `p`'s current coordinates (bitwise equal
+    /// values; the tree's copy was made by setInputCloud). False for an index past the points
+    /// the tree was built over, and for a point it does not hold.
+    bool held_as_is(std::size_t i, const PointT& p) const {
+        if (!tree_ || i >= source_points_) return false;
+        float xyz[3];
+        if (nbhd_tree_point(tree_.get(), i, xyz) != NBHD_STATUS_OK) return false;
+        return xyz[0] == p.x && xyz[1] == p.y && xyz[2] == p.z;
     }
 
     At at_own(pcl::index_t index) const {
@@ -415,21 +438,16 @@ private:
         std::size_t kk = static_cast<std::size_t>(k) < distinct_ ? static_cast<std::size_t>(k)
                                                                   : distinct_;
         const nbhd_tree* t = tree_.get();
-        nbhd_status s;
+        // On an error `into` leaves the vectors empty: 0 results.
         if (a.q) {
-            s = into(idx, dist, kk, [&](std::uint32_t* i, float* d, std::size_t c, std::size_t* n) {
+            into(idx, dist, kk, [&](std::uint32_t* i, float* d, std::size_t c, std::size_t* n) {
                 return nbhd_tree_knn(t, a.q, kk, i, d, c, n);
             });
-        } else {
-            const Key key = make_key(NBHD_NEIGHBORHOOD_KIND_KNN, kk, 0.0f);
-            if (from_table(key, kk, 0.0, a.index, idx, dist)) return static_cast<int>(idx.size());
-            s = into(idx, dist, kk, [&](std::uint32_t* i, float* d, std::size_t c, std::size_t* n) {
+        } else if (!from_table(make_key(NBHD_NEIGHBORHOOD_KIND_KNN, kk, 0.0f), kk, 0.0, a.index,
+                               idx, dist)) {
+            into(idx, dist, kk, [&](std::uint32_t* i, float* d, std::size_t c, std::size_t* n) {
                 return nbhd_tree_knn_index(t, a.index, false, kk, i, d, c, n);
             });
-            if (s == NBHD_STATUS_SKIPPED_POINT) {  // not in the tree: around its coordinates
-                const PointT& p = (*input_)[a.index];
-                return knn_distinct(At{&p.x, 0, false}, k, idx, dist);
-            }
         }
         return static_cast<int>(idx.size());
     }
@@ -455,31 +473,24 @@ private:
         const nbhd_tree* t = tree_.get();
         const bool capped = max_nn > 0 && max_nn < distinct_;
         const std::size_t k = max_nn;
-        nbhd_status s;
         // Room for the answer, so that nbhd searches once: PCL's algorithms often pass fresh
         // vectors, so the hint (1.5 × the last answer's size, shared by all threads as a
         // relaxed atomic: a size, not a buffer) is the usual guess.
         std::size_t guess = capped ? k : size_hint_.load(std::memory_order_relaxed);
         if (!capped && idx.capacity() > guess) guess = idx.capacity();
         if (a.q) {
-            s = into(idx, dist, guess, [&](std::uint32_t* i, float* d, std::size_t c, std::size_t* n) {
+            into(idx, dist, guess, [&](std::uint32_t* i, float* d, std::size_t c, std::size_t* n) {
                 return capped ? nbhd_tree_knn_radius(t, a.q, k, r, i, d, c, n)
                               : nbhd_tree_radius(t, a.q, r, i, d, c, n);
             });
-        } else if (from_table(make_key(capped ? NBHD_NEIGHBORHOOD_KIND_KNN_RADIUS
-                                                 : NBHD_NEIGHBORHOOD_KIND_RADIUS,
-                                          capped ? k : 0, limit),
-                              capped ? k : 0, r, a.index, idx, dist)) {
-            s = NBHD_STATUS_OK;
-        } else {
-            s = into(idx, dist, guess, [&](std::uint32_t* i, float* d, std::size_t c, std::size_t* n) {
+        } else if (!from_table(make_key(capped ? NBHD_NEIGHBORHOOD_KIND_KNN_RADIUS
+                                                  : NBHD_NEIGHBORHOOD_KIND_RADIUS,
+                                           capped ? k : 0, limit),
+                               capped ? k : 0, r, a.index, idx, dist)) {
+            into(idx, dist, guess, [&](std::uint32_t* i, float* d, std::size_t c, std::size_t* n) {
                 return capped ? nbhd_tree_knn_radius_index(t, a.index, false, k, r, i, d, c, n)
                               : nbhd_tree_radius_index(t, a.index, false, r, i, d, c, n);
             });
-            if (s == NBHD_STATUS_SKIPPED_POINT) {
-                const PointT& p = (*input_)[a.index];
-                return within_distinct(At{&p.x, 0, false}, radius, idx, dist, max_nn);
-            }
         }
         if (!capped) {  // written only when it moves by half or more (no cache-line ping-pong)
             const std::size_t want = dist.size() + dist.size() / 2 + 16;
@@ -507,6 +518,7 @@ private:
     struct RowTable {
         Key key = 0;
         nbhd_neighborhoods* table = nullptr;
+        std::size_t rows = 0;                // rows of the table (off has rows + 1 entries)
         const std::size_t* off = nullptr;
         const std::uint32_t* idx = nullptr;
         const float* dist = nullptr;
@@ -518,7 +530,8 @@ private:
     /// and makes the table when the run is long enough.
     bool from_table(Key key, std::size_t k, double r, std::size_t index, pcl::Indices& idx,
                     std::vector<float>& dist) const {
-        if (!table_runs_) return false;
+        // A key holds 30 bits of k: a larger k (over a billion points) is never a table's.
+        if (!table_runs_ || k > 0x3FFFFFFF) return false;
         const RowTable* t = table_.load(std::memory_order_acquire);
         if (!t || t->key != key) {
             if (refused_key_.load(std::memory_order_relaxed) == key) return false;
@@ -538,6 +551,7 @@ private:
                 return false;
             }
         }
+        if (index >= t->rows) return false;  // not a row of the table: a single query
         const std::size_t a = t->off[index], b = t->off[index + 1];
         if (a == b) return false;
         idx.resize(b - a);
@@ -586,6 +600,7 @@ private:
         if (nbhd_tree_neighborhoods(tree_.get(), &spec, &o, &t->table) != NBHD_STATUS_OK)
             return nullptr;
         t->key = key;
+        t->rows = nbhd_neighborhoods_rows(t->table);
         t->off = nbhd_neighborhoods_offsets(t->table);
         t->idx = nbhd_neighborhoods_indices(t->table);
         t->dist = static_cast<const float*>(nbhd_neighborhoods_sq_dists(t->table));
@@ -606,6 +621,7 @@ private:
     mutable std::atomic<Key> refused_key_{0};  // a run whose table would be too large
     std::size_t searched_ = 0;  // points searched: in the tree, and the extra copies of listed ones
     std::size_t distinct_ = 0;  // points in the tree
+    std::size_t source_points_ = 0;  // the input cloud's size at setInputCloud: the tree's indices
     std::vector<std::uint32_t> copies_;  // times each cloud index was listed, if one was repeated
     mutable std::atomic<std::size_t> size_hint_{64};  // expected radius answer size
     mutable std::atomic<std::uint64_t> radius_memo_{0};  // limit bits << 32 | radius bits

@@ -5,7 +5,7 @@
 # a program linked against the static library.
 #
 # Needs cmake, g++, libflann-dev, libpcl-dev, libopenmesh-dev, libnanoflann-dev, libeigen3-dev,
-# liblz4-dev (scripts/test.sh installs them when missing).
+# liblz4-dev, libcgal-dev (bench_denoise; scripts/test.sh installs them when missing).
 #
 # Environment:
 #   NBHD_DATA_DIR   the data directory (default: tests/data of the repository)

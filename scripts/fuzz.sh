@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Fuzzes each reader of nbhd::io (PLY, PCD, PCD binary_compressed data, OBJ, XYZ, LAS/LAZ),
 # the saved-tree loader (load_tree, fuzz/tree_bodies.rs) and
-# the C ABI's build/query, table and smoothing entry points (abi_*, fuzz/abi_bodies.rs) with
-# cargo-fuzz (libFuzzer) for a few seconds each: scripts/test.sh runs it so.
+# the C ABI's build/query, table and smoothing entry points (abi_*, fuzz/abi_bodies.rs) and the
+# SIMD forms of the dispatched loops against their portable forms and brute force (simd_*,
+# fuzz/simd_bodies.rs) with cargo-fuzz (libFuzzer) for a few seconds each: scripts/test.sh runs
+# it so.
 #
 #   scripts/fuzz.sh                 every target, FUZZ_SECONDS (default 5) each
 #   FUZZ_SECONDS=600 scripts/fuzz.sh read_pcd     a longer run of one target
@@ -31,7 +33,7 @@ export CARGO_TARGET_DIR="$target_dir/fuzz"
 targets=("$@")
 if [ "${#targets[@]}" -eq 0 ]; then
     targets=(read_ply read_pcd read_pcd_compressed read_obj read_xyz read_las
-        abi_build_query abi_tables abi_smoothing load_tree)
+        abi_build_query abi_tables abi_smoothing load_tree simd_search simd_robust)
 fi
 
 echo "== building the fuzz targets"

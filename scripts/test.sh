@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test of nbhd on a fresh machine: installs what is missing (Debian packages), then
 # formatting, lints, the Rust tests (which include the C ABI checks: a C program against the
-# cdylib, under valgrind, and a threaded C test) and the C++ comparisons under ctest.
+# cdylib, under valgrind, and a threaded C test), the C++ comparisons under ctest, and the C and
+# C++ tests again under AddressSanitizer + UndefinedBehaviorSanitizer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -25,7 +26,7 @@ if [ -f cpp_examples/CMakeLists.txt ]; then
     command -v cmake >/dev/null 2>&1 || missing+=(cmake)
     command -v c++ >/dev/null 2>&1 || missing+=(g++)
     command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)  # cpp-test.sh checks nbhd.pc
-    for pkg in libflann-dev libpcl-dev libopenmesh-dev libnanoflann-dev libeigen3-dev liblz4-dev; do
+    for pkg in libflann-dev libpcl-dev libopenmesh-dev libnanoflann-dev libeigen3-dev liblz4-dev libcgal-dev; do
         dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
     done
 fi
@@ -64,6 +65,10 @@ scripts/fuzz.sh
 if [ -f cpp_examples/CMakeLists.txt ]; then
     echo "== C++ examples (ctest)"
     scripts/cpp-test.sh
+    # The headers' ctests and the C ABI tests once more under AddressSanitizer +
+    # UndefinedBehaviorSanitizer (the library cpp-test.sh installed; any report fails).
+    echo "== the C and C++ surfaces under the sanitizers"
+    scripts/sanitize-test.sh
 fi
 scripts/meshlab-test.sh  # the MeshLab plugin in Debian's meshlabserver (installs what it needs)
 echo "== all tests passed"

@@ -50,7 +50,8 @@ pub struct Cloud<T> {
 impl<T: Scalar> Cloud<T> {
     /// Copies the points of `view`, converting to `T` and applying `policy` to non-finite
     /// points. A value that is finite in the source but overflows `T` (an `f64` beyond the
-    /// `f32` range) counts as non-finite.
+    /// `f32` range) counts as non-finite. The copy may hold no point (none given, or every one
+    /// skipped).
     pub fn from_view(view: &PointsView<'_>, policy: NonFinitePolicy) -> Result<Self> {
         Self::from_view_at(view, 0..view.len(), policy)
     }
@@ -83,9 +84,6 @@ impl<T: Scalar> Cloud<T> {
             } else {
                 ids.push(i as u32);
             }
-        }
-        if ids.is_empty() {
-            return Err(NbhdError::EmptyInput);
         }
         Ok(Self {
             coords,

@@ -271,6 +271,16 @@ impl AnyIndex {
         }
     }
 
+    /// Sets the worker threads of a growing tree's later builds
+    /// ([`DynamicKdTree::set_threads`]); a static tree refuses ([`NbhdError::InvalidOption`]).
+    pub fn set_threads(&mut self, threads: usize) -> Result<()> {
+        match self {
+            AnyIndex::GrowingF32(t) => t.set_threads(threads),
+            AnyIndex::GrowingF64(t) => t.set_threads(threads),
+            _ => Err(static_tree("set the threads of its builds")),
+        }
+    }
+
     /// Inserts a batch into a growing tree ([`DynamicKdTree::insert`]); a static tree refuses
     /// ([`NbhdError::InvalidOption`]).
     pub fn insert(&mut self, points: &PointsView<'_>) -> Result<u32> {

@@ -34,6 +34,7 @@ pub(crate) mod scatter;
 pub(crate) mod select;
 #[cfg(any(test, feature = "shapes"))]
 pub mod shapes;
+pub mod simd;
 pub mod smooth;
 pub mod table;
 pub mod tree;

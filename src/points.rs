@@ -8,6 +8,22 @@ use crate::scalar::{Scalar, ScalarType};
 /// The largest number of points a tree holds: indices are `u32`.
 pub const MAX_POINTS: usize = u32::MAX as usize;
 
+/// The bytes of one point of dimension `dim` in `scalar`: what every description of points
+/// (a view, a growing tree, a saved growing tree) must fit in the address space.
+///
+/// Errors: [`NbhdError::SizeOverflow`] when `dim × scalar size` exceeds `isize::MAX` bytes.
+pub fn point_bytes(dim: usize, scalar: ScalarType) -> Result<usize> {
+    dim.checked_mul(scalar.size())
+        .filter(|&b| b <= isize::MAX as usize)
+        .ok_or_else(|| NbhdError::SizeOverflow {
+            what: format!(
+                "dim {dim} times {} bytes per coordinate ({:?})",
+                scalar.size(),
+                scalar
+            ),
+        })
+}
+
 /// A borrowed, validated description of `count` points of dimension `dim` in a byte buffer.
 ///
 /// Point `i` starts at byte `i * stride`; its coordinates are `dim` consecutive values of
@@ -22,9 +38,11 @@ pub struct PointsView<'a> {
 }
 
 impl<'a> PointsView<'a> {
-    /// Describes `count` points of dimension `dim`, `stride` bytes apart, in `bytes`.
+    /// Describes `count` points of dimension `dim`, `stride` bytes apart, in `bytes`. Zero
+    /// points are a valid description (of zero bytes): a tree over them, or a batch of them
+    /// as queries, holds or asks nothing.
     ///
-    /// Errors: [`NbhdError::EmptyInput`] for `count == 0`, [`NbhdError::ZeroDimension`],
+    /// Errors: [`NbhdError::ZeroDimension`],
     /// [`NbhdError::StrideTooSmall`], [`NbhdError::TooManyPoints`] and
     /// [`NbhdError::BufferTooSmall`] when `bytes` is shorter than the description.
     pub fn new(
@@ -59,12 +77,12 @@ impl<'a> PointsView<'a> {
     }
 
     /// The number of bytes a buffer of `count` points of dimension `dim`, `stride` bytes apart,
-    /// must hold: `(count - 1) * stride + dim * scalar.size()`, after the same geometry checks
-    /// as [`Self::new`]. Lets a caller that only has a pointer (the C ABI) know how many bytes
-    /// it may view before making the view.
+    /// must hold: `(count - 1) * stride + dim * scalar.size()` (0 for no point), after the same
+    /// geometry checks as [`Self::new`]. Lets a caller that only has a pointer (the C ABI) know
+    /// how many bytes it may view before making the view.
     ///
     /// Errors: [`NbhdError::ZeroDimension`], [`NbhdError::StrideTooSmall`],
-    /// [`NbhdError::EmptyInput`], [`NbhdError::TooManyPoints`], and
+    /// [`NbhdError::TooManyPoints`], and
     /// [`NbhdError::SizeOverflow`] when `dim × scalar size` or the buffer size overflows the
     /// address space.
     pub fn required_bytes(
@@ -76,15 +94,7 @@ impl<'a> PointsView<'a> {
         if dim == 0 {
             return Err(NbhdError::ZeroDimension);
         }
-        let point_bytes =
-            dim.checked_mul(scalar.size())
-                .ok_or_else(|| NbhdError::SizeOverflow {
-                    what: format!(
-                        "dim {dim} times {} bytes per coordinate ({:?})",
-                        scalar.size(),
-                        scalar
-                    ),
-                })?;
+        let point_bytes = point_bytes(dim, scalar)?;
         if stride < point_bytes {
             return Err(NbhdError::StrideTooSmall {
                 stride,
@@ -92,7 +102,7 @@ impl<'a> PointsView<'a> {
             });
         }
         if count == 0 {
-            return Err(NbhdError::EmptyInput);
+            return Ok(0);
         }
         if count > MAX_POINTS {
             return Err(NbhdError::TooManyPoints {
@@ -143,7 +153,7 @@ impl<'a> PointsView<'a> {
         self.count
     }
 
-    /// Always `false`: an empty view cannot be made.
+    /// `true` for a view of no point.
     pub fn is_empty(&self) -> bool {
         self.count == 0
     }
@@ -235,9 +245,12 @@ mod tests {
             PointsView::new(b, 2, 0, 24, ScalarType::F64).unwrap_err(),
             NbhdError::ZeroDimension
         );
+        let empty = PointsView::new(b, 0, 3, 24, ScalarType::F64).unwrap();
+        assert!(empty.is_empty() && empty.dim() == 3);
+        assert!(PointsView::new(&[], 0, 3, 24, ScalarType::F64).is_ok());
         assert_eq!(
-            PointsView::new(b, 0, 3, 24, ScalarType::F64).unwrap_err(),
-            NbhdError::EmptyInput
+            PointsView::new(b, 0, 0, 24, ScalarType::F64).unwrap_err(),
+            NbhdError::ZeroDimension
         );
         assert!(matches!(
             PointsView::new(b, 2, 3, 16, ScalarType::F64),
@@ -263,10 +276,11 @@ mod tests {
             PointsView::required_bytes(1, 2, 16, ScalarType::F64),
             Ok(16)
         );
-        assert_eq!(
-            PointsView::required_bytes(0, 3, 12, ScalarType::F32),
-            Err(NbhdError::EmptyInput)
-        );
+        assert_eq!(PointsView::required_bytes(0, 3, 12, ScalarType::F32), Ok(0));
+        assert!(matches!(
+            PointsView::required_bytes(0, 3, 11, ScalarType::F32),
+            Err(NbhdError::StrideTooSmall { .. })
+        ));
         assert_eq!(
             PointsView::required_bytes(2, 0, 12, ScalarType::F32),
             Err(NbhdError::ZeroDimension)

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 /// The layers, lowest first. A module of layer `i` may use modules of layers `< i`.
 const LAYERS: &[&[&str]] = &[
     // vocabulary every part shares
-    &["scalar", "error", "linalg", "select", "prefetch"],
+    &["scalar", "error", "linalg", "select", "prefetch", "simd"],
     &["points", "parallel", "progress", "scatter", "names"],
     // the caller's points, validated and packed
     &["cloud"],

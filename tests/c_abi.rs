@@ -426,6 +426,20 @@ fn c_subset_trees_are_clean_under_valgrind() {
 }
 
 /// A scratch directory for a C test's files, emptied first.
+#[test]
+fn c_buffers_changed_between_calls_and_threads_interleaved() {
+    run(Command::new(compiled("mutate_test")), "tests/c/mutate_test");
+}
+
+#[test]
+fn c_buffers_changed_between_calls_are_clean_under_valgrind() {
+    let exe = compiled("mutate_test");
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(exe);
+        run(cmd, "valgrind tests/c/mutate_test");
+    }
+}
+
 fn scratch(name: &str) -> PathBuf {
     let dir = built().out_dir.join(name);
     let _ = std::fs::remove_dir_all(&dir);

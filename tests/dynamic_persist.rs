@@ -370,3 +370,69 @@ fn crafted_files_are_refused_or_exact() {
     // Changes that leave a valid forest (e.g. the growth factor or the nbhd version) load.
     assert!(loaded > 0, "no change was accepted ({refused} refused)");
 }
+
+/// A file is untrusted input: the thread count it states is not obeyed (a file saying 1024
+/// made every later insertion build on 1024 threads), the loaded tree builds on the default
+/// until `set_threads`; and a dimension whose point would not fit in memory is refused (an
+/// empty saved tree loaded with any), as `DynamicKdTree::new` refuses it.
+#[test]
+fn saved_threads_are_not_obeyed_and_huge_dimensions_are_refused() {
+    let options = BuildOptions {
+        threads: 2,
+        ..BuildOptions::default()
+    };
+    let mut t = DynamicKdTree::<f32>::new(3, &options).unwrap();
+    t.insert_flat(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0]).unwrap();
+    let mut bytes = t.to_bytes();
+    assert_eq!(u64::from_ne_bytes(bytes[88..96].try_into().unwrap()), 2);
+    bytes[88..96].copy_from_slice(&1024u64.to_ne_bytes());
+    reseal(&mut bytes);
+    assert_eq!(
+        SavedDynamicInfo::from_bytes(&bytes)
+            .unwrap()
+            .options
+            .threads,
+        1024
+    );
+    let mut back = DynamicKdTree::<f32>::from_bytes(&bytes).unwrap();
+    assert_eq!(
+        back.options().threads,
+        0,
+        "the file's thread count was obeyed"
+    );
+    back.set_threads(1).unwrap();
+    assert_eq!(back.options().threads, 1);
+    back.insert_flat(&[6.0, 7.0, 8.0]).unwrap();
+    assert!(matches!(
+        back.set_threads(nbhd::MAX_THREADS + 1),
+        Err(NbhdError::InvalidOption {
+            name: "threads",
+            ..
+        })
+    ));
+    assert_eq!(back.options().threads, 1);
+
+    for (scalar_size, dim) in [
+        (4, usize::MAX),
+        (4, usize::MAX / 4 + 1),
+        (8, isize::MAX as usize / 8 + 1),
+    ] {
+        let e = if scalar_size == 4 {
+            DynamicKdTree::<f32>::new(dim, &BuildOptions::default()).unwrap_err()
+        } else {
+            DynamicKdTree::<f64>::new(dim, &BuildOptions::default()).unwrap_err()
+        };
+        assert!(
+            matches!(e, NbhdError::SizeOverflow { .. }),
+            "dim {dim}: {e}"
+        );
+    }
+    let empty = DynamicKdTree::<f64>::new(2, &BuildOptions::default()).unwrap();
+    for dim in [u64::MAX, isize::MAX as u64 / 8 + 1] {
+        let mut bytes = empty.to_bytes();
+        bytes[32..40].copy_from_slice(&dim.to_ne_bytes());
+        reseal(&mut bytes);
+        let e = saved_error::<f64>(&bytes);
+        assert!(e.to_string().contains(&format!("dimension {dim}")), "{e}");
+    }
+}

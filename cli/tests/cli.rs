@@ -844,6 +844,26 @@ fn robust_smoothing_is_the_default_and_matches_the_library() {
     }
 }
 
+/// The robust run's report: "1 iteration" in the singular, the extra noise estimate (the one
+/// that stopped the iterations) said as such, and the noise scale's line.
+#[test]
+fn robust_report_counts_iterations_and_estimates() {
+    let (file, _) = noisy_sphere_file("nsphere-report.ply");
+    let out = tmp("nsphere-report-out.ply");
+    let o = nbhd(&["smooth", &file, &out, "--iterations", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("1 iteration (at most 1"), "{text}");
+    assert!(!text.contains("1 iterations"), "{text}");
+    assert!(text.contains("noise scale: local dimension"), "{text}");
+    let o = nbhd(&["smooth", &file, &out]);
+    let text = stdout(&o);
+    assert!(
+        text.contains("(the last one, on the result, stopped the iterations)"),
+        "{text}"
+    );
+}
+
 #[test]
 fn nan_points_keep_their_place_through_smoothing() {
     let (file, pts) = sphere_file("sphere-nan.xyz");

@@ -108,6 +108,11 @@ class DynamicKdTree:
         """Inserts a batch; returns the index of its first point."""
     def remove(self, indices: Sequence[int]) -> None: ...
     @property
+    def threads(self) -> int:
+        """Threads of the builds insert and remove run (0: a thread per core); 0 after from_bytes."""
+    @threads.setter
+    def threads(self, threads: int) -> None: ...
+    @property
     def size(self) -> int:
         """Live points."""
     @property

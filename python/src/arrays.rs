@@ -31,8 +31,9 @@ impl Dtype {
 }
 
 /// `obj` as a numpy array of float32 or float64: an array of either type as it is (no copy),
-/// anything else (lists, integer or float16 arrays) converted by `numpy.asarray` to `want`
-/// (float64 when `None`). With `want` given, an array of the other float type is converted too.
+/// anything else (lists, integer, boolean or float16 arrays) converted by `numpy.asarray` to
+/// `want` (float64 when `None`). With `want` given, an array of the other float type is
+/// converted too. Complex, object, string and other non-numeric arrays raise NbhdValueError.
 pub fn float_array<'py>(
     obj: &Bound<'py, PyAny>,
     want: Option<Dtype>,
@@ -52,10 +53,34 @@ pub fn float_array<'py>(
         (_, w) => {
             let w = w.unwrap_or(Dtype::F64);
             let np = obj.py().import("numpy")?;
-            let arr = np.call_method1("asarray", (obj, w.numpy_name()))?;
+            let given = np.call_method1("asarray", (obj,))?;
+            refuse_non_real(&given)?;
+            let arr = np.call_method1("asarray", (given, w.numpy_name()))?;
             Ok((arr, w))
         }
     }
+}
+
+/// Refuses arrays whose values are not real numbers: complex (converting drops the imaginary
+/// part, which numpy only warns about), object (anything, converted one element at a time),
+/// strings, bytes, records, dates and durations.
+fn refuse_non_real(arr: &Bound<'_, PyAny>) -> PyResult<()> {
+    let dtype = arr.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if matches!(kind.as_str(), "b" | "i" | "u" | "f") {
+        return Ok(());
+    }
+    let what = match kind.as_str() {
+        "c" => "complex numbers (their imaginary part would be dropped)",
+        "O" => "Python objects",
+        "U" | "S" => "strings",
+        "M" | "m" => "dates or durations",
+        _ => "records or raw bytes",
+    };
+    Err(value_err(format!(
+        "nbhd takes real numbers; got a {} array of {what}",
+        dtype.str()?
+    )))
 }
 
 /// The rank of a numpy array.

@@ -121,6 +121,19 @@ impl PyDynamicKdTree {
         py.detach(|| index.remove(&indices)).or_raise()
     }
 
+    /// Worker threads of the builds that `insert` and `remove` run: 0 a thread per core, 1
+    /// serially, n a pool of n (at most 1024). A tree read by `from_bytes` (or unpickled)
+    /// starts at 0 whatever the bytes say: saved data is untrusted input.
+    #[getter]
+    fn threads(&self) -> usize {
+        self.index.options().threads
+    }
+
+    #[setter]
+    fn set_threads(&mut self, threads: usize) -> PyResult<()> {
+        self.index.set_threads(threads).or_raise()
+    }
+
     /// Live points.
     #[getter]
     fn size(&self) -> usize {
@@ -186,7 +199,7 @@ impl PyDynamicKdTree {
             index::spec(Some(k), None, true)?,
             threads,
         )?
-        .dense(py)
+        .dense(py, k.min(self.size()))
     }
 
     /// All live points within `radius` of `x`; as `KdTree.radius`.

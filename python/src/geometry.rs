@@ -329,6 +329,8 @@ pub fn smooth_robust<'py>(
         outputs,
         non_finite: options::non_finite(non_finite)?,
         threads,
+        // what Python does not set (the noise scale) stays the library's default
+        ..RobustOptions::default()
     };
     let pts = dvec3s(points)?;
     let r = py

@@ -63,11 +63,12 @@ impl<'py> Answer<'py> {
         }
     }
 
-    /// A k-nearest answer: a tuple, or a batch's rows as two (rows, k) arrays.
-    pub(crate) fn dense(self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    /// A k-nearest answer: a tuple, or a batch's rows as two (rows, `width`) arrays (`width`
+    /// = min(k, size); a batch of no query is (0, `width`)).
+    pub(crate) fn dense(self, py: Python<'py>, width: usize) -> PyResult<Bound<'py, PyAny>> {
         match self {
             Answer::One(t) => Ok(t.into_any()),
-            Answer::Many(table) => table.dense(py),
+            Answer::Many(table) => table.dense(py, width),
         }
     }
 }

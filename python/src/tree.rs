@@ -162,7 +162,7 @@ impl PyKdTree {
             index::spec(Some(k), None, true)?,
             threads,
         )?
-        .dense(py)
+        .dense(py, k.min(self.size()))
     }
 
     /// All stored points within `radius` of `x` (plain Euclidean radius, inclusive:
@@ -305,10 +305,10 @@ impl PyTable {
     }
 
     /// The rows as two (rows, width) arrays when every row has the same length (a k-nearest
-    /// batch: min(k, size) each).
-    pub(crate) fn dense<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    /// batch: min(k, size) each, `width`; a batch of no query is (0, width)).
+    pub(crate) fn dense<'py>(&self, py: Python<'py>, width: usize) -> PyResult<Bound<'py, PyAny>> {
         let total = *self.starts.last().unwrap_or(&0);
-        let width = total.checked_div(self.rows).unwrap_or(0);
+        let width = total.checked_div(self.rows).unwrap_or(width);
         if self.starts.iter().enumerate().any(|(i, &o)| o != i * width) {
             return Err(value_err("internal: k-nearest rows of unequal length"));
         }

@@ -26,17 +26,68 @@ def test_non_finite_points_are_named():
         nbhd.KdTree(pts)
 
 
-def test_empty_and_dimensionless_inputs():
-    with pytest.raises(nbhd.NbhdValueError, match="empty"):
-        nbhd.KdTree(np.zeros((0, 3)))
+def test_dimensionless_inputs():
     with pytest.raises(nbhd.NbhdValueError, match="dimension"):
         nbhd.KdTree(np.zeros((4, 0)))
     with pytest.raises(nbhd.NbhdValueError, match="2-D"):
         nbhd.KdTree(np.zeros(3))
     with pytest.raises(nbhd.NbhdValueError, match="2-D"):
         nbhd.KdTree(np.zeros((2, 2, 3)))
-    with pytest.raises(nbhd.NbhdValueError, match="empty"):
-        nbhd.KdTree(np.full((3, 3), np.nan), non_finite="skip")
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_no_point_and_no_query_are_valid(dtype):
+    # A tree over no point (none given, or every one skipped) finds nothing; a batch of no
+    # query is a table of no row; scipy's cKDTree answers both the same way.
+    for tree, rows in [
+        (nbhd.KdTree(np.zeros((0, 3), dtype)), 0),
+        (nbhd.KdTree(np.full((3, 3), np.nan, dtype), non_finite="skip"), 3),
+    ]:
+        assert tree.size == 0
+        i, d = tree.knn(np.zeros(3, dtype), 4)
+        assert i.shape == (0,) and d.shape == (0,)
+        i, d = tree.knn(np.zeros((2, 3), dtype), 4)
+        assert i.shape == (2, 0) and d.shape == (2, 0)
+        assert len(tree.radius(np.zeros((5, 3), dtype), 1.0)) == 5
+        assert len(tree.neighborhoods(k=2)) == rows
+        assert len(tree.neighborhoods(radius=1.0)) == rows
+        back = nbhd.KdTree.from_bytes(tree.to_bytes())
+        assert back.size == 0
+    tree = nbhd.KdTree(np.random.default_rng(3).random((20, 3)).astype(dtype))
+    i, d = tree.knn(np.zeros((0, 3), dtype), 4)
+    assert i.shape == (0, 4) and d.shape == (0, 4)
+    assert len(tree.radius(np.zeros((0, 3)), 0.5)) == 0
+    assert len(tree.knn_radius(np.zeros((0, 3)), 2, 0.5)) == 0
+    dyn = nbhd.DynamicKdTree(3, dtype=np.dtype(dtype).name)
+    assert dyn.insert(np.zeros((0, 3))) == 0
+    dyn.insert(np.ones((4, 3)))
+    assert dyn.insert(np.zeros((0, 3))) == 4 and dyn.size == 4
+    i, d = dyn.knn(np.zeros((0, 3)), 2)
+    assert i.shape == (0, 2)
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        np.zeros((4, 3), np.complex128),
+        np.array([[1.0, 2.0, 3.0j]]),
+        np.array([[1.0, 2.0, 3.0]], dtype=object),
+        [[1.0, 2.0, "3"]],
+    ],
+)
+def test_complex_and_object_arrays_are_refused(bad):
+    # No silent cast (numpy only warns when it drops an imaginary part): a clear error.
+    import warnings
+
+    tree = nbhd.KdTree(np.zeros((5, 3)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(nbhd.NbhdValueError, match="real numbers"):
+            nbhd.KdTree(bad)
+        with pytest.raises(nbhd.NbhdValueError, match="real numbers"):
+            tree.knn(bad, 2)
+        with pytest.raises(nbhd.NbhdValueError, match="real numbers"):
+            nbhd.DynamicKdTree(3).insert(bad)
 
 
 def test_bad_queries(cloud):
@@ -59,8 +110,6 @@ def test_bad_queries(cloud):
     bad[4, 1] = np.inf
     with pytest.raises(nbhd.NbhdValueError, match="4"):
         tree.knn(bad, 3)
-    with pytest.raises(nbhd.NbhdValueError, match="empty"):
-        tree.knn(np.zeros((0, 3)), 3)
     with pytest.raises(nbhd.NbhdValueError, match="give k, radius"):
         tree.neighborhoods()
 

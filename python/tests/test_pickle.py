@@ -186,3 +186,20 @@ def test_dynamic_tree_options_and_errors(dtype):
         nbhd.DynamicKdTree(2, dtype="int8")
     back = pickle.loads(pickle.dumps(dyn))
     assert back.dtype_name == dtype and back.stats() == dyn.stats()
+
+
+def test_dynamic_tree_threads_are_set_and_not_taken_from_bytes():
+    # Saved bytes are untrusted: a tree read back builds on the default (0), whatever the
+    # bytes say, and the count is set on the handle.
+    dyn = nbhd.DynamicKdTree(3, threads=3)
+    assert dyn.threads == 3
+    dyn.insert(np.random.default_rng(1).random((50, 3)))
+    back = nbhd.DynamicKdTree.from_bytes(dyn.to_bytes())
+    assert back.threads == 0
+    back.threads = 1
+    assert back.threads == 1
+    back.insert(np.zeros((4, 3)))
+    with pytest.raises(nbhd.NbhdValueError, match="threads"):
+        back.threads = 5000
+    assert back.threads == 1
+    assert pickle.loads(pickle.dumps(back)).threads == 0

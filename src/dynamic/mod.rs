@@ -51,7 +51,7 @@ use std::sync::{Arc, OnceLock};
 
 use crate::cloud::NonFinitePolicy;
 use crate::error::{NbhdError, Result};
-use crate::points::PointsView;
+use crate::points::{point_bytes, PointsView};
 use crate::scalar::Scalar;
 use crate::tree::{BuildOptions, KdTree};
 
@@ -153,12 +153,15 @@ impl<T: Scalar> DynamicKdTree<T> {
     /// An empty tree of dimension `dim` whose trees are built with `options` (pivot, median,
     /// leaf size and threads; `non_finite` decides what an inserted non-finite point does).
     ///
-    /// Errors: [`NbhdError::ZeroDimension`], and those of [`BuildOptions::validate`].
+    /// Errors: [`NbhdError::ZeroDimension`], [`NbhdError::SizeOverflow`] for a dimension
+    /// whose point does not fit in the address space (as a [`PointsView`] of it is refused:
+    /// no point could ever be inserted or asked about), and those of [`BuildOptions::validate`].
     pub fn new(dim: usize, options: &BuildOptions) -> Result<Self> {
         options.validate()?;
         if dim == 0 {
             return Err(NbhdError::ZeroDimension);
         }
+        point_bytes(dim, T::TYPE)?;
         Ok(Self {
             dim,
             options: *options,
@@ -187,6 +190,19 @@ impl<T: Scalar> DynamicKdTree<T> {
             });
         }
         self.growth = growth;
+        Ok(())
+    }
+
+    /// Sets the worker threads of the builds that insertions and removals run (0: the current
+    /// rayon pool, 1: serially, n: a pool of n; at most [`crate::MAX_THREADS`]), as
+    /// [`BuildOptions::threads`] at [`Self::new`]. A loaded tree starts at 0 whatever its file
+    /// says (a file is untrusted input), so this is how a loaded tree gets another count.
+    /// Results do not depend on it.
+    ///
+    /// Errors: [`NbhdError::InvalidOption`] above [`crate::MAX_THREADS`].
+    pub fn set_threads(&mut self, threads: usize) -> Result<()> {
+        crate::parallel::check_threads(threads)?;
+        self.options.threads = threads;
         Ok(())
     }
 
@@ -262,7 +278,8 @@ impl<T: Scalar> DynamicKdTree<T> {
     }
 
     /// Inserts the points of `view` (converted to `T`) and returns the index of the first:
-    /// the batch gets the indices `first..first + view.len()`, in order.
+    /// the batch gets the indices `first..first + view.len()`, in order. A batch of no point
+    /// inserts nothing and returns the next index.
     ///
     /// Errors, with nothing inserted: [`NbhdError::DimensionMismatch`];
     /// [`NbhdError::NonFinite`] naming the position in the batch of the first non-finite
@@ -290,7 +307,7 @@ impl<T: Scalar> DynamicKdTree<T> {
         }
         let n = view.len();
         if n == 0 {
-            return Err(NbhdError::EmptyInput);
+            return Ok(self.next);
         }
         let first = self.next;
         let end = u64::from(first) + n as u64;

@@ -19,6 +19,7 @@ use super::{bit, DynamicKdTree, Part};
 use crate::cloud::NonFinitePolicy;
 use crate::error::Result;
 use crate::parallel::MAX_THREADS;
+use crate::points::point_bytes;
 use crate::query::NeighborSearch;
 use crate::scalar::{Scalar, ScalarType};
 use crate::tree::{
@@ -63,7 +64,8 @@ pub struct SavedDynamicInfo {
     pub trees: usize,
     /// The growth factor.
     pub growth: usize,
-    /// The options the static trees are built with.
+    /// The options the static trees are built with, as the file states them (its `threads`
+    /// is what the saving tree used: a loaded tree builds on the default 0 instead).
     pub options: BuildOptions,
     /// Bytes of the saved dynamic tree: header and payload.
     pub total_len: u64,
@@ -92,6 +94,12 @@ impl SavedDynamicInfo {
         if dim == 0 {
             return Err(invalid("dimension 0"));
         }
+        // As a new tree refuses it: no point of such a dimension fits in the address space
+        // (an empty saved tree would otherwise load with any).
+        usize::try_from(dim)
+            .ok()
+            .filter(|&d| point_bytes(d, scalar).is_ok())
+            .ok_or_else(|| invalid(format!("dimension {dim} (a point would not fit in memory)")))?;
         if next > u64::from(u32::MAX) {
             return Err(invalid(format!("{next} indices given (at most 2^32 - 1)")));
         }
@@ -285,7 +293,13 @@ impl<T: Scalar> SavedFormat for DynamicKdTree<T> {
         info.options.validate()?;
         Ok(Self {
             dim: info.dim,
-            options: info.options,
+            // The file's thread count is not obeyed (a file is untrusted input: one saying
+            // 1024 made every later insertion start 1024 threads): the loader's default,
+            // changed by `set_threads`.
+            options: BuildOptions {
+                threads: 0,
+                ..info.options
+            },
             store: kept.store,
             base: info.base,
             next: info.next_index,

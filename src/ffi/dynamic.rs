@@ -69,8 +69,9 @@ pub struct nbhd_dynamic_stats {
 /// leaves it out (queries naming it fail with NBHD_STATUS_SKIPPED_POINT).
 ///
 /// Errors: NULL_POINTER (`out_tree`), MISALIGNED_POINTER, ZERO_DIMENSION, INVALID_ARGUMENT
-/// (`scalar_type` not a value of nbhd_scalar_type), INVALID_OPTION. On error `*out_tree` is
-/// NULL.
+/// (`scalar_type` not a value of nbhd_scalar_type; `dim * sizeof(scalar)` overflowing the
+/// address space, as nbhd_tree_build refuses such points), INVALID_OPTION. On error
+/// `*out_tree` is NULL.
 ///
 /// Ownership: the caller frees `*out_tree` with nbhd_dynamic_free.
 ///
@@ -103,11 +104,12 @@ pub unsafe extern "C" fn nbhd_dynamic_create(
 /// Inserts the points `*points` (of either scalar type, converted to the tree's; of the
 /// tree's dimension) as one batch. `*out_first` (may be NULL) receives the index of the
 /// first: the batch gets `first .. first + points->count - 1`, in order. The point buffer
-/// may be freed as soon as this returns (the tree copies the points).
+/// may be freed as soon as this returns (the tree copies the points). A batch of no point
+/// inserts nothing (`*out_first` receives the next index).
 ///
-/// Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data`),
-/// MISALIGNED_POINTER, the errors of a points description (see nbhd_tree_build: EMPTY_INPUT
-/// for count 0, INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
+/// Errors, with nothing inserted: NULL_POINTER (`tree`, `points`, `points->data` with a
+/// count above 0), MISALIGNED_POINTER, the errors of a points description (see
+/// nbhd_tree_build: INVALID_ARGUMENT, STRIDE_TOO_SMALL, TOO_MANY_POINTS), DIMENSION_MISMATCH,
 /// NON_FINITE (with options.non_finite REJECT; the message names the point's position in the
 /// batch), TOO_MANY_POINTS (indices would pass UINT32_MAX - 1 over the tree's life),
 /// OUT_OF_MEMORY, THREAD_POOL.
@@ -177,6 +179,31 @@ pub unsafe extern "C" fn nbhd_dynamic_remove(
         // (caller).
         let tree = unsafe { &mut *tree };
         tree.inner.remove(ids)?;
+        Ok(())
+    })
+}
+
+/// Sets the worker threads of the builds that later insertions and removals run: 0 the shared
+/// pool (a thread per core), 1 serially, n a pool of n threads (at most 1024), as
+/// `options->threads` of nbhd_dynamic_create. A loaded tree (nbhd_dynamic_load) starts at 0
+/// whatever its file says; this changes it. Answers do not depend on it.
+///
+/// Errors, with nothing changed: NULL_POINTER, MISALIGNED_POINTER, INVALID_OPTION (above
+/// 1024).
+///
+/// # Safety
+/// `tree` must be NULL or a live handle not in use by another thread.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_set_threads(
+    tree: *mut nbhd_dynamic_tree,
+    threads: usize,
+) -> nbhd_status {
+    guard("nbhd_dynamic_set_threads", || {
+        super::args::check_ptr(tree.cast_const(), "tree")?;
+        // SAFETY: non-NULL and aligned (checked); a live handle used by no other thread
+        // (caller).
+        let tree = unsafe { &mut *tree };
+        tree.inner.set_threads(threads)?;
         Ok(())
     })
 }

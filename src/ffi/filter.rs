@@ -231,10 +231,14 @@ pub unsafe extern "C" fn nbhd_voxel_grid(
         check_ptr(leaf, "leaf")?;
         check_optional(centroids.cast_const(), "centroids")?;
         check_optional(nearest.cast_const(), "nearest")?;
-        // SAFETY: `leaf` is non-NULL, aligned and readable for `leaf_count` values (caller).
-        let leaf = unsafe { std::slice::from_raw_parts(leaf, leaf_count) }.to_vec();
         // SAFETY: the caller's description of the point memory is true (contract above).
         let view = unsafe { arg.view() }?;
+        // A count other than 1 or the dimension is refused before `leaf` is read (it bounds
+        // the read too: at most `dim` values, which fit in memory as a point does).
+        crate::filter::check_leaf_count(leaf_count, view.dim())?;
+        // SAFETY: `leaf` is non-NULL, aligned and readable for `leaf_count` values (caller),
+        // and `leaf_count` is 1 or the points' dimension (checked just above).
+        let leaf = unsafe { std::slice::from_raw_parts(leaf, leaf_count) }.to_vec();
         let options = VoxelGridOptions {
             leaf,
             min_points_per_voxel,

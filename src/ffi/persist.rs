@@ -330,8 +330,10 @@ pub unsafe extern "C" fn nbhd_dynamic_save_to_buffer(
 /// exactly as the saved one did, and continues its indices where the saved one stopped.
 ///
 /// Nothing in the file is trusted: the header, every static tree and what spans them (index
-/// ranges, bitmaps, kept coordinates, live count) are checked before a tree is handed out. On
-/// any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
+/// ranges, bitmaps, kept coordinates, live count; a dimension whose point would not fit in
+/// memory) are checked before a tree is handed out, and the thread count the file states is
+/// not obeyed: the loaded tree builds on the shared pool (0) until nbhd_dynamic_set_threads.
+/// On any error `*out_tree` is set to NULL (if `out_tree` is not NULL).
 ///
 /// Errors: NULL_POINTER (`path`, `out_tree`), MISALIGNED_POINTER, INVALID_ARGUMENT (an empty
 /// `path`; off Unix, not UTF-8), IO_ERROR (the file cannot be read; the message names it),

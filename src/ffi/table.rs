@@ -120,7 +120,7 @@ pub(super) unsafe fn neighborhoods<H: IndexHandle>(
 /// a new table in `*out_table`: row i belongs to query point i. The query points may be of
 /// either scalar type (they are converted to the tree's) but must have the tree's dimension;
 /// none may be NaN or infinite. `options` may be NULL; its `exclude_self` does not apply
-/// (queries are not stored points).
+/// (queries are not stored points). No query (`queries->count` 0) gives a table of no row.
 ///
 /// On any error `*out_table` is set to NULL (if `out_table` is not NULL).
 ///

@@ -1,10 +1,15 @@
 //! The tree handle: build options, build, free, statistics.
 
-use super::args::{check_ptr, deref, init_out};
+use super::args::{check_aligned, check_ptr, deref, init_out};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::{nbhd_build_options, nbhd_points, nbhd_stats, read_build_options, PointsArg};
+use crate::error::NbhdError;
 use crate::handle::AnyIndex;
+use crate::index::NeighborIndex;
+use crate::query::Query;
+use crate::scalar::Scalar;
 use crate::tree::BuildOptions;
+use crate::with_index;
 
 /// A built k-d tree (opaque). It holds its own copy of the points, in the scalar type of the
 /// points it was built from, and is immutable: any number of threads may query one tree at
@@ -59,12 +64,13 @@ pub extern "C" fn nbhd_build_options_default() -> nbhd_build_options {
 /// The tree computes in `points->scalar_type` and keeps its own copy of the points, so the
 /// point buffer may be changed or freed as soon as this returns. `options` may be NULL
 /// for the defaults. On any error `*out_tree` is set to NULL (if `out_tree` is not NULL) and
-/// nothing needs freeing.
+/// nothing needs freeing. No point (count 0, or every point skipped) gives a tree of no
+/// point: its queries find nothing and its tables have empty rows.
 ///
-/// Errors: NULL_POINTER (`points`, `points->data`, `out_tree`), MISALIGNED_POINTER,
-/// INVALID_ARGUMENT (`points->scalar_type` not a value of the enum; `points->dim * sizeof
-/// (scalar)` or `(count - 1) * stride` overflowing the address space — the message gives the
-/// values passed), EMPTY_INPUT (count 0, or every point skipped), ZERO_DIMENSION,
+/// Errors: NULL_POINTER (`points`, `points->data` with a count above 0, `out_tree`),
+/// MISALIGNED_POINTER, INVALID_ARGUMENT (`points->scalar_type` not a value of the enum;
+/// `points->dim * sizeof (scalar)` or `(count - 1) * stride` overflowing the address space —
+/// the message gives the values passed), ZERO_DIMENSION,
 /// STRIDE_TOO_SMALL (a stride below one point, with both sizes), TOO_MANY_POINTS, NON_FINITE
 /// (the message names the first point and coordinate), INVALID_OPTION (leaf size 0, an enum
 /// field out of range), THREAD_POOL. No other status is returned.
@@ -112,8 +118,8 @@ pub unsafe extern "C" fn nbhd_tree_build(
 /// the listed points, and empty rows for the others.
 ///
 /// Errors: those of nbhd_tree_build (NON_FINITE names the first listed non-finite point unless
-/// `options->non_finite` skips them; EMPTY_INPUT when `index_count` is 0 or every listed point
-/// is skipped), plus NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
+/// `options->non_finite` skips them; an `index_count` of 0 gives a tree of no point), plus
+/// NULL_POINTER / MISALIGNED_POINTER (`indices`), INDEX_OUT_OF_RANGE (the
 /// message names the first index >= `points->count`) and INVALID_ARGUMENT (an index listed
 /// twice, named in the message).
 ///
@@ -121,7 +127,8 @@ pub unsafe extern "C" fn nbhd_tree_build(
 /// the point buffer may be freed once this returns.
 ///
 /// # Safety
-/// As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t.
+/// As nbhd_tree_build; `indices` must be NULL or point to `index_count` readable uint32_t
+/// (NULL is accepted for an `index_count` of 0).
 #[no_mangle]
 pub unsafe extern "C" fn nbhd_tree_build_indices(
     points: *const nbhd_points,
@@ -140,15 +147,21 @@ pub unsafe extern "C" fn nbhd_tree_build_indices(
                 read_build_options(options)?,
             )
         };
-        check_ptr(indices, "indices")?;
         if index_count > isize::MAX as usize / std::mem::size_of::<u32>() {
             return Err(FfiError::InvalidArgument(format!(
                 "index_count {index_count} overflows the address space"
             )));
         }
-        // SAFETY: `indices` is non-NULL and aligned (checked above) and points to `index_count`
-        // readable values (caller), whose byte size fits in isize (checked above); only read.
-        let indices = unsafe { std::slice::from_raw_parts(indices, index_count) };
+        let indices: &[u32] = if index_count == 0 {
+            super::args::check_optional(indices, "indices")?;
+            &[]
+        } else {
+            check_ptr(indices, "indices")?;
+            // SAFETY: `indices` is non-NULL and aligned (checked above) and points to
+            // `index_count` readable values (caller), whose byte size fits in isize (checked
+            // above); only read.
+            unsafe { std::slice::from_raw_parts(indices, index_count) }
+        };
         // SAFETY: the caller's description of the point memory is true (contract above).
         let view = unsafe { arg.view() }?;
         let tree = AnyIndex::build_subset(&view, indices, &options)?;
@@ -211,4 +224,53 @@ pub unsafe extern "C" fn nbhd_tree_stats(
         unsafe { out.write(stats) };
         Ok(())
     })
+}
+
+/// Copies the coordinates the tree holds for the point with index `index` (an index of the
+/// points given to nbhd_tree_build) to `out_coords`: `dim` values of the tree's scalar type
+/// (nbhd_stats.scalar_type). A wrapper that answers "around point i" through the index path
+/// (nbhd_tree_knn_index, ...) compares them with the caller's current coordinates first, so
+/// that a point moved since the build is searched where it is now (as nbhd_pcl.hpp does).
+///
+/// Errors: NULL_POINTER (`tree`, `out_coords`), MISALIGNED_POINTER, INDEX_OUT_OF_RANGE
+/// (`index` >= nbhd_stats.source_points), SKIPPED_POINT (a point skipped at build time, or
+/// not listed to nbhd_tree_build_indices). Nothing is written on an error.
+///
+/// # Safety
+/// `tree` must be NULL or a live handle; `out_coords` NULL or writable for `dim` values of the
+/// tree's scalar type.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_tree_point(
+    tree: *const nbhd_tree,
+    index: usize,
+    out_coords: *mut std::ffi::c_void,
+) -> nbhd_status {
+    guard("nbhd_tree_point", || {
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: `out_coords` is NULL or writable for `dim` values of the tree's type (caller).
+        with_index!(&tree.inner, t, _T => unsafe { copy_point(t, index, out_coords) })
+    })
+}
+
+/// Copies the coordinates of caller index `index` to `out`, or fails as a query around it would.
+///
+/// # Safety
+/// `out` NULL or writable for `dim` values of `T`.
+unsafe fn copy_point<T: Scalar, I: NeighborIndex<T>>(
+    t: &I,
+    index: usize,
+    out: *mut std::ffi::c_void,
+) -> Result<(), FfiError> {
+    check_aligned(out.cast_const(), std::mem::align_of::<T>(), "out_coords")?;
+    let count = t.source_len();
+    let index = u32::try_from(index).map_err(|_| NbhdError::IndexOutOfRange { index, count })?;
+    let (coords, _) = t.resolve(Query::Stored {
+        index,
+        exclude_self: false,
+    })?;
+    // SAFETY: `out` is non-NULL and aligned for `T` (checked above) and writable for `dim`
+    // values of `T` (caller); `coords` holds `dim` values and cannot overlap a caller's buffer.
+    unsafe { std::ptr::copy_nonoverlapping(coords.as_ptr(), out.cast::<T>(), coords.len()) };
+    Ok(())
 }

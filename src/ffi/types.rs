@@ -26,9 +26,11 @@ use crate::tree::{BuildOptions, TreeStats};
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct nbhd_points {
-    /// First byte of point 0. Must not be NULL.
+    /// First byte of point 0. Must not be NULL, except for no point (`count` 0).
     pub data: *const c_void,
-    /// Number of points, 1 to 4294967295 (UINT32_MAX): indices are `uint32_t`.
+    /// Number of points, 0 to 4294967295 (UINT32_MAX): indices are `uint32_t`. No point is a
+    /// valid set: a tree over it finds nothing, a batch of no query gives a table of no row
+    /// (functions that need points, such as smoothing, refuse it with EMPTY_INPUT).
     pub count: usize,
     /// Coordinates per point, at least 1.
     pub dim: usize,
@@ -69,7 +71,8 @@ impl PointsArg {
             c_field!(p.stride),
         );
         let scalar = c_field!(p.scalar_type as enum)?;
-        if data.is_null() {
+        // No point needs no memory: an empty std::vector's data() may be NULL.
+        if data.is_null() && count > 0 {
             return Err(FfiError::Null(format!("{arg}->data")));
         }
         let scalar = ScalarType::from(scalar);
@@ -101,10 +104,15 @@ impl PointsArg {
                 },
                 e => e,
             })?;
-        // SAFETY: `data` is non-NULL (checked in `read`), `len` <= isize::MAX (checked by
-        // `required_bytes`) and, by the caller's description, `len` bytes from `data` are
-        // readable and not mutated while the view is used. u8 has no alignment requirement.
-        let bytes = unsafe { std::slice::from_raw_parts(self.data, len) };
+        let bytes: &[u8] = if len == 0 {
+            &[] // no point (`data` may be NULL)
+        } else {
+            // SAFETY: `data` is non-NULL when there are points (checked in `read`), `len` <=
+            // isize::MAX (checked by `required_bytes`) and, by the caller's description, `len`
+            // bytes from `data` are readable and not mutated while the view is used. u8 has
+            // no alignment requirement.
+            unsafe { std::slice::from_raw_parts(self.data, len) }
+        };
         Ok(PointsView::new(
             bytes,
             self.count,

@@ -19,6 +19,7 @@
 
 mod outliers;
 mod voxel;
+pub(crate) use voxel::check_leaf_count;
 
 pub use outliers::{
     radius_outlier_removal, statistical_outlier_removal, Kept, RadiusOutlierOptions,

@@ -163,15 +163,22 @@ fn leaf_error(reason: String) -> NbhdError {
 }
 
 /// The leaf sizes per coordinate, checked: finite and > 0 in `T`, with a finite inverse.
+/// Refuses a number of leaf sizes other than one (a cube) or one per coordinate: before the
+/// sizes are read, so that the C ABI reads no more than a valid count.
+pub(crate) fn check_leaf_count(n: usize, d: usize) -> Result<()> {
+    if n == 1 || n == d {
+        return Ok(());
+    }
+    Err(leaf_error(format!(
+        "{n} leaf sizes given for points of dimension {d} (give one, or one per coordinate)"
+    )))
+}
+
 fn inverse_leaf<T: Scalar>(leaf: &[f64], d: usize) -> Result<Vec<T>> {
+    check_leaf_count(leaf.len(), d)?;
     let per_axis: Vec<f64> = match leaf.len() {
         1 => vec![leaf[0]; d],
-        n if n == d => leaf.to_vec(),
-        n => {
-            return Err(leaf_error(format!(
-                "{n} leaf sizes given for points of dimension {d} (give one, or one per coordinate)"
-            )))
-        }
+        _ => leaf.to_vec(),
     };
     per_axis
         .iter()

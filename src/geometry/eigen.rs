@@ -107,7 +107,7 @@ pub(crate) fn sym_eigen3_smallest_lanes<const N: usize>(
     a: &[DMat3; N],
 ) -> [Option<(DVec3, DVec3)>; N] {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
+    if crate::simd::avx() {
         // SAFETY: the processor supports AVX (checked just above).
         return unsafe { lanes_avx(a) };
     }

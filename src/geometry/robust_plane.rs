@@ -185,13 +185,11 @@ mod lanes {
     use super::{Neighborhood, LANES};
     use glam::{DMat3, DVec3};
 
-    /// Whether the AVX loops can run.
+    /// Whether the AVX loops can run (`crate::simd`: the processor has AVX, the portable
+    /// forms are not forced).
     #[inline]
     fn has_avx() -> bool {
-        #[cfg(target_arch = "x86_64")]
-        return std::arch::is_x86_feature_detected!("avx");
-        #[cfg(not(target_arch = "x86_64"))]
-        false
+        crate::simd::avx()
     }
 
     /// The sum of the points and the largest absolute coordinate.

@@ -68,6 +68,10 @@ impl<T: Scalar> PcaSweep<T> {
     /// first one. `O(n d² + n log n)`.
     pub fn new(view: &PointsView<'_>, policy: NonFinitePolicy) -> Result<Self> {
         let cloud = Cloud::<T>::from_view(view, policy)?;
+        if cloud.len() == 0 {
+            // No principal axes without a point.
+            return Err(crate::error::NbhdError::EmptyInput);
+        }
         let (n, d) = (cloud.len(), cloud.dim);
         let max_abs = cloud
             .coords

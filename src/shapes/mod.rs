@@ -12,6 +12,7 @@
 
 mod analytic;
 pub mod datasets;
+pub mod mesh;
 pub mod metrics;
 mod rng;
 

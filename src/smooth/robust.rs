@@ -10,6 +10,13 @@
 //! iteration of [`smooth_robust`] does, on the current points (the *proxy*: the cloud as
 //! smoothed so far, so that later iterations classify and choose on a less noisy cloud):
 //!
+//! 0. **Noise scale** (`robust/scales.rs`): before the first iteration, and before each later
+//!    one while it reads so, the cloud's local dimension (the median over the points of how
+//!    their neighbour distances grow: 2 on a surface, 3 in a ball of noise) says whether the
+//!    neighbourhoods below see the surface through the noise. Where they do not (noise of
+//!    about two spacings and more), `k` and `k_plane` are tripled until the proxy reads as a
+//!    surface (the stopping rule waits for it); then the rows are cut back and the iterations go on as below. Clouds with noise
+//!    up to about 1.5 spacings are never widened.
 //! 1. **Neighbourhoods** (Section 2.1.1): the `k_plane` nearest other points within ε. They
 //!    are searched once, on the input; later iterations re-measure and re-sort each point's
 //!    candidates on the proxy ('Update Neighbors', Section 7.3, without a second search: points
@@ -56,7 +63,9 @@
 //!    which holds on any smooth surface however curved, and fails for the blended normals
 //!    next to an edge); `a_ij` is the larger of the two.
 //! 5. **Stopping rule**: stop as soon as an iteration lowered the noise estimate σ̂ by less than
-//!    the fraction `tolerance`, at most after `max_iterations`. The amount of smoothing thus
+//!    the fraction `tolerance` (by less than a quarter while more than 0.4 of the first σ̂ is
+//!    left on a cloud that did not start as a ball of noise: that spread is mostly the
+//!    surface's own detail, see `stop_tolerance`), at most after `max_iterations`. The amount of smoothing thus
 //!    grows with the noise instead of being a fixed step count (one count under-smooths strong
 //!    noise and erodes weak noise; docs/smoothing-results.md), and a clean cloud stops after
 //!    one iteration: its σ̂ is curvature, which smoothing does not lower, so it is not eroded
@@ -64,7 +73,21 @@
 //!
 //! Every per-point computation reads the previous iteration only and sums its neighbours in row
 //! order; medians are taken over vectors collected in point order. The result is bit-identical
-//! for any number of rayon threads. The points are stored in the k-d tree's order while the
+//! for any number of rayon threads.
+//!
+//! **Global statistics and reach** (what a tiled run must reduce and exchange). Per iteration
+//! the method uses exactly two quantities computed over all points, each an exact median (a
+//! selection of one value among per-point values, so it can be reduced exactly across tiles):
+//! the noise estimate σ̂ (`noise_estimate` in `robust/planes.rs`, over each point's distance to its
+//! covariance plane) and, while the rows are wide, the median distance ratio of the noise scale
+//! (`distance_ratio` in `robust/scales.rs`, over each point's `d₄ₘ/dₘ`). The spacing h (a mean over the
+//! input's nearest distances, summed in caller order) is computed once. Everything else is per
+//! point. One iteration reads the rows of a point (the `k_plane` nearest of the first search,
+//! `2·k_plane` while wide, all within ε = 12h) and, through the candidate planes and the
+//! neighbours' normals, their rows: a point's new position depends on points within 2ε of it
+//! in the current proxy, and the candidates themselves come from the first search on the input;
+//! a halo of 2ε per iteration (plus the distance points move, at most ε per iteration) bounds
+//! what a tile needs. The points are stored in the k-d tree's order while the
 //! iterations run, so that a point's neighbours lie close in memory.
 //!
 //! Speed (docs/smoothing-results.md#speed): one search instead of one per iteration, a quarter of
@@ -77,6 +100,7 @@
 
 mod planes;
 mod rows;
+mod scales;
 mod step;
 
 use super::source::{knn_rows, Neighbors, SearchMethod};
@@ -91,7 +115,9 @@ use rows::Rows;
 use step::step;
 
 /// Settings of [`smooth_robust`]. The defaults are one setting for every shape and noise level:
-/// all thresholds are multiples of the estimated noise σ̂ or dimensionless.
+/// all thresholds are multiples of the estimated noise σ̂ or dimensionless, and the
+/// neighbourhoods grow with the noise by themselves (`noise_scale`). Every front door (CLI,
+/// C ABI, Python, MeshLab) starts from [`RobustOptions::default`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RobustOptions {
     /// Size `k` of the umbrella neighbourhood `N_i` (≥ 1). Default 24.
@@ -122,6 +148,11 @@ pub struct RobustOptions {
     /// Step size τ of eq. 2.18 (finite, in (0, 1]). Default 1: each step moves a point onto the
     /// weighted mean of its neighbours' planes.
     pub tau: f64,
+    /// Scale from the noise (`robust/scales.rs`): while the cloud's neighbourhoods read as
+    /// balls of noise (noise of about two spacings or more), iterate with `k` and `k_plane`
+    /// tripled. Clouds with noise up to about 1.5 spacings are smoothed as without it. Not
+    /// applied to a caller's table. Default true.
+    pub noise_scale: bool,
     /// Orientation of the normals reported in the outputs.
     pub orientation: Orientation,
     /// Compute the per-point outputs of the result (as [`super::smooth`] does, with the robust
@@ -147,6 +178,7 @@ impl Default for RobustOptions {
             inlier_width: 5.0,
             feature_angle: 20.0,
             tau: 1.0,
+            noise_scale: true,
             orientation: Orientation::Unoriented,
             outputs: true,
             non_finite: crate::NonFinitePolicy::Reject,
@@ -214,6 +246,13 @@ pub struct RobustReport {
     pub noise: Vec<f64>,
     /// RMS displacement of each iteration, in units of h.
     pub moved: Vec<f64>,
+    /// The noise scale (`robust/scales.rs`): the local dimension of the cloud (2 a surface, 3
+    /// a ball of noise) as measured before the first iteration and, while it read as a ball of
+    /// noise, before each later one (empty with `noise_scale: false`; a caller's table is
+    /// measured but never widened).
+    pub dimension: Vec<f64>,
+    /// How many of the iterations used the wide neighbourhoods (`k` and `k_plane` tripled).
+    pub wide_iterations: usize,
 }
 
 /// Smooths `points` robustly with `options` (see the module documentation).
@@ -290,6 +329,52 @@ fn robust_on_pool(
     }
 }
 
+/// The neighbour rows of a cloud in the k-d tree's order, and the points stored that way.
+struct Stored {
+    rows: Rows,
+    /// `order[s]`: the caller's index of the point stored at `s`.
+    order: Vec<u32>,
+    /// The points (as smoothed so far) in stored order.
+    cur: Vec<DVec3>,
+}
+
+/// The `k_plane` nearest of every point of `points` from `neighbors` in the k-d tree's order
+/// (`robust/rows.rs`), by blocks where the call searches with the tree, and each point's
+/// squared distance to its nearest (by caller index); not yet cut at ε.
+fn search_rows(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    k_plane: usize,
+) -> Result<(Stored, Vec<Option<f64>>)> {
+    let (rows, order, nearest) = match neighbors {
+        Neighbors::Search(SearchMethod::KdTree) => Rows::search(points, k_plane)?,
+        _ => {
+            let (knn, order) = knn_rows(points, neighbors, k_plane)?;
+            let nearest = (0..knn.len())
+                .map(|i| knn.sq_dists_of(i).first().copied())
+                .collect();
+            (Rows::in_stored_order(&knn, &order), order, nearest)
+        }
+    };
+    let cur = order.iter().map(|&o| points[o as usize]).collect();
+    Ok((Stored { rows, order, cur }, nearest))
+}
+
+/// What the iterations of [`iterate`] leave.
+#[derive(Default)]
+struct Iterations {
+    /// The robust normals of the last step, in stored order (empty if no step was taken).
+    normals: Vec<DVec3>,
+    /// σ̂ of each iteration's input, absolute.
+    noise: Vec<f64>,
+    /// RMS displacement of each iteration, absolute.
+    moved: Vec<f64>,
+    /// The local dimension of each check of the noise scale (`robust/scales.rs`).
+    dimension: Vec<f64>,
+    /// How many iterations used the wide neighbourhoods.
+    wide: usize,
+}
+
 /// [`smooth_robust_from`] on finite points (nonempty, every coordinate finite:
 /// [`super::finite_subset`] checked or chose them, so they are not scanned again).
 fn robust_finite(
@@ -301,110 +386,178 @@ fn robust_finite(
     let total = options.max_iterations as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
-    // the rows in the k-d tree's order (`robust/rows.rs`), by blocks where the call searches
-    // with the tree; from a table like every other smoothing call otherwise
-    let (mut rows, order, nearest) = match neighbors {
-        Neighbors::Search(SearchMethod::KdTree) => Rows::search(points, options.k_plane)?,
-        _ => {
-            let (knn, order) = knn_rows(points, neighbors, options.k_plane)?;
-            let nearest = (0..knn.len())
-                .map(|i| knn.sq_dists_of(i).first().copied())
-                .collect();
-            (Rows::in_stored_order(&knn, &order), order, nearest)
-        }
-    };
+    let (mut st, nearest) = search_rows(points, neighbors, options.k_plane)?;
     let h = mean_spacing_of_nearest(nearest.into_iter());
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
-    // the points and their neighbour rows in tree order (rows.rs); back in input order at the end
-    let mut cur: Vec<DVec3> = order.iter().map(|&o| points[o as usize]).collect();
-    rows.cut(&cur, &order, eps);
-    if rows.max_len() + 1 < 3 {
+    st.rows.cut(&st.cur, &st.order, eps);
+    if st.rows.max_len() + 1 < 3 {
         // no neighbourhood reaches 3 points: the same refusal as every smoothing call
-        let narrow = rows.narrow_table(&cur, options.k_plane, &order);
+        let narrow = st.rows.narrow_table(&st.cur, options.k_plane, &st.order);
         super::check_not_degenerate(&narrow, None, eps, h, relative)?;
     }
-    let min_neighbors = rows.min_narrow_len(options.k);
-    let mut normals: Vec<DVec3> = Vec::new();
-    let (mut noise, mut moved) = (Vec::new(), Vec::new());
-    let mut sigma0 = 0.0;
+    let min_neighbors = st.rows.min_narrow_len(options.k);
+    let (dimension, wide) = noise_scale(points, &mut st, neighbors, eps, options)?;
+    let mut it = iterate(&mut st, eps, wide, options, &mut report)?;
+    it.dimension.splice(0..0, dimension);
+    finish(st, it, h, eps, min_neighbors, options, report)
+}
+
+/// Item 0 of the module documentation: the local dimension of the input (`robust/scales.rs`),
+/// and where it reads as a ball of noise and the call searches (a caller's table is measured,
+/// never widened), the rows of `st` searched again, `WIDE` times as long. Returns the local
+/// dimension and whether the rows are wide.
+fn noise_scale(
+    points: &[DVec3],
+    st: &mut Stored,
+    neighbors: Neighbors<'_>,
+    eps: f64,
+    options: &RobustOptions,
+) -> Result<(Option<f64>, bool)> {
+    if !options.noise_scale {
+        return Ok((None, false));
+    }
+    let ratio = scales::distance_ratio(&st.cur, &st.rows, options.k_plane);
+    // a caller's table has the rows it has: measured, never widened
+    let wide = scales::is_ball(ratio, false) && !matches!(neighbors, Neighbors::Table(_));
+    if wide {
+        let (mut w, _) = search_rows(points, neighbors, options.k_plane * scales::WIDE)?;
+        w.rows.cut(&w.cur, &w.order, eps);
+        *st = w;
+    }
+    Ok((ratio.map(scales::dimension), wide))
+}
+
+/// Items 1–5 of the module documentation: the iterations on the rows and points of `st`, until
+/// the stopping rule or `max_iterations`; `st.rows` are left measured on `st.cur`.
+fn iterate(
+    st: &mut Stored,
+    eps: f64,
+    mut wide: bool,
+    options: &RobustOptions,
+    report: &mut impl FnMut(f64, Stage) -> Result<()>,
+) -> Result<Iterations> {
+    let mut it = Iterations::default();
+    let started_wide = wide;
     let mut prev_sigma = f64::INFINITY;
     // whether `rows` were measured on `cur` as it is now
     let mut rows_current = true;
-    let hu = if h > 0.0 { h } else { 1.0 };
-    for it in 0..options.max_iterations {
-        let base = it as f64;
+    for i in 0..options.max_iterations {
+        let base = i as f64;
         if !rows_current {
             report(base, Stage::Neighbors)?;
-            rows.update(&cur, &order, eps);
+            st.rows.update(&st.cur, &st.order, eps);
             rows_current = true;
         }
-        report(base + 0.2, Stage::Geometry)?;
-        let planes = covariance_planes(&cur, &rows);
-        let sigma = noise_estimate(&cur, &planes);
-        if it == 0 {
-            sigma0 = sigma;
+        if wide && i > 0 {
+            // the noise scale again, on the proxy: back to the usual rows once it reads as a
+            // surface (σ̂ is then measured on other rows: no comparison with the last one)
+            let ratio = scales::distance_ratio(&st.cur, &st.rows, options.k_plane);
+            it.dimension.extend(ratio.map(scales::dimension));
+            if !scales::is_ball(ratio, true) {
+                st.rows.shrink(options.k_plane);
+                wide = false;
+                prev_sigma = f64::INFINITY;
+            }
         }
-        noise.push(sigma / hu);
-        if it > 0 && sigma > (1.0 - options.tolerance) * prev_sigma {
+        let o = RobustOptions {
+            k: options.k * if wide { scales::WIDE } else { 1 },
+            ..*options
+        };
+        report(base + 0.2, Stage::Geometry)?;
+        let planes = covariance_planes(&st.cur, &st.rows);
+        let sigma = noise_estimate(&st.cur, &planes);
+        it.noise.push(sigma);
+        // while the rows are balls of noise σ̂ measures the ball: the noise scale ends them
+        if i > 0
+            && !wide
+            && sigma > (1.0 - stop_tolerance(sigma, &it, started_wide, options)) * prev_sigma
+        {
             break;
         }
+        it.wide += usize::from(wide);
         prev_sigma = sigma;
-        let width = options.inlier_width * sigma;
-        normals = selected_normals(&cur, &rows, &planes, width);
+        let width = o.inlier_width * sigma;
+        it.normals = selected_normals(&st.cur, &st.rows, &planes, width);
         report(base + 0.6, Stage::Step)?;
-        let next = step(&cur, &rows, &normals, width, options);
-        let rms = displacement_rms(&cur, &next, &order);
-        moved.push(rms / hu);
-        cur = next;
+        let next = step(&st.cur, &st.rows, &it.normals, width, &o);
+        let rms = displacement_rms(&st.cur, &next, &st.order);
+        it.moved.push(rms);
+        st.cur = next;
         rows_current = false;
         if rms == 0.0 {
             break;
         }
     }
     if !rows_current {
-        rows.update(&cur, &order, eps);
+        st.rows.update(&st.cur, &st.order, eps);
     }
-    if normals.is_empty() {
-        normals = covariance_planes(&cur, &rows)
+    Ok(it)
+}
+
+/// Fraction of the first noise estimate above which what is left is mostly the surface's own
+/// shape (see [`stop_tolerance`]).
+const SHAPE_SPREAD: f64 = 0.4;
+
+/// The stopping rule's tolerance where what is left is mostly shape.
+const SHAPE_TOLERANCE: f64 = 0.25;
+
+/// The tolerance of the stopping rule (item 5 of the module documentation) for an iteration
+/// whose input has the noise estimate `sigma`: `options.tolerance`, unless more than
+/// [`SHAPE_SPREAD`] of the first estimate is left on a cloud that did not start as a ball of
+/// noise. There the spread about the planes is mostly the surface's own shape (curvature and
+/// detail finer than the neighbourhoods, which the plane fit reads as noise): smoothing it
+/// further erodes the detail, so the iterations go on only while each still lowers σ̂ by
+/// [`SHAPE_TOLERANCE`]. Measured on the meshes of the denoising protocol at 10K points and 1 %
+/// noise (docs/smoothing-results.md): σ̂ falls to 0.5–0.7 of the first estimate on detailed
+/// shapes (the dragon, the armadillo) and the iterations after the first erode them; on the
+/// cube's faces it falls below 0.3 after one iteration, and further iterations keep lowering
+/// the noise.
+fn stop_tolerance(sigma: f64, it: &Iterations, started_wide: bool, options: &RobustOptions) -> f64 {
+    let first = it.noise.first().copied().unwrap_or(sigma);
+    if options.tolerance > 0.0 && !started_wide && sigma > SHAPE_SPREAD * first {
+        options.tolerance.max(SHAPE_TOLERANCE)
+    } else {
+        options.tolerance
+    }
+}
+
+/// The report of [`robust_finite`]: points and normals in the caller's order, and the
+/// per-point outputs where asked for.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    st: Stored,
+    it: Iterations,
+    h: f64,
+    eps: f64,
+    min_neighbors: usize,
+    options: &RobustOptions,
+    mut report: impl FnMut(f64, Stage) -> Result<()>,
+) -> Result<RobustReport> {
+    let Stored { rows, order, cur } = st;
+    let normals = if it.normals.is_empty() {
+        covariance_planes(&cur, &rows)
             .iter()
             .map(|c| c.normal)
-            .collect();
-    }
+            .collect()
+    } else {
+        it.normals
+    };
+    let hu = if h > 0.0 { h } else { 1.0 };
     let points_out = in_input_order(&cur, &order);
     let normals = in_input_order(&normals, &order);
+    let sigma0 = it.noise.first().copied().unwrap_or(0.0);
     let lambda = 2.0 * options.inlier_width * sigma0 / (hu * hu);
     let outputs = if options.outputs {
         report(options.max_iterations as f64 + 0.2, Stage::Outputs)?;
         let narrow = rows.narrow_table(&cur, options.k, &order);
         drop(rows); // the wide rows are done with: their memory goes to the outputs
-                    // the outputs of the faithful method's defaults, with the noise-adapted threshold
-        let defaults = super::SmoothOptions::default();
-        let criteria = Criteria {
-            weighting: Weighting::Sharp,
-            lambda: lambda.max(f64::MIN_POSITIVE),
-            feature: FeatureCriterion::AllPoints,
-            constrain_interior: None,
-            density: defaults.density,
-            formula: defaults.formula,
-        };
-        let mut out = point_outputs(
-            &points_out,
-            &narrow,
-            &criteria,
-            options.orientation,
-            &mut |_| true,
-        )?;
-        for (o, &n) in out.iter_mut().zip(&normals) {
-            // the robust normal, on the side the oriented covariance normal points to
-            o.normal = if n.dot(o.normal) < 0.0 { -n } else { n };
-        }
-        out
+        robust_outputs(&points_out, &narrow, &normals, lambda, options)?
     } else {
         Vec::new()
     };
-    report(total, Stage::Done)?;
+    report(options.max_iterations as f64 + 1.0, Stage::Done)?;
     Ok(RobustReport {
         result: SmoothResult {
             points: points_out,
@@ -415,9 +568,38 @@ fn robust_finite(
             min_neighbors,
         },
         normals,
-        noise,
-        moved,
+        noise: it.noise.iter().map(|v| v / hu).collect(),
+        moved: it.moved.iter().map(|v| v / hu).collect(),
+        dimension: it.dimension,
+        wide_iterations: it.wide,
     })
+}
+
+/// The per-point outputs of the faithful method's defaults with the noise-adapted threshold
+/// `lambda`, and the robust `normals` (on the side the oriented covariance normal points to).
+fn robust_outputs(
+    points: &[DVec3],
+    narrow: &crate::table::NeighborTable<f64>,
+    normals: &[DVec3],
+    lambda: f64,
+    options: &RobustOptions,
+) -> Result<Vec<super::PointOutput>> {
+    let defaults = super::SmoothOptions::default();
+    let criteria = Criteria {
+        weighting: Weighting::Sharp,
+        lambda: lambda.max(f64::MIN_POSITIVE),
+        feature: FeatureCriterion::AllPoints,
+        constrain_interior: None,
+        density: defaults.density,
+        formula: defaults.formula,
+    };
+    let mut out = point_outputs(points, narrow, &criteria, options.orientation, &mut |_| {
+        true
+    })?;
+    for (o, &n) in out.iter_mut().zip(normals) {
+        o.normal = if n.dot(o.normal) < 0.0 { -n } else { n };
+    }
+    Ok(out)
 }
 
 /// RMS distance between `before` and `after` (stored as `order` says), summed in the caller's

@@ -402,6 +402,44 @@ fn robust_is_bit_identical_for_one_and_two_threads() {
     assert_eq!(a.outputs.len(), 3000);
 }
 
+/// Noise of three spacings: the noise scale widens the neighbourhoods (`robust/scales.rs`),
+/// and the result is still the same bits on one thread and on two.
+#[test]
+fn robust_noise_scale_widens_and_stays_bit_identical() {
+    let (_, _, p) = noisy(&Cube::new(1.0), 6000, 3.0, 9);
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| smooth_robust_report(&p, &robust_quiet(), &mut |_, _| true).unwrap())
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.wide_iterations > 0, "{:?}", a.dimension);
+    assert!(a.dimension[0] > 2.75, "{:?}", a.dimension);
+    let bits = |r: &super::robust::RobustReport| -> Vec<u64> {
+        r.result
+            .points
+            .iter()
+            .flat_map(|q| q.to_array())
+            .map(f64::to_bits)
+            .collect()
+    };
+    assert_eq!(bits(&a), bits(&b));
+    assert_eq!(a.dimension, b.dimension);
+    // without it, the same cloud is not widened
+    let off = smooth_robust_report(
+        &p,
+        &RobustOptions {
+            noise_scale: false,
+            ..robust_quiet()
+        },
+        &mut |_, _| true,
+    )
+    .unwrap();
+    assert_eq!((off.wide_iterations, off.dimension.len()), (0, 0));
+}
+
 #[test]
 fn robust_scales_exactly_with_a_power_of_two() {
     let (_, _, p) = noisy(&Torus::new(1.0, 0.4), 1500, 1.0, 4);

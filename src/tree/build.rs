@@ -9,7 +9,7 @@
 use super::layout::Layout;
 use super::node::Node;
 use super::options::{BuildOptions, MedianAlgorithm};
-use super::split::{choose_split, resolve_below, NodeFacts, Plan, Split};
+use super::split::{choose_split, resolve_below, Below, NodeFacts, Plan, Split};
 use crate::scalar::Scalar;
 use crate::select::{select_nth, SelectAlgorithm};
 use rayon::prelude::*;
@@ -21,6 +21,9 @@ const PARALLEL_MIN: usize = 16 * 1024;
 pub(crate) struct BuildInput<L> {
     pub layout: L,
     pub options: BuildOptions,
+    /// The depth from which every node splits at the median
+    /// ([`super::options::max_unbalanced_depth`] of the points built over).
+    pub guard: usize,
 }
 
 /// Nodes of a subtree (child links relative to its first node) and its depth.
@@ -206,10 +209,10 @@ fn split_node<T: Scalar, L: Layout<T>>(
     scan: Scan,
 ) -> (Split, T, bool) {
     let layout = &input.layout;
-    let (policy, d) = (input.options.pivot, layout.dim());
+    let (policy, guard, d) = (input.options.pivot, input.guard, layout.dim());
     let plan = match scan {
-        Scan::Serial => choose_split(policy, depth, d, &ScanFacts { layout, items }),
-        Scan::Parallel => choose_split(policy, depth, d, &ParScanFacts { layout, items }),
+        Scan::Serial => choose_split(policy, depth, guard, d, &ScanFacts { layout, items }),
+        Scan::Parallel => choose_split(policy, depth, guard, d, &ParScanFacts { layout, items }),
     };
     let (dim, rank) = match plan {
         Plan::Rank(split) => (split.dim, split.rank),
@@ -220,10 +223,20 @@ fn split_node<T: Scalar, L: Layout<T>>(
             return (split, layout.coord(&items[split.rank], split.dim), true);
         }
         Plan::Below { dim, value } => {
-            let below = partition_below(layout, items, dim, value);
+            let below = partition_below(layout, items, dim, value, false);
             match resolve_below(below, items.len()) {
-                Ok(rank) => return (Split { dim, rank }, value, false),
-                Err(rank) => (dim, rank),
+                Below::Rank(rank) => return (Split { dim, rank }, value, false),
+                Below::SlideUp => {
+                    // `value` is the smallest coordinate: its copies go left, and the split
+                    // value is the smallest coordinate of the right side.
+                    let rank = partition_below(layout, items, dim, value, true);
+                    let next = items[rank..]
+                        .iter()
+                        .map(|it| layout.coord(it, dim))
+                        .fold(layout.coord(&items[rank], dim), |m, c| m.min_of(c));
+                    return (Split { dim, rank }, next, false);
+                }
+                Below::Clamp(rank) => (dim, rank),
             }
         }
     };
@@ -246,7 +259,8 @@ fn split_copies<T: Scalar, L: Layout<T>>(
     (split, layout.coord(&items[split.rank], split.dim))
 }
 
-/// Moves the items with coordinate `< value` in `dim` to the front; returns their count.
+/// Moves the items with coordinate `< value` in `dim` (`<= value` if `or_equal`) to the
+/// front; returns their count.
 ///
 /// Lomuto's scheme without branches on the data: every item is swapped with the first item not
 /// yet known to be below, and the boundary advances by the comparison's outcome. Hoare's scheme
@@ -258,11 +272,13 @@ fn partition_below<T: Scalar, L: Layout<T>>(
     items: &mut [L::Item],
     dim: usize,
     value: T,
+    or_equal: bool,
 ) -> usize {
     let mut store = 0;
     for i in 0..items.len() {
         let x = items[i];
-        let below = layout.coord(&x, dim) < value;
+        let c = layout.coord(&x, dim);
+        let below = c < value || (or_equal && c == value);
         items[i] = items[store];
         items[store] = x;
         store += usize::from(below);

@@ -45,11 +45,13 @@ impl Selection<'_> {
 }
 
 impl<T: Scalar> KdTree<T> {
-    /// Builds a tree over the points of `view` (converted to `T`).
+    /// Builds a tree over the points of `view` (converted to `T`). A view of no point, or one
+    /// whose every point is skipped, gives a tree of no point: every query finds nothing and
+    /// every table row is empty.
     ///
     /// Errors: [`NbhdError::NonFinite`] naming the first point with a NaN or infinite
-    /// coordinate (unless `options.non_finite` skips them), [`NbhdError::EmptyInput`] if no
-    /// point remains, [`NbhdError::InvalidOption`] for a leaf size of 0,
+    /// coordinate (unless `options.non_finite` skips them), [`NbhdError::InvalidOption`] for a
+    /// leaf size of 0,
     /// [`NbhdError::ThreadPool`] if a requested pool cannot be created.
     ///
     /// ```
@@ -79,8 +81,8 @@ impl<T: Scalar> KdTree<T> {
     /// are their neighbourhoods among the listed points, the other rows are empty.
     ///
     /// Errors: as [`Self::build`] (non-finite points among the listed ones are rejected or
-    /// skipped as `options.non_finite` says; [`NbhdError::EmptyInput`] if `indices` is empty or
-    /// every listed point is skipped), plus [`NbhdError::IndexOutOfRange`] naming the first
+    /// skipped as `options.non_finite` says; an empty list gives a tree of no point), plus
+    /// [`NbhdError::IndexOutOfRange`] naming the first
     /// index `>= view.len()` and [`NbhdError::DuplicateIndex`] naming the smallest index
     /// listed twice.
     pub fn build_subset(
@@ -149,9 +151,6 @@ impl<T: Scalar> KdTree<T> {
 /// `indices` checked against a view of `count` points and made strictly increasing (borrowed
 /// when they already are, the usual case).
 fn checked_subset(indices: &[u32], count: usize) -> Result<Cow<'_, [u32]>> {
-    if indices.is_empty() {
-        return Err(NbhdError::EmptyInput);
-    }
     if let Some(&bad) = indices.iter().find(|&&i| i as usize >= count) {
         return Err(NbhdError::IndexOutOfRange {
             index: bad as usize,
@@ -274,9 +273,6 @@ fn read_records<T: Scalar, S: Scalar, const D: usize>(
             });
         }
     }
-    if records.is_empty() {
-        return Err(NbhdError::EmptyInput);
-    }
     Ok(records)
 }
 
@@ -289,6 +285,7 @@ fn run_build<T: Scalar, L: Layout<T>>(
     let input = BuildInput {
         layout,
         options: *options,
+        guard: super::max_unbalanced_depth(items.len()),
     };
     if options.median == MedianAlgorithm::Presorted {
         return Ok(presorted::build_presorted(&input, items));

@@ -491,6 +491,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         let (llo, lhi, lmin) = (&part.lo[ni], &part.hi[ni], part.min_id[ni]);
         let (a, b) = (nd.a as usize, nd.b as usize);
         let (bound, worst) = (&mut st.bound, &mut st.worst);
+        let sse = crate::simd::sse();
         for i in 0..m {
             let qi = &mb.q[i];
             if !admits(box_dist(qi, qi, llo, lhi), lmin, bound[i], worst[i]) {
@@ -499,7 +500,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
             let mut start = a;
             while start < b {
                 let d = part.soa.block_sq_dists(qi, start);
-                let mut hits = below_mask(&d, bound[i]);
+                let mut hits = below_mask(&d, bound[i], sse);
                 if b - start < BLOCK {
                     hits &= (1 << (b - start)) - 1;
                 }

@@ -60,12 +60,13 @@ fn sq_dist_packed<T: Scalar, const D: usize>(q: &[T; 4], p: &[T]) -> T {
     s
 }
 
-/// Bit `p` set where `d[p] ≤ bound` (`N` ≤ 32, a multiple of 4): SSE compares and movemask on
-/// x86-64 (4 or 2 lanes per instruction), a plain loop elsewhere.
+/// Bit `p` set where `d[p] ≤ bound` (`N` ≤ 32, a multiple of 4): with `sse`
+/// ([`crate::simd::sse`], read by the caller once per search or group, not per leaf) SSE
+/// compares and movemask on x86-64 (4 or 2 lanes per instruction), else a plain loop.
 #[inline(always)]
-pub(crate) fn below_mask<T: Scalar, const N: usize>(d: &[T; N], bound: T) -> u32 {
+pub(crate) fn below_mask<T: Scalar, const N: usize>(d: &[T; N], bound: T, sse: bool) -> u32 {
     #[cfg(target_arch = "x86_64")]
-    {
+    if sse {
         use std::arch::x86_64::*;
         match T::TYPE {
             ScalarType::F32 => {
@@ -151,13 +152,15 @@ mod tests {
         d[..31].copy_from_slice(&direct);
         d[31] = T::from_f64(f64::INFINITY);
         let bound = direct[7];
-        let mask = below_mask(&d, bound);
-        for (p, &x) in d.iter().enumerate() {
-            assert_eq!(mask >> p & 1 == 1, x <= bound, "entry {p}");
+        for sse in [true, false] {
+            let mask = below_mask(&d, bound, sse);
+            for (p, &x) in d.iter().enumerate() {
+                assert_eq!(mask >> p & 1 == 1, x <= bound, "entry {p}");
+            }
+            assert_eq!(below_mask(&d, T::from_f64(f64::INFINITY), sse), u32::MAX);
+            let nan = [T::from_f64(f64::NAN); 4];
+            assert_eq!(below_mask(&nan, T::from_f64(f64::INFINITY), sse), 0);
         }
-        assert_eq!(below_mask(&d, T::from_f64(f64::INFINITY)), u32::MAX);
-        let nan = [T::from_f64(f64::NAN); 4];
-        assert_eq!(below_mask(&nan, T::from_f64(f64::INFINITY)), 0);
     }
 
     #[test]

@@ -58,7 +58,9 @@ pub use envelope::{LoadOptions, Persist, FORMAT_VERSION, HEADER_LEN, MAGIC};
 pub use envelope::{SavedFormat, SavedHeader};
 pub use exact_knn::exact_knn_table;
 use node::{Descent, Node};
-pub use options::{BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE};
+pub use options::{
+    max_unbalanced_depth, BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE,
+};
 pub use persist::SavedTreeInfo;
 use search::TreeView;
 
@@ -115,7 +117,8 @@ impl<T: Scalar> KdTree<T> {
         self.ids.len()
     }
 
-    /// Always `false`: a tree holds at least one point.
+    /// `true` for a tree over no point (none given, or every one skipped): one empty leaf,
+    /// queries find nothing and table rows are empty.
     pub fn is_empty(&self) -> bool {
         self.ids.is_empty()
     }
@@ -264,7 +267,10 @@ impl<T: Scalar> NeighborIndex<T> for KdTree<T> {
 
     #[inline(always)]
     fn visit<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, set: &mut C) {
-        self.run(q, exclude, set);
+        // a tree of no point is one empty leaf: nothing to find
+        if !self.ids.is_empty() {
+            self.run(q, exclude, set);
+        }
     }
 
     fn visit_box(&self, min: &[T], max: &[T], scratch: &mut Vec<T>, out: &mut Vec<u32>) {

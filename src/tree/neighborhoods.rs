@@ -23,6 +23,8 @@ impl<T: Scalar> KdTree<T> {
             Some(f(&self.view(), self.source_len, nbhd, exclude_self))
         };
         match self.dim {
+            // no point: the index's own rows, every one empty
+            _ if self.is_empty() => None,
             3 => grouped(group_search::table::<T, 3>),
             2 => grouped(group_search::table::<T, 2>),
             1 => grouped(group_search::table::<T, 1>),

@@ -119,16 +119,17 @@ impl SavedTreeInfo {
         if dim == 0 {
             return Err(invalid("dimension 0"));
         }
-        if points == 0 || points > max {
-            return Err(invalid(format!("{points} points (1 to {max})")));
+        if points > max {
+            return Err(invalid(format!("{points} points (0 to {max})")));
         }
         if source_len < points || source_len > max {
             return Err(invalid(format!(
                 "{source_len} source points for {points} held points"
             )));
         }
-        // Every split leaves both sides non-empty, so there are at most 2n - 1 nodes.
-        if nodes == 0 || nodes > 2 * points - 1 {
+        // Every split leaves both sides non-empty, so there are at most 2n - 1 nodes (and one
+        // empty leaf for a tree of no point).
+        if nodes == 0 || nodes > 2 * points.max(1) - 1 {
             return Err(invalid(format!("{nodes} nodes for {points} points")));
         }
         if depth >= nodes {
@@ -410,7 +411,8 @@ impl<T: Scalar> KdTree<T> {
             }
             depth = depth.max(level);
             if nd.dim == LEAF {
-                if nd.a as usize != start || start >= end {
+                // Only a tree of no point has an empty leaf: its root.
+                if nd.a as usize != start || (start >= end && n > 0) {
                     return Err(invalid(format!(
                         "leaf {i} holds points {}..{} where {start}..{end} are due",
                         nd.a, nd.b
@@ -455,6 +457,9 @@ impl<T: Scalar> KdTree<T> {
                 "the depth is {depth}, not {} as stated",
                 self.depth
             )));
+        }
+        if n == 0 {
+            return Ok(()); // one empty leaf, checked above: no split
         }
         // Pass 2, the splits: tight boxes bottom-up. In reverse preorder a subtree leaves
         // exactly its box on the stack, so at an internal node the top box is its left child's

@@ -8,7 +8,7 @@
 use super::build::{BuildInput, Subtree};
 use super::layout::Layout;
 use super::node::Node;
-use super::split::{choose_split, resolve_below, NodeFacts, Plan};
+use super::split::{choose_split, resolve_below, Below, NodeFacts, Plan};
 use crate::scalar::Scalar;
 
 /// Facts about a node read from the presorted lists.
@@ -28,10 +28,14 @@ impl<L: Layout<T>, T: Scalar> SortedFacts<'_, L, T> {
             .coord(&self.by_slot[self.lists[list][pos] as usize], list)
     }
 
-    /// Number of the node's points with coordinate `< value` in `j` (a binary search).
-    fn count_below(&self, j: usize, value: T) -> usize {
+    /// Number of the node's points with coordinate `< value` in `j` (`<= value` if
+    /// `or_equal`), by a binary search.
+    fn count_below(&self, j: usize, value: T, or_equal: bool) -> usize {
         let list = &self.lists[j][self.start..self.end];
-        list.partition_point(|&s| self.layout.coord(&self.by_slot[s as usize], j) < value)
+        list.partition_point(|&s| {
+            let c = self.layout.coord(&self.by_slot[s as usize], j);
+            c < value || (or_equal && c == value)
+        })
     }
 }
 
@@ -45,7 +49,7 @@ impl<L: Layout<T>, T: Scalar> NodeFacts<T> for SortedFacts<'_, L, T> {
     }
 
     fn closest(&self, j: usize, target: T) -> T {
-        let r = self.start + self.count_below(j, target);
+        let r = self.start + self.count_below(j, target, false);
         match (r > self.start, r < self.end) {
             (true, true) => {
                 let (below, above) = (self.coord(j, r - 1), self.coord(j, r));
@@ -107,12 +111,16 @@ pub(crate) fn build_presorted<T: Scalar, L: Layout<T>>(
             start,
             end,
         };
-        let (j, rank, value) = match choose_split(input.options.pivot, depth, d, &facts) {
+        let plan = choose_split(input.options.pivot, depth, input.guard, d, &facts);
+        let (j, rank, value) = match plan {
             Plan::Rank(split) | Plan::Coincident(split) => (split.dim, split.rank, None),
             Plan::Below { dim, value } => {
-                match resolve_below(facts.count_below(dim, value), end - start) {
-                    Ok(rank) => (dim, rank, Some(value)),
-                    Err(rank) => (dim, rank, None),
+                match resolve_below(facts.count_below(dim, value, false), end - start) {
+                    Below::Rank(rank) => (dim, rank, Some(value)),
+                    // The copies of the smallest coordinate go left; the split value (read
+                    // below) is the next coordinate, where the right side starts.
+                    Below::SlideUp => (dim, facts.count_below(dim, value, true), None),
+                    Below::Clamp(rank) => (dim, rank, None),
                 }
             }
         };

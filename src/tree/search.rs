@@ -317,14 +317,19 @@ fn compact_d<T: Scalar, C: ResultSet<T>>(
     out: &mut C,
     stack: &mut [Pending<T>],
 ) {
-    match q.len() {
-        3 => compact_search::<T, C, 3>(tree, q, exclude, out, stack),
-        2 => compact_search::<T, C, 2>(tree, q, exclude, out, stack),
-        _ => compact_search::<T, C, 1>(tree, q, exclude, out, stack),
+    // The masks' form is chosen once, at compile time inside the search: a test of it per leaf
+    // cost single queries 1.4 % of their instructions (callgrind, torus-77k, k = 10).
+    match (q.len(), crate::simd::sse()) {
+        (3, true) => compact_search::<T, C, 3, true>(tree, q, exclude, out, stack),
+        (2, true) => compact_search::<T, C, 2, true>(tree, q, exclude, out, stack),
+        (_, true) => compact_search::<T, C, 1, true>(tree, q, exclude, out, stack),
+        (3, false) => compact_search::<T, C, 3, false>(tree, q, exclude, out, stack),
+        (2, false) => compact_search::<T, C, 2, false>(tree, q, exclude, out, stack),
+        (_, false) => compact_search::<T, C, 1, false>(tree, q, exclude, out, stack),
     }
 }
 
-fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
+fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool>(
     tree: &DescentView<'_, T>,
     q: &[T],
     exclude: Option<u32>,
@@ -373,7 +378,7 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize>(
                 for (points, ids) in points.chunks(SCAN * D).zip(ids.chunks(SCAN)) {
                     let mut d = [T::ZERO; SCAN];
                     sq_dists_packed::<T, D, SCAN>(&qa, points, &mut d);
-                    let mask = below_mask(&d, out.bound()) & low_bits(ids.len());
+                    let mask = below_mask(&d, out.bound(), SSE) & low_bits(ids.len());
                     out.offer_block(ids, &d, mask, excluded);
                 }
                 break;

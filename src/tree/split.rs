@@ -39,8 +39,9 @@ pub(crate) enum Plan<T> {
     /// children stay sorted).
     Coincident(Split),
     /// Points with coordinate `< value` in `dim` go left, the rest right, and the split
-    /// value is `value` (sliding midpoint, closest to middle). If that would leave a side
-    /// empty, the rank is clamped to `1` or `n − 1` and the plan becomes a [`Plan::Rank`].
+    /// value is `value` (sliding midpoint, closest to middle). If no point is below `value` (it
+    /// is the node's smallest coordinate in `dim`), the threshold slides up to the next
+    /// coordinate: the copies of the smallest go left ([`Below::SlideUp`]).
     Below {
         /// Dimension.
         dim: usize,
@@ -58,15 +59,23 @@ pub(crate) struct Split {
 }
 
 /// Decides the split of a node at `depth` with `d` dimensions. Ranks are in `1..n`, so both
-/// children are non-empty and every build terminates.
+/// children are non-empty and every build terminates. From depth `guard` on (see
+/// [`super::options::max_unbalanced_depth`]) every policy splits at the median of the most
+/// spread dimension, so that no input makes a tree deeper than `guard` plus a balanced tree.
 pub(crate) fn choose_split<T: Scalar>(
     policy: PivotPolicy,
     depth: usize,
+    guard: usize,
     d: usize,
     facts: &impl NodeFacts<T>,
 ) -> Plan<T> {
     let n = facts.len();
     let median = n / 2;
+    let policy = if depth >= guard && !policy.is_balanced() {
+        PivotPolicy::SpreadMedian
+    } else {
+        policy
+    };
     if policy == PivotPolicy::CyclicMedian {
         return Plan::Rank(Split {
             dim: depth % d,
@@ -97,12 +106,29 @@ pub(crate) fn choose_split<T: Scalar>(
     }
 }
 
-/// The rank a [`Plan::Below`] resolves to when `below` points are under its threshold: the
-/// count itself, or the clamped rank (`Err`) when a side would be empty.
-pub(crate) fn resolve_below(below: usize, n: usize) -> Result<usize, usize> {
-    if below >= 1 && below < n {
-        Ok(below)
-    } else {
-        Err(below.clamp(1, n - 1))
+/// How a [`Plan::Below`] splits a node of `n` points when `below` are under its threshold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Below {
+    /// Both sides hold points: the first `below` are the left child.
+    Rank(usize),
+    /// No point is below: the threshold is the node's smallest coordinate in the dimension.
+    /// This is a tie, not a choice of the policy — the closest-to-middle pivot equally far
+    /// from both ends of a node that holds two distinct values (thesis eq. 5.1 names no
+    /// order among equals), or a midpoint rounded down onto the smaller of two neighbouring
+    /// floats. The points at the smallest coordinate form the left child and the split value
+    /// is the next coordinate above it, where the pivot's side then starts: one point per
+    /// level split off instead made such nodes n/2 levels deep in O(n²) time.
+    SlideUp,
+    /// Every point is below (a threshold above the largest coordinate, which no policy
+    /// gives): split at this rank of the composite order instead.
+    Clamp(usize),
+}
+
+/// The [`Below`] case of `below` points under a threshold in a node of `n` points.
+pub(crate) fn resolve_below(below: usize, n: usize) -> Below {
+    match below {
+        0 => Below::SlideUp,
+        b if b < n => Below::Rank(b),
+        _ => Below::Clamp(n - 1),
     }
 }

@@ -383,6 +383,30 @@ static void test_saved(const char *dir) {
     nbhd_tree_free(st);
     CHECK_STATUS(nbhd_dynamic_load_from_buffer(buf, size, &back), NBHD_STATUS_OK);
     nbhd_dynamic_free(back);
+    /* A file stating 1024 threads (saved by a tree created with them) loads, and the loaded
+       handle's thread count can be set (tests/dynamic_persist.rs checks that the file's count
+       is not obeyed). */
+    {
+        nbhd_build_options many = nbhd_build_options_default();
+        nbhd_dynamic_tree *t = NULL;
+        double one[DIM] = {0.5, 0.5, 0.5};
+        nbhd_points p1 = {one, 1, DIM, 0, NBHD_SCALAR_TYPE_F64};
+        many.threads = 1024;
+        CHECK_STATUS(nbhd_dynamic_create(DIM, NBHD_SCALAR_TYPE_F64, &many, &t), NBHD_STATUS_OK);
+        if (t != NULL) {
+            CHECK_STATUS(nbhd_dynamic_save_to_buffer(t, buf, size, &size), NBHD_STATUS_OK);
+            nbhd_dynamic_free(t);
+            t = NULL;
+            CHECK_STATUS(nbhd_dynamic_load_from_buffer(buf, size, &t), NBHD_STATUS_OK);
+            CHECK_STATUS(nbhd_dynamic_set_threads(t, 1), NBHD_STATUS_OK);
+            CHECK_STATUS(nbhd_dynamic_insert(t, &p1, NULL), NBHD_STATUS_OK);
+            CHECK_STATUS(nbhd_dynamic_set_threads(t, 1025), NBHD_STATUS_INVALID_OPTION);
+            CHECK_MESSAGE("threads");
+            CHECK_STATUS(nbhd_dynamic_set_threads(NULL, 1), NBHD_STATUS_NULL_POINTER);
+            CHECK_STATUS(nbhd_dynamic_set_threads(t, 0), NBHD_STATUS_OK);
+            nbhd_dynamic_free(t);
+        }
+    }
     free(buf);
     nbhd_dynamic_free(dyn);
 }
@@ -403,6 +427,14 @@ static void test_errors(void) {
     CHECK(dyn == NULL);
     CHECK_STATUS(nbhd_dynamic_create(DIM, 7, NULL, &dyn), NBHD_STATUS_INVALID_ARGUMENT);
     CHECK_MESSAGE("scalar_type");
+    /* A dimension no point of which fits in memory: refused as nbhd_tree_build refuses it. */
+    CHECK_STATUS(nbhd_dynamic_create(SIZE_MAX, NBHD_SCALAR_TYPE_F32, NULL, &dyn),
+                 NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK(dyn == NULL);
+    CHECK_MESSAGE("overflows the address space");
+    CHECK_STATUS(nbhd_dynamic_create(SIZE_MAX / 8 + 1, NBHD_SCALAR_TYPE_F64, NULL, &dyn),
+                 NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK(dyn == NULL);
     CHECK_STATUS(nbhd_dynamic_create(DIM, NBHD_SCALAR_TYPE_F32, NULL, NULL),
                  NBHD_STATUS_NULL_POINTER);
     o.leaf_size = 0;
@@ -420,8 +452,20 @@ static void test_errors(void) {
     /* inserts: NULL, zero points, dimension, NaN (rejected by default), absurd sizes */
     CHECK_STATUS(nbhd_dynamic_insert(NULL, &p, &first), NBHD_STATUS_NULL_POINTER);
     CHECK_STATUS(nbhd_dynamic_insert(dyn, NULL, &first), NBHD_STATUS_NULL_POINTER);
-    p.count = 0;
-    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_EMPTY_INPUT);
+    p.count = 0; /* no point: nothing inserted, the next index given back */
+    first = 77;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+    CHECK(first == 0);
+    p.data = NULL;
+    CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_OK);
+    p.data = two;
+    {
+        nbhd_neighborhood_spec spec = {NBHD_NEIGHBORHOOD_KIND_KNN, 2, 0.0};
+        nbhd_neighborhoods *t = NULL;
+        CHECK_STATUS(nbhd_dynamic_neighborhoods_of(dyn, &p, &spec, NULL, &t), NBHD_STATUS_OK);
+        CHECK(nbhd_neighborhoods_rows(t) == 0);
+        nbhd_neighborhoods_free(t);
+    }
     p.count = (size_t)1 << 40;
     CHECK_STATUS(nbhd_dynamic_insert(dyn, &p, &first), NBHD_STATUS_TOO_MANY_POINTS);
     p.count = 2;

@@ -376,7 +376,12 @@ static void test_voxel(int f32) {
     bad = NAN;
     CHECK_STATUS(nbhd_voxel_grid(&p, &bad, 1, 0, 1, cen, near, N, &count),
                  NBHD_STATUS_INVALID_OPTION);
+    /* A leaf count other than 1 or the dimension is refused before `leaf` is read: here one
+       value is readable, and AddressSanitizer (scripts/sanitize-test.sh) saw the library read
+       two before refusing them. */
     CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 2, 0, 1, cen, near, N, &count),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, SIZE_MAX, 0, 1, cen, near, N, &count),
                  NBHD_STATUS_INVALID_OPTION);
     CHECK_STATUS(nbhd_voxel_grid(&p, NULL, 1, 0, 1, cen, near, N, &count),
                  NBHD_STATUS_NULL_POINTER);

@@ -93,7 +93,9 @@ pub struct Args {
     pub method: MethodArg,
 
     /// Maximum valence k: at most the k nearest other points form a neighbourhood (the
-    /// umbrella N_i) [default: 24 robust, 15 thesis' methods]
+    /// umbrella N_i) [default: 24 robust, 15 thesis' methods]. Robust: for noise up to about
+    /// 1.5 spacings; tripled by itself while the cloud reads as a ball of noise (2–3 spacings
+    /// and more); raise it for noise that varies more slowly than a few spacings
     #[arg(short, long)]
     pub k: Option<usize>,
 
@@ -108,26 +110,31 @@ pub struct Args {
     pub tau: Option<f64>,
 
     /// Robust: size of the wide neighbourhood the candidate planes are fitted and scored on
-    /// (≥ k) [default: 48]
+    /// (≥ k) [default: 48]: planes that tell a face from the chamfer across an edge at noise
+    /// of about one spacing; tripled by itself, as k, while the cloud reads as a ball of noise
     #[arg(long)]
     pub k_plane: Option<usize>,
 
-    /// Robust: at most this many iterations [default: 10]
+    /// Robust: at most this many iterations [default: 10]; the stopping rule usually ends
+    /// earlier (2–4 on clean or smooth clouds, 6–9 on flat faces or strong noise)
     #[arg(long)]
     pub iterations: Option<usize>,
 
     /// Robust: stop once an iteration lowered the noise estimate by less than this fraction
-    /// [default: 0.05]
+    /// [default: 0.05]; one value for every noise level (a clean cloud stops after one
+    /// iteration); 0 runs all --iterations
     #[arg(long, allow_hyphen_values = true)]
     pub tolerance: Option<f64>,
 
     /// Robust: width of the inlier weight of plane distances, in units of the estimated noise
-    /// [default: 5]
+    /// [default: 5], so the same value suits every noise level; larger smooths across
+    /// structured noise the estimate does not see (sensor ripples), smaller keeps finer detail
     #[arg(long, allow_hyphen_values = true)]
     pub inlier_width: Option<f64>,
 
     /// Robust: angle in degrees between normals at which neighbours count as across a feature
-    /// [default: 20]
+    /// [default: 20]: for every shape; smaller keeps the edges of machined parts sharper but
+    /// lets strongly curved surfaces drift outward slightly
     #[arg(long, allow_hyphen_values = true)]
     pub feature_angle: Option<f64>,
 
@@ -330,6 +337,100 @@ fn run_thesis(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run> {
     })
 }
 
+/// `n` and the noun, in the plural unless `n` is 1.
+fn count(n: usize, noun: &str) -> String {
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
+/// What the robust run did: iterations, the noise estimates, the neighbourhoods.
+fn robust_text(
+    opts: &RobustOptions,
+    noise: &[f64],
+    moved: &[f64],
+    res: &nbhd::smooth::SmoothResult,
+    radius_given: &str,
+) -> String {
+    let noise: Vec<String> = noise.iter().map(|v| format!("{v:.3}h")).collect();
+    // the estimate is measured before each iteration and once more on the result of the last
+    // one, which is what the stopping rule compares: one more estimate than iterations
+    let stop = if noise.len() > moved.len() {
+        " (the last one, on the result, stopped the iterations)"
+    } else {
+        ""
+    };
+    format!(
+        "{} (at most {}, stopping once the noise estimate falls by less than {}), τ = {}\n\
+         noise estimate σ̂ before each iteration{stop}: {}\nneighbourhoods: the {} nearest \
+         within ε = {:.6} ({radius_given}; h = {:.6}), smallest {}; planes over the {} nearest\n",
+        count(moved.len(), "iteration"),
+        opts.max_iterations,
+        opts.tolerance,
+        opts.tau,
+        noise.join(", "),
+        opts.k,
+        res.epsilon,
+        res.spacing,
+        res.min_neighbors,
+        opts.k_plane,
+    )
+}
+
+/// The noise scale's line: the local dimension measured, and the iterations it widened.
+fn noise_scale_text(dimension: &[f64], wide: usize, opts: &RobustOptions) -> String {
+    let Some(first) = dimension.first() else {
+        return String::new();
+    };
+    let then = if wide > 0 {
+        format!(
+            "{} with the {} nearest (planes over {}) while the cloud read as a ball of noise",
+            count(wide, "iteration"),
+            3 * opts.k,
+            3 * opts.k_plane
+        )
+    } else {
+        "a surface at this scale: the usual neighbourhoods".to_string()
+    };
+    format!(
+        "noise scale: local dimension {first:.2} (2 a surface, 3 a ball of noise; wider \
+         neighbourhoods from 2.75): {then}\n"
+    )
+}
+
+/// A hint where the robust run barely moved the points (RMS displacement below 0.1h): what
+/// the noise estimate found and what to change if the cloud is noisier than that.
+fn barely_moved_hint(
+    points: &[glam::DVec3],
+    res: &nbhd::smooth::SmoothResult,
+    noise: &[f64],
+    opts: &RobustOptions,
+) -> String {
+    let h = res.spacing;
+    if h.is_nan() || h <= 0.0 || points.is_empty() {
+        return String::new();
+    }
+    let ms = res
+        .points
+        .iter()
+        .zip(points)
+        .map(|(a, b)| a.distance_squared(*b))
+        .sum::<f64>()
+        / points.len() as f64;
+    let rms = ms.sqrt() / h;
+    let sigma = noise.first().copied().unwrap_or(0.0);
+    if rms >= 0.1 {
+        return String::new();
+    }
+    format!(
+        "note: the points moved by {rms:.3}h (RMS) only. The noise estimate found σ̂ = {sigma:.3}h: \
+         at the scale of the {} nearest (a few h) the points lie that close to their local planes, \
+         so there is little noise to remove at that scale. Noise that varies more slowly than \
+         that (e.g. the depth steps and ripples of structured-light and stereo sensors) reads as \
+         surface: to smooth it, widen the neighbourhoods (--k-plane 192 -k 96) and the inlier \
+         weight (--inlier-width 10), or use --method isotropic with more --steps.\n",
+        opts.k_plane
+    )
+}
+
 /// The robust smoothing (`nbhd::smooth::robust`).
 fn run_robust(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run> {
     let opts = RobustOptions {
@@ -343,22 +444,9 @@ fn run_robust(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run> {
     };
     let res = rep.result;
     let radius_given = length_text(a.radius.unwrap_or(opts.epsilon));
-    let noise: Vec<String> = rep.noise.iter().map(|v| format!("{v:.3}h")).collect();
-    let text = format!(
-        "{} iterations (at most {}, stopping once the noise estimate falls by less than {}), \
-         τ = {}\nnoise estimate per iteration: {}\nneighbourhoods: the {} nearest within ε = \
-         {:.6} ({radius_given}; h = {:.6}), smallest {}; planes over the {} nearest\n",
-        rep.moved.len(),
-        opts.max_iterations,
-        opts.tolerance,
-        opts.tau,
-        noise.join(", "),
-        opts.k,
-        res.epsilon,
-        res.spacing,
-        res.min_neighbors,
-        opts.k_plane,
-    );
+    let text = robust_text(&opts, &rep.noise, &rep.moved, &res, &radius_given)
+        + &noise_scale_text(&rep.dimension, rep.wide_iterations, &opts)
+        + &barely_moved_hint(points, &res, &rep.noise, &opts);
     let json = json!({
         "k": opts.k,
         "k_plane": opts.k_plane,
@@ -371,6 +459,8 @@ fn run_robust(a: &Args, points: &[glam::DVec3], out: &Output) -> Result<Run> {
         "feature_angle": num(opts.feature_angle),
         "tau": num(opts.tau),
         "noise_h": rep.noise.iter().map(|&v| num(v)).collect::<Vec<_>>(),
+        "local_dimension": rep.dimension.iter().map(|&v| num(v)).collect::<Vec<_>>(),
+        "wide_iterations": rep.wide_iterations,
         "moved_h": rep.moved.iter().map(|&v| num(v)).collect::<Vec<_>>(),
     });
     Ok(Run {

@@ -116,7 +116,7 @@ impl Local {
     /// which would round differently).
     fn score(&self, n: DVec3, offset: f64, width: f64) -> f32 {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if crate::simd::avx() {
             // SAFETY: the processor supports AVX (checked just above).
             return unsafe { self.score_avx(n, offset, width) };
         }

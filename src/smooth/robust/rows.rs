@@ -96,6 +96,15 @@ impl Rows {
         &row[..row.len().min(k)]
     }
 
+    /// Keeps only the first `k` candidates of every row (rows are sorted: the `k` nearest).
+    pub(super) fn shrink(&mut self, k: usize) {
+        let k = k as u32;
+        for (c, l) in self.candidates.iter_mut().zip(&mut self.len) {
+            *c = (*c).min(k);
+            *l = (*l).min(k);
+        }
+    }
+
     /// The largest number of neighbours any point has within ε.
     pub(super) fn max_len(&self) -> usize {
         self.len.iter().copied().max().unwrap_or(0) as usize

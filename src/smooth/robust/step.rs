@@ -82,7 +82,7 @@ impl Kernel {
     /// Stored point `s` after the step over its umbrella `row`.
     fn moved(&self, points: &[DVec3], normals: &[DVec3], s: usize, row: &[u32]) -> DVec3 {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if crate::simd::avx() {
             // SAFETY: the processor supports AVX (checked just above).
             return unsafe { self.moved_avx(points, normals, s, row) };
         }

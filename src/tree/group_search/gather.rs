@@ -377,10 +377,10 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
         if let Some(n) = self.keys_within_avx512(qi, self_id, bound) {
             return n;
         }
-        let (mut n, count) = (0, self.ids.len());
+        let (mut n, count, sse) = (0, self.ids.len(), crate::simd::sse());
         for start in (0..count).step_by(BLOCK) {
             let d: [T; BLOCK] = sq_dists_by_dim(qi, |j| &self.coords[j][start..start + BLOCK]);
-            let mut hits = below_mask(&d, bound);
+            let mut hits = below_mask(&d, bound, sse);
             if count - start < BLOCK {
                 // the padding is infinitely far, yet within an infinite bound
                 hits &= (1 << (count - start)) - 1;
@@ -427,12 +427,11 @@ fn avx512_keys<T: Scalar, K: 'static>() -> bool {
         && avx512_here()
 }
 
-/// Whether the AVX-512 loops run here: built (x86-64, Rust 1.89 or later) and a processor with
-/// AVX-512 F and VL.
+/// Whether the AVX-512 loops run here: built (x86-64, Rust 1.89 or later), a processor with
+/// AVX-512 F and VL, and the portable forms not forced (`crate::simd`).
 fn avx512_here() -> bool {
     #[cfg(all(target_arch = "x86_64", rustc_1_89))]
-    return std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512vl");
+    return crate::simd::avx512();
     #[cfg(not(all(target_arch = "x86_64", rustc_1_89)))]
     false
 }
@@ -467,7 +466,7 @@ fn rank<K: Copy + Ord + Rank>(keys: &[K], slots: &mut [K]) {
             // SAFETY: the processor supports AVX-512 F and VL (checked just above).
             return unsafe { rank_avx512(keys, slots) };
         }
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::simd::avx2() {
             // SAFETY: the processor supports AVX2 (checked just above).
             return unsafe { rank_avx2(keys, slots) };
         }
