@@ -10,10 +10,9 @@ use std::ffi::c_void;
 use super::args::{check_aligned, check_optional};
 use super::enums::{nbhd_non_finite_policy, nbhd_orientation, nbhd_scalar_type, nbhd_units};
 use super::fields::{c_field, CStruct};
-use super::smoothing_io::{nbhd_progress_fn, read_points, Progress};
+use super::smoothing_io::{nbhd_progress_fn, read_points, Progress, Strided};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::nbhd_points;
-use crate::error::NbhdError;
 use crate::geometry::{estimate_normals_from, Neighbors, NormalEstimate, NormalOptions};
 use crate::scalar::ScalarType;
 
@@ -139,70 +138,6 @@ unsafe fn read_options(
     };
     let progress = Progress::new(c_field!(o.progress), c_field!(o.progress_user_data));
     Ok((core, progress))
-}
-
-/// One strided output array: where, how far apart, how many values per point.
-struct Strided {
-    at: *mut u8,
-    stride: usize,
-    scalar: ScalarType,
-}
-
-impl Strided {
-    /// Checks a strided array of `count` points of `width` values named `what`: the stride
-    /// (0 = packed) holds one point's values and the span does not overflow.
-    fn new(
-        at: *mut c_void,
-        stride: usize,
-        scalar: ScalarType,
-        width: usize,
-        count: usize,
-        what: &str,
-    ) -> Result<Self, FfiError> {
-        let size = width * scalar.size();
-        let stride = if stride == 0 { size } else { stride };
-        if stride < size {
-            return Err(FfiError::InvalidArgument(format!(
-                "out->{what}_stride {stride} is smaller than {width} value(s) of {} bytes",
-                scalar.size()
-            )));
-        }
-        if (count.max(1) - 1)
-            .checked_mul(stride)
-            .and_then(|b| b.checked_add(size))
-            .is_none_or(|b| b > isize::MAX as usize)
-        {
-            return Err(NbhdError::SizeOverflow {
-                what: format!("out->{what} with {count} points and stride {stride}"),
-            }
-            .into());
-        }
-        Ok(Self {
-            at: at.cast(),
-            stride,
-            scalar,
-        })
-    }
-
-    /// Writes the values of point `i`, unaligned.
-    ///
-    /// # Safety
-    /// The array must be writable for point `i` in the layout checked by [`Strided::new`], and
-    /// no Rust borrow of it may be live.
-    unsafe fn write(&self, i: usize, values: &[f64]) {
-        let size = self.scalar.size();
-        for (c, &v) in values.iter().enumerate() {
-            // SAFETY: inside point i's values of the caller's writable array (caller); the
-            // offset cannot overflow (checked in `new`); unaligned writes.
-            unsafe {
-                let p = self.at.add(i * self.stride + c * size);
-                match self.scalar {
-                    ScalarType::F32 => p.cast::<f32>().write_unaligned(v as f32),
-                    ScalarType::F64 => p.cast::<f64>().write_unaligned(v),
-                }
-            }
-        }
-    }
 }
 
 /// The caller's nbhd_normals_output, read and checked for `count` points.
