@@ -23,6 +23,7 @@ use std::time::Instant;
 
 use kiddo::{MutableKdTree, SquaredEuclidean};
 use nbhd::dynamic::DynamicKdTree;
+use nbhd::NeighborIndex;
 use nbhd::{BuildOptions, KdTree, Neighborhood, PointsView, TableOptions};
 use rayon::prelude::*;
 

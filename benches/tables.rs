@@ -19,6 +19,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nbhd::shapes::datasets::Dataset;
 use nbhd::table::neighborhoods_of_all;
+use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, Neighborhood, NonFinitePolicy, PivotPolicy, PointsView,
     Query, Scalar, TableOptions,

@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use nbhd::shapes::datasets::Dataset;
 use nbhd::shapes::Rng;
+use nbhd::NeighborIndex;
 use nbhd::{BuildOptions, KdTree, PointsView};
 
 fn main() {

@@ -1,11 +1,12 @@
 //! Where the time of `nbhd_estimate_normals` goes on a torus (diagnostic, not a test): the
-//! whole call as the C ABI makes it (`smooth::estimate_normals`), the same with the propagated
+//! whole call as the C ABI makes it (`geometry::estimate_normals`), the same with the propagated
 //! orientation (issue: propagation may take no more time than the normals themselves), the
 //! full per-point analysis (`nbhd_estimate_curvatures`), and the stages of the old path.
 //!
 //! `cargo run --release --example normals_timing -- [POINTS] [--threads T] [--repeat R]`
 //! `[--only normals|curvatures|table]` (one run of that stage alone, for
 //! `valgrind --tool=callgrind`).
+use nbhd::geometry::estimate_normals;
 use nbhd::geometry::neighbors::neighbor_table;
 use nbhd::geometry::normals::local_frames;
 use nbhd::shapes::{sample, Torus};
@@ -67,7 +68,7 @@ fn main() {
             ..SmoothOptions::default()
         };
         match only.as_str() {
-            "normals" => return drop(smooth::estimate_normals(&points, &opts).unwrap()),
+            "normals" => return drop(estimate_normals(&points, &opts.normal_options()).unwrap()),
             "curvatures" => return drop(smooth::smooth(&points, &opts).unwrap()),
             "table" => {
                 return drop(neighbor_table(&points, Neighborhood::Knn { k: 15 }, true).unwrap())
@@ -75,14 +76,14 @@ fn main() {
             _ => {}
         }
         let normals = best(repeat, || {
-            smooth::estimate_normals(&points, &opts).unwrap();
+            estimate_normals(&points, &opts.normal_options()).unwrap();
         });
         let propagated = SmoothOptions {
             orientation: nbhd::geometry::Orientation::Propagate,
             ..opts
         };
         let oriented = best(repeat, || {
-            smooth::estimate_normals(&points, &propagated).unwrap();
+            estimate_normals(&points, &propagated.normal_options()).unwrap();
         });
         let full = best(repeat, || {
             smooth::smooth(&points, &opts).unwrap();

@@ -6,6 +6,7 @@
 use std::time::Instant;
 
 use nbhd::shapes::datasets::Dataset;
+use nbhd::Persist;
 use nbhd::{BuildOptions, KdTree, PointsView, Scalar};
 
 fn stats(v: &mut [f64]) -> String {

@@ -10,6 +10,7 @@ use std::num::NonZero;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nbhd::shapes::datasets::Dataset;
+use nbhd::NeighborIndex;
 use nbhd::{BuildOptions, KdTree, PointsView, Query};
 
 /// CPU time of the calling thread, in seconds.

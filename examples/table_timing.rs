@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use nbhd::scalar::Scalar;
 use nbhd::shapes::datasets::Dataset;
+use nbhd::NeighborIndex;
 use nbhd::{BuildOptions, KdTree, Neighborhood, PointsView, Query, TableOptions};
 
 fn main() {

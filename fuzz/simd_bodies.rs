@@ -20,8 +20,8 @@
 use glam::DVec3;
 use nbhd::smooth::{smooth_robust, RobustOptions};
 use nbhd::{
-    BruteForce, BuildOptions, KdTree, Neighbor, NeighborSearch, Neighborhood, NonFinitePolicy,
-    PivotPolicy, PointsView, Query, Scalar, TableOptions,
+    BruteForce, BuildOptions, KdTree, Neighbor, NeighborIndex, NeighborSearch, Neighborhood,
+    NonFinitePolicy, PivotPolicy, PointsView, Query, Scalar, TableOptions,
 };
 
 /// Arguments read from the fuzzer's bytes; past the end every read gives 0.

@@ -11,6 +11,8 @@
 
 use nbhd::dynamic::DynamicKdTree;
 use nbhd::tree::HEADER_LEN;
+use nbhd::NeighborIndex;
+use nbhd::Persist;
 use nbhd::{
     BruteForce, KdTree, NbhdError, NeighborSearch, Neighborhood, NonFinitePolicy, PointsView,
     Query, Scalar,

@@ -400,6 +400,7 @@ impl fmt::Display for NbhdError {
                     ": epsilon resolved to {epsilon:e} in the points' units (mean spacing h = \
                      {spacing:e})"
                 )?;
+                // the units as the command line and Python spell them (`src/names.rs`)
                 if *relative {
                     write!(
                         f,

@@ -14,12 +14,16 @@
 pub(crate) mod cloud;
 pub mod dynamic;
 pub mod error;
+#[doc(hidden)]
 pub mod ffi;
 pub mod filter;
 pub mod geometry;
+pub mod handle;
+pub mod index;
 #[cfg(feature = "io")]
 pub mod io;
 pub(crate) mod linalg;
+pub mod names;
 pub(crate) mod parallel;
 pub mod points;
 pub(crate) mod prefetch;
@@ -38,14 +42,15 @@ pub mod tree;
 pub use cloud::NonFinitePolicy;
 pub use dynamic::DynamicKdTree;
 pub use error::{NbhdError, Result};
+pub use index::{IndexRows, NeighborIndex, Spacing};
 pub use parallel::MAX_THREADS;
 pub use points::{PointsView, MAX_POINTS};
 pub use query::brute::BruteForce;
 pub use query::pca_sweep::PcaSweep;
-pub use query::{Neighbor, NeighborSearch, Neighborhood, Query};
+pub use query::{Neighbor, NeighborSearch, Neighborhood, NeighborhoodSpec, Query};
 pub use scalar::{Scalar, ScalarType};
 pub use table::{NeighborTable, TableOptions};
-pub use tree::{BuildOptions, IndexRows, KdTree, MedianAlgorithm, PivotPolicy, Spacing, TreeStats};
+pub use tree::{BuildOptions, KdTree, MedianAlgorithm, Persist, PivotPolicy, TreeStats};
 
 /// The Rust code blocks of README.md and docs/features.md, compiled and run as doctests (`cargo
 /// test --doc`), so that what the documents show keeps to the API as it is. Built for doctests

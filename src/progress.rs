@@ -172,3 +172,34 @@ mod tests {
         }
     }
 }
+
+/// What the run is doing when the progress callback is called.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Neighbourhood search (and the spacing estimate).
+    Neighbors,
+    /// Normals and curvatures of a step.
+    Geometry,
+    /// Moving the points.
+    Step,
+    /// Per-point outputs of the result.
+    Outputs,
+    /// Finished.
+    Done,
+}
+
+/// A reporter of progress counted in units out of `total` (steps or iterations, plus one for
+/// the rest): it hands `progress` the fraction done, clamped to `[0, 1]`, and turns a `false`
+/// into [`NbhdError::Cancelled`].
+pub(crate) fn progress_in_units<'a, P: FnMut(f64, Stage) -> bool + ?Sized>(
+    total: f64,
+    progress: &'a mut P,
+) -> impl FnMut(f64, Stage) -> Result<()> + 'a {
+    move |f, s| {
+        if progress((f / total).clamp(0.0, 1.0), s) {
+            Ok(())
+        } else {
+            Err(NbhdError::Cancelled)
+        }
+    }
+}

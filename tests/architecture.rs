@@ -12,18 +12,20 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     // vocabulary every part shares
     &["scalar", "error", "linalg", "select", "prefetch", "simd"],
-    &["points", "parallel", "progress", "scatter"],
+    &["points", "parallel", "progress", "scatter", "names"],
     // the caller's points, validated and packed
     &["cloud"],
     // queries and their baselines (brute force, PCA sweep), then tables of their answers
     &["query"],
     &["table"],
+    // the neighbour index: every query once, over what each flavour provides (Chapter 5)
+    &["index"],
     // the k-d tree (Chapters 3, 5, 6)
     &["tree"],
     // normals, curvatures (Chapter 2); files; the dynamic forest of trees; point filters (outlier removal)
     &["geometry", "io", "dynamic", "filter"],
     // smoothing (Chapter 2); analytic test shapes and their metrics
-    &["smooth", "shapes"],
+    &["smooth", "shapes", "handle"],
     // the C ABI over all of it
     &["ffi"],
 ];
@@ -125,13 +127,35 @@ fn crate_uses(text: &str, reexports: &BTreeMap<String, String>) -> Vec<String> {
     used
 }
 
+/// Macros a module exports (`#[macro_export] macro_rules! name`), which live at the crate root:
+/// `crate::name` is a use of that module.
+fn exported_macros(module: &str, text: &str, out: &mut BTreeMap<String, String>) {
+    for (i, _) in text.match_indices("#[macro_export]") {
+        let rest = &text[i..];
+        if let Some(at) = rest.find("macro_rules!") {
+            let name: String = rest[at + "macro_rules!".len()..]
+                .trim_start()
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            out.insert(name, module.to_string());
+        }
+    }
+}
+
 #[test]
 fn every_module_uses_only_lower_layers() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let lib = fs::read_to_string(src.join("lib.rs")).expect("src/lib.rs");
-    let reexports = root_reexports(&lib);
+    let mut reexports = root_reexports(&lib);
     let mut files = Vec::new();
     rust_files(&src, &mut files);
+    for file in &files {
+        if let Some(module) = module_of(&src, file) {
+            let text = fs::read_to_string(file).expect("a source file");
+            exported_macros(&module, &text, &mut reexports);
+        }
+    }
     let mut violations = Vec::new();
     let mut unplaced = Vec::new();
     for file in &files {
@@ -182,4 +206,226 @@ fn the_reader_finds_grouped_and_reexported_uses() {
         &reexports,
     );
     assert_eq!(uses, ["query", "table", "tree", "error"]);
+}
+
+// ---- One neighbour index (docs/ARCHITECTURE.md, "One index") ----
+//
+// Every query is written once, in `src/index/`, over the few facts each flavour provides. The
+// checks below fail when a second copy of the query family, of its result collectors, of the
+// persistence envelope or of the runtime dispatch appears beside it.
+
+/// The query family of `NeighborIndex`: a definition of one of these names outside
+/// `src/index/` is a second implementation, unless it is listed in [`QUERY_NAMES_ELSEWHERE`].
+const QUERY_NAMES: &[&str] = &[
+    "knn",
+    "radius",
+    "knn_radius",
+    "in_box",
+    "in_boxes",
+    "neighborhoods",
+    "neighborhoods_at",
+    "neighborhoods_of",
+    "spacing",
+];
+
+/// Definitions of a query name outside `src/index/` that are not a second implementation:
+/// (file under `src/`, name, why).
+const QUERY_NAMES_ELSEWHERE: &[(&str, &str, &str)] = &[
+    // the runtime handle: one line each, dispatching to the typed index's trait method
+    ("handle.rs", "neighborhoods", "dispatch"),
+    ("handle.rs", "neighborhoods_at", "dispatch"),
+    ("handle.rs", "neighborhoods_of", "dispatch"),
+    ("handle.rs", "in_boxes", "dispatch"),
+    ("handle.rs", "spacing", "dispatch"),
+    // constructors of the run-time neighbourhood description, not queries
+    ("query/mod.rs", "knn", "NeighborhoodSpec"),
+    ("query/mod.rs", "radius", "NeighborhoodSpec"),
+    ("query/mod.rs", "knn_radius", "NeighborhoodSpec"),
+    // the brute-force baseline every test compares the index with
+    ("query/brute.rs", "in_box", "baseline"),
+    // the C exports' shared bodies over the handle (`nbhd_tree_*` and `nbhd_dynamic_*`)
+    ("ffi/table.rs", "neighborhoods", "C export"),
+    ("ffi/table.rs", "neighborhoods_of", "C export"),
+];
+
+/// The types that implement `NeighborIndex`, by the file of their implementation (in the
+/// files' order).
+const INDEX_FLAVOURS: &[(&str, &str)] = &[
+    ("dynamic/search.rs", "DynamicKdTree"),
+    ("tree/mod.rs", "KdTree"),
+];
+
+/// Traits and types that exist once: the index, its result collectors, the persistence
+/// envelope, the runtime handle, the option names.
+const DEFINED_ONCE: &[&str] = &[
+    "trait NeighborIndex",
+    "trait NeighborSearch",
+    "trait ResultSet",
+    "trait RowSets",
+    "trait Persist",
+    "enum AnyIndex",
+    "trait OptionName",
+];
+
+/// Every production file under `dir` as (path relative to `dir` with `/`, production text).
+fn production_files(dir: &Path) -> Vec<(String, String)> {
+    let mut files = Vec::new();
+    rust_files(dir, &mut files);
+    files.sort();
+    files
+        .iter()
+        .filter(|f| f.file_name().is_some_and(|n| n != "tests.rs"))
+        .map(|f| {
+            let rel = f
+                .strip_prefix(dir)
+                .unwrap()
+                .to_string_lossy()
+                .replace('\\', "/");
+            let text = fs::read_to_string(f).expect("a source file");
+            (rel, production(&text).to_string())
+        })
+        .collect()
+}
+
+/// Whether `line` defines `what` (`trait Name` or `enum Name`, any visibility).
+fn defines(line: &str, what: &str) -> bool {
+    let l = line.trim_start();
+    let l = ["pub ", "pub(crate) ", "pub(super) "]
+        .iter()
+        .find_map(|v| l.strip_prefix(v))
+        .unwrap_or(l);
+    l.strip_prefix(what)
+        .is_some_and(|rest| rest.starts_with([' ', '<', ':', '{']))
+}
+
+/// The names of `names` that `text` defines as functions (`fn name(` or `fn name<`).
+fn defined_fns<'a>(text: &str, names: &[&'a str]) -> Vec<&'a str> {
+    names
+        .iter()
+        .copied()
+        .filter(|n| text.contains(&format!("fn {n}(")) || text.contains(&format!("fn {n}<")))
+        .collect()
+}
+
+/// The query names defined outside `src/index/` and not listed as allowed: (file, name).
+fn second_queries(files: &[(String, String)]) -> Vec<(String, &'static str)> {
+    let mut found = Vec::new();
+    for (rel, text) in files {
+        if rel.starts_with("index/") {
+            continue;
+        }
+        for name in defined_fns(text, QUERY_NAMES) {
+            if !QUERY_NAMES_ELSEWHERE
+                .iter()
+                .any(|&(f, n, _)| f == rel && n == name)
+            {
+                found.push((rel.clone(), name));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn every_query_is_written_once_in_the_index() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let files = production_files(&src);
+    let second = second_queries(&files);
+    assert!(
+        second.is_empty(),
+        "a query of the index defined outside src/index/ (write it once in NeighborIndex, \
+         or list it in QUERY_NAMES_ELSEWHERE with the reason): {second:?}"
+    );
+    // every allowance is still needed (a stale one would hide a later copy)
+    for &(file, name, why) in QUERY_NAMES_ELSEWHERE {
+        let text = &files.iter().find(|(r, _)| r == file).expect(file).1;
+        assert!(
+            defined_fns(text, &[name]) == [name],
+            "src/{file} no longer defines {name} ({why}): drop it from QUERY_NAMES_ELSEWHERE"
+        );
+    }
+}
+
+#[test]
+fn the_index_has_two_flavours_and_each_concept_one_definition() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = production_files(&src);
+    let flavours: Vec<(String, String)> = files
+        .iter()
+        .flat_map(|(rel, text)| {
+            text.match_indices("> NeighborIndex<T> for ")
+                .map(move |(at, m)| {
+                    let ty: String = text[at + m.len()..]
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
+                    (rel.clone(), ty)
+                })
+        })
+        .collect();
+    let expected: Vec<(String, String)> = INDEX_FLAVOURS
+        .iter()
+        .map(|&(f, t)| (f.to_string(), t.to_string()))
+        .collect();
+    assert_eq!(
+        flavours, expected,
+        "the implementations of NeighborIndex (a new flavour overrides only its fast paths; \
+         add it to INDEX_FLAVOURS and docs/ARCHITECTURE.md)"
+    );
+    // the front doors bind the one handle: no typed tree held by an enum of their own
+    let python = Path::new(env!("CARGO_MANIFEST_DIR")).join("python/src");
+    files.extend(
+        production_files(&python)
+            .into_iter()
+            .map(|(r, t)| (format!("python/{r}"), t)),
+    );
+    for what in DEFINED_ONCE {
+        let homes: Vec<&str> = files
+            .iter()
+            .filter(|(_, t)| t.lines().any(|l| defines(l, what)))
+            .map(|(r, _)| r.as_str())
+            .collect();
+        assert_eq!(homes.len(), 1, "{what} is defined in {homes:?}, not once");
+    }
+    for (rel, text) in &files {
+        let front_door = rel.starts_with("ffi/") || rel.starts_with("python/");
+        let holds_tree = text.lines().any(|l| {
+            let l = l.trim_start();
+            (l.starts_with("F32(") || l.starts_with("F64(") || l.contains("Static"))
+                && (l.contains("KdTree<f32>") || l.contains("KdTree<f64>"))
+        });
+        assert!(
+            !(front_door && holds_tree),
+            "{rel} holds typed trees in an enum of its own: use nbhd::handle::AnyIndex"
+        );
+    }
+}
+
+#[test]
+fn the_structural_checks_see_a_second_copy() {
+    let files = vec![
+        ("index/mod.rs".to_string(), "fn knn(&self) {}".to_string()),
+        (
+            "dynamic/search.rs".to_string(),
+            "pub fn radius<Q>(&self) {}".to_string(),
+        ),
+        (
+            "handle.rs".to_string(),
+            "pub fn spacing(&self) {}".to_string(),
+        ),
+    ];
+    assert_eq!(
+        second_queries(&files),
+        [("dynamic/search.rs".to_string(), "radius")]
+    );
+    assert_eq!(
+        defined_fns("fn in_boxes(x) fn in_box<T>()", &["in_box", "in_boxes"]),
+        ["in_box", "in_boxes"]
+    );
+    assert!(defines(
+        "    pub(super) trait RowSets<T: Scalar> {",
+        "trait RowSets"
+    ));
+    assert!(!defines("impl<T> RowSets<T> for Rows {", "trait RowSets"));
+    assert!(!defines("pub trait RowSetsMore {", "trait RowSets"));
 }

@@ -7,6 +7,7 @@
 mod common;
 
 use common::{points, to_f32, Kind, Rng, KINDS};
+use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, MedianAlgorithm, NbhdError, NonFinitePolicy, PivotPolicy,
     PointsView, Scalar,

@@ -13,6 +13,8 @@ use common::{points, Kind, Rng};
 use nbhd::dynamic::{DynamicKdTree, SavedDynamicInfo};
 use nbhd::error::SavedTreeError;
 use nbhd::tree::{LoadOptions, HEADER_LEN};
+use nbhd::NeighborIndex;
+use nbhd::Persist;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, NbhdError, NeighborSearch, Neighborhood, NonFinitePolicy,
     PointsView, Query, Scalar, TableOptions,

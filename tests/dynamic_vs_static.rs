@@ -3,13 +3,19 @@
 //! in 1, 2, 3 and 5 dimensions, f32 and f64, over every pivot × median combination. After
 //! every step every query kind answers exactly what brute force over the live points answers
 //! (same indices, squared distances and order), the all-point and batch tables are the bytes
-//! of a static tree built over the live points (the others skipped), for 1 and 2 threads, and
-//! the index rule holds (removed indices refused, never reused).
+//! of a static tree built over the live points (the others skipped), for 1 and 2 threads, as
+//! are the box queries, the tables of listed points, the spacing and the filters, and the
+//! index rule holds (removed indices refused, never reused).
 
 mod common;
 
 use common::{points, Kind, Rng, KINDS};
 use nbhd::dynamic::DynamicKdTree;
+use nbhd::filter::{
+    radius_outlier_removal, statistical_outlier_removal, RadiusOutlierOptions,
+    StatisticalOutlierOptions,
+};
+use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, MedianAlgorithm, NbhdError, NeighborSearch, Neighborhood,
     NonFinitePolicy, PivotPolicy, PointsView, Query, Scalar, TableOptions,
@@ -219,6 +225,83 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
             };
             assert_eq!(tree.neighborhoods_of(&qview, nbhd, &opts).unwrap(), want);
         }
+    }
+    the_rest_of_the_family_matches(tree, &stat, &live, &batch, rng);
+}
+
+/// Box queries, tables of listed points, the spacing and the filters of the growing tree: the
+/// static tree's answers over the live points, byte for byte (every query of the one index
+/// family, `src/index/`, exists for both flavours).
+fn the_rest_of_the_family_matches<T: Scalar>(
+    tree: &DynamicKdTree<T>,
+    stat: &KdTree<T>,
+    live: &[u32],
+    batch: &[Vec<T>],
+    rng: &mut Rng,
+) {
+    let d = tree.dim();
+    // boxes around points of the batch, of random extents, a half-space and a plane
+    let mut boxes: Vec<T> = Vec::new();
+    for q in batch.iter().take(12) {
+        let r = T::from_f64(rng.unit() * 0.3);
+        boxes.extend(q.iter().map(|&c| c - r));
+        boxes.extend(q.iter().map(|&c| c + r));
+    }
+    let inf = T::from_f64(f64::INFINITY);
+    boxes.extend((0..d).map(|_| T::ZERO - inf));
+    boxes.extend((0..d).map(|j| if j == 0 { T::from_f64(0.5) } else { inf }));
+    boxes.extend(batch[3].iter().copied());
+    boxes.extend(batch[3].iter().copied());
+    let (mut got, mut want) = (Vec::new(), Vec::new());
+    for b in boxes.chunks_exact(2 * d) {
+        let (min, max) = b.split_at(d);
+        tree.in_box(min, max, &mut got).unwrap();
+        stat.in_box(min, max, &mut want).unwrap();
+        assert_eq!(got, want, "box {min:?} {max:?}");
+    }
+    for threads in [1, 2] {
+        assert_eq!(
+            tree.in_boxes(&boxes, threads).unwrap(),
+            stat.in_boxes(&boxes, 1).unwrap()
+        );
+    }
+    assert_eq!(tree.indices(), live);
+    // tables of listed points: some live points, in any order, one twice
+    let listed: Vec<u32> = (0..8).map(|_| live[rng.below(live.len())]).collect();
+    for nbhd in [
+        Neighborhood::Knn { k: 3 },
+        Neighborhood::Radius {
+            radius: T::from_f64(0.2),
+            sorted: true,
+        },
+    ] {
+        let opts = TableOptions::default();
+        assert_eq!(
+            tree.neighborhoods_at(&listed, nbhd, &opts).unwrap(),
+            stat.neighborhoods_at(&listed, nbhd, &opts).unwrap()
+        );
+    }
+    // the spacing and the filters
+    assert_eq!(tree.spacing(2), stat.spacing(1));
+    let sor = StatisticalOutlierOptions {
+        k: 3,
+        std_ratio: 0.5,
+        threads: 2,
+    };
+    assert_eq!(
+        statistical_outlier_removal(tree, &sor),
+        statistical_outlier_removal(stat, &sor)
+    );
+    for min_neighbors in [0, 2] {
+        let ror = RadiusOutlierOptions {
+            radius: 0.15,
+            min_neighbors,
+            threads: 1,
+        };
+        assert_eq!(
+            radius_outlier_removal(tree, &ror).unwrap(),
+            radius_outlier_removal(stat, &ror).unwrap()
+        );
     }
 }
 

@@ -7,8 +7,8 @@
 use nbhd::dynamic::DynamicKdTree;
 use nbhd::filter::{radius_outlier_removal, RadiusOutlierOptions};
 use nbhd::{
-    BruteForce, BuildOptions, KdTree, NbhdError, NeighborSearch, Neighborhood, NonFinitePolicy,
-    PcaSweep, PointsView, Query, Scalar, TableOptions,
+    BruteForce, BuildOptions, KdTree, NbhdError, NeighborIndex, NeighborSearch, Neighborhood,
+    NonFinitePolicy, PcaSweep, Persist, PointsView, Query, Scalar, TableOptions,
 };
 
 fn nbhds<T: Scalar>() -> [Neighborhood<T>; 4] {

@@ -1,5 +1,6 @@
 //! Every bad input gets its typed error, never a panic.
 
+use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, NbhdError, NeighborSearch, Neighborhood, NonFinitePolicy,
     PointsView, Query, ScalarType, MAX_POINTS,

@@ -7,6 +7,7 @@ mod common;
 
 use common::{points, to_f32, Kind};
 use nbhd::table::neighborhoods_of_all;
+use nbhd::NeighborIndex;
 use nbhd::{
     BuildOptions, KdTree, NeighborTable, Neighborhood, PivotPolicy, PointsView, Query, Scalar,
     TableOptions,

@@ -9,6 +9,7 @@ use nbhd::smooth::source::tree_neighbors;
 use nbhd::smooth::{
     analyze, analyze_from, smooth, smooth_from, Neighbors, SearchMethod, SmoothOptions,
 };
+use nbhd::NeighborIndex;
 use nbhd::{BuildOptions, KdTree, NeighborTable, Neighborhood, PointsView, TableOptions};
 
 fn cloud() -> Vec<DVec3> {

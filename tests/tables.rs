@@ -5,6 +5,7 @@ mod common;
 
 use common::{points, to_f32, Kind};
 use nbhd::table::neighborhoods_of_all;
+use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, Neighborhood, NonFinitePolicy, PointsView, TableOptions,
 };

@@ -6,6 +6,7 @@
 mod common;
 
 use common::{points, to_f32, Kind, KINDS};
+use nbhd::NeighborIndex;
 use nbhd::{BuildOptions, KdTree, MedianAlgorithm, PivotPolicy, PointsView, Query};
 
 fn build<T: nbhd::Scalar>(c: &[T], d: usize, opts: BuildOptions) -> KdTree<T> {

@@ -9,6 +9,7 @@
 mod common;
 
 use common::Rng;
+use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, NeighborSearch, Neighborhood, NonFinitePolicy, PivotPolicy,
     PointsView, Query, Scalar, TableOptions,

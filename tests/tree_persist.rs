@@ -11,6 +11,8 @@ mod common;
 use common::{points, to_f32, Kind, Rng};
 use nbhd::error::SavedTreeError;
 use nbhd::tree::{LoadOptions, SavedTreeInfo, HEADER_LEN};
+use nbhd::NeighborIndex;
+use nbhd::Persist;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, MedianAlgorithm, NbhdError, NeighborSearch, Neighborhood,
     NonFinitePolicy, PivotPolicy, PointsView, Query, Scalar, TableOptions,

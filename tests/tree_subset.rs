@@ -8,6 +8,7 @@ mod common;
 
 use common::{points, to_f32, Kind, Rng, KINDS};
 use nbhd::table::neighborhoods_of_all;
+use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, NbhdError, NeighborSearch, Neighborhood, NonFinitePolicy,
     PointsView, Query, Scalar, TableOptions,

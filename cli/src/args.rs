@@ -4,8 +4,9 @@
 
 use crate::error::Result;
 use glam::DVec3;
-use nbhd::geometry::Orientation;
+use nbhd::geometry::{Orientation, OrientationKind};
 use nbhd::io::{Format, PointCloud};
+use nbhd::names::OptionName;
 use nbhd::smooth::{Curvature, Length};
 use nbhd::{BuildOptions, MedianAlgorithm, NonFinitePolicy, PivotPolicy};
 use std::path::PathBuf;
@@ -155,67 +156,36 @@ pub fn curvature_text(c: Curvature) -> String {
     }
 }
 
-/// Pivot policy of the k-d tree (thesis Sections 3.2 and 5.4).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum PivotArg {
-    /// Dimensions in turn, split at the median (thesis Algorithm 4)
-    CyclicMedian,
-    /// Median of the dimension of largest spread (Omohundro)
-    SpreadMedian,
-    /// Point closest to the middle of the most spread dimension (Moore, eq. 5.1); unbalanced
-    ClosestToMiddle,
-    /// Middle of the most spread dimension, slid to the nearest point (ANN, FLANN)
-    SlidingMidpoint,
-}
-
-impl From<PivotArg> for PivotPolicy {
-    fn from(p: PivotArg) -> Self {
-        match p {
-            PivotArg::CyclicMedian => PivotPolicy::CyclicMedian,
-            PivotArg::SpreadMedian => PivotPolicy::SpreadMedian,
-            PivotArg::ClosestToMiddle => PivotPolicy::ClosestToMiddle,
-            PivotArg::SlidingMidpoint => PivotPolicy::SlidingMidpoint,
-        }
-    }
-}
-
-/// How the median policies find the median (thesis Section 3.3 and Chapter 6).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum MedianArg {
-    /// Lists presorted once and kept sorted by stable partition (Algorithm 6, "Sorting")
-    Presorted,
-    /// Sort each node's points, then pick ("Median (Sorting)")
-    Sort,
-    /// Randomised quickselect, median-of-three pivot (Algorithm 10)
-    Quickselect,
-    /// Floyd-Rivest selection ("Median (Floyd-Rivest)")
-    FloydRivest,
-    /// Deterministic median of medians (Algorithm 11, "Median (Linear Det.)")
-    MedianOfMedians,
-}
-
-impl From<MedianArg> for MedianAlgorithm {
-    fn from(m: MedianArg) -> Self {
-        match m {
-            MedianArg::Presorted => MedianAlgorithm::Presorted,
-            MedianArg::Sort => MedianAlgorithm::Sort,
-            MedianArg::Quickselect => MedianAlgorithm::Quickselect,
-            MedianArg::FloydRivest => MedianAlgorithm::FloydRivest,
-            MedianArg::MedianOfMedians => MedianAlgorithm::MedianOfMedians,
-        }
-    }
+/// A parser of the values of the library's option `T` by their names (`nbhd::names`), the words
+/// Python takes too: the names are listed in the help, older spellings accepted but not shown.
+pub fn named<T>() -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: OptionName + Send + Sync,
+{
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    let shown = T::NAMES.iter().map(|&(_, n)| PossibleValue::new(n));
+    let hidden = T::ALIASES
+        .iter()
+        .map(|&(n, _)| PossibleValue::new(n).hide(true));
+    PossibleValuesParser::new(shown.chain(hidden))
+        .map(|s| nbhd::names::parse_name::<T>(&s).expect("one of the possible values"))
 }
 
 /// How the k-d tree is built.
 #[derive(clap::Args, Debug, Clone)]
 pub struct TreeArgs {
-    /// Pivot policy: how a node picks its splitting dimension and value
-    #[arg(long, value_enum, default_value = "sliding-midpoint")]
-    pub pivot: PivotArg,
+    /// Pivot policy: how a node picks its splitting dimension and value (thesis Sections 3.2
+    /// and 5.4): dimensions in turn split at the median (cyclic-median, Algorithm 4), the median
+    /// of the most spread dimension (spread-median), the point closest to its middle
+    /// (closest-to-middle, unbalanced), or its middle slid to the nearest point
+    /// (sliding-midpoint, ANN and FLANN)
+    #[arg(long, value_parser = named::<PivotPolicy>(), default_value = "sliding-midpoint")]
+    pub pivot: PivotPolicy,
 
-    /// Median algorithm of the median policies (every one gives the identical tree)
-    #[arg(long, value_enum, default_value = "floyd-rivest")]
-    pub median: MedianArg,
+    /// Median algorithm of the median policies (every one gives the identical tree; thesis
+    /// Section 3.3 and Chapter 6)
+    #[arg(long, value_parser = named::<MedianAlgorithm>(), default_value = "floyd-rivest")]
+    pub median: MedianAlgorithm,
 
     /// Most points in a leaf bucket (1 gives the thesis' one point per node)
     #[arg(long, default_value_t = nbhd::tree::DEFAULT_LEAF_SIZE)]
@@ -227,8 +197,8 @@ impl TreeArgs {
     /// indices and get empty neighbourhoods).
     pub fn options(&self) -> BuildOptions {
         BuildOptions {
-            pivot: self.pivot.into(),
-            median: self.median.into(),
+            pivot: self.pivot,
+            median: self.median,
             leaf_size: self.leaf_size,
             non_finite: NonFinitePolicy::Skip,
             threads: 0,
@@ -236,16 +206,25 @@ impl TreeArgs {
     }
 }
 
-/// How normals are oriented (covariance normals have no sign of their own).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+/// How normals are oriented (covariance normals have no sign of their own): the library's
+/// orientations by name, or `outward`, away from the centroid of the points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OrientArg {
-    /// The eigen-solver's sign: arbitrary but deterministic
-    None,
-    /// Consistent over the neighbour graph (minimum spanning tree, Hoppe et al.); outward on
-    /// closed surfaces
-    Propagate,
-    /// Away from the centroid of the points (outward for star-shaped objects)
+    /// One of the library's orientations (`unoriented`, also `none`; `toward-point` and
+    /// `away-from-point` about the viewpoint; `propagate`).
+    Kind(OrientationKind),
+    /// Away from the centroid of the points (outward for star-shaped objects).
     Outward,
+}
+
+/// Parses `--orient`: the library's names of the orientations, or `outward`.
+pub fn parse_orient(s: &str) -> std::result::Result<OrientArg, String> {
+    if s == "outward" {
+        return Ok(OrientArg::Outward);
+    }
+    s.parse::<OrientationKind>()
+        .map(OrientArg::Kind)
+        .map_err(|e| format!("{e}, or outward"))
 }
 
 /// The orientation the arguments ask for, given the points.
@@ -254,15 +233,16 @@ pub fn orientation(
     viewpoint: Option<[f64; 3]>,
     points: &[DVec3],
 ) -> Orientation {
-    if let Some(v) = viewpoint {
-        return Orientation::TowardViewpoint(DVec3::from_array(v));
-    }
-    match orient {
-        OrientArg::None => Orientation::Unoriented,
-        OrientArg::Propagate => Orientation::Propagate,
-        OrientArg::Outward => {
-            let c = points.iter().fold(DVec3::ZERO, |a, &p| a + p) / points.len().max(1) as f64;
-            Orientation::AwayFrom(c)
+    let centroid = || points.iter().fold(DVec3::ZERO, |a, &p| a + p) / points.len().max(1) as f64;
+    match (orient, viewpoint) {
+        (OrientArg::Kind(OrientationKind::AwayFromPoint), Some(v)) => {
+            Orientation::AwayFrom(DVec3::from_array(v))
         }
+        // a viewpoint orients toward it
+        (_, Some(v)) => Orientation::TowardViewpoint(DVec3::from_array(v)),
+        (OrientArg::Outward | OrientArg::Kind(OrientationKind::AwayFromPoint), None) => {
+            Orientation::AwayFrom(centroid())
+        }
+        (OrientArg::Kind(kind), None) => Orientation::of_kind(kind, centroid()),
     }
 }

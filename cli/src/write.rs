@@ -4,6 +4,7 @@
 
 use crate::error::{Context, Result};
 use crate::render::{render_cloud, ColorMap, Image, RenderOptions};
+use nbhd::geometry::NormalEstimate;
 use nbhd::io::{Format, PointCloud, Precision, WriteOptions};
 use nbhd::smooth::PointOutput;
 use std::path::Path;
@@ -49,6 +50,23 @@ pub fn add_fields(
         field("max_abs_curvature", &|o| o.max_principal_curvature)?;
     }
     Ok(())
+}
+
+/// Adds the normals of `estimates` (of the points `index`, the others NaN) to `cloud`, and their
+/// surface variation as the `curvature` field (PCL's name).
+pub fn add_normals(
+    cloud: &mut PointCloud,
+    index: &[usize],
+    estimates: &[NormalEstimate],
+) -> Result<()> {
+    let n = cloud.len();
+    let (mut normals, mut variation) = (vec![[f64::NAN; 3]; n], vec![f64::NAN; n]);
+    for (&i, e) in index.iter().zip(estimates) {
+        normals[i] = e.normal.to_array();
+        variation[i] = e.surface_variation;
+    }
+    cloud.set_normals(normals)?;
+    Ok(cloud.set_scalar("curvature", variation)?)
 }
 
 /// `float32` or `float64`: what `precision` writes for `cloud`.

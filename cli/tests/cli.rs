@@ -1,5 +1,6 @@
 //! The `nbhd` binary as a person runs it.
 
+use nbhd::NeighborIndex;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 

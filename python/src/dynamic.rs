@@ -2,38 +2,16 @@
 //! removals (by index), with the static tree's queries and tables, and pickling through the
 //! library's saved format.
 
-use nbhd::dynamic::{DynamicKdTree, SavedDynamicInfo};
-use nbhd::{BuildOptions, NbhdError, NeighborSearch, Query, ScalarType, TableOptions};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
+use nbhd::handle::AnyIndex;
+use nbhd::{with_index, BuildOptions, NeighborIndex, Query, ScalarType};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyType};
 
 use crate::arrays::{float_array, ndim, vec1, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
+use crate::index::{self, dtype};
 use crate::options;
-use crate::tree::{neighborhood, pair, queries, Answer, PyTable};
-
-/// The dynamic tree of either scalar type.
-enum Dyn {
-    F32(DynamicKdTree<f32>),
-    F64(DynamicKdTree<f64>),
-}
-
-/// Runs `$body` with `$t` bound to the tree of either type and `$T` to its scalar type.
-macro_rules! with_dyn {
-    ($tree:expr, $t:ident, $T:ident => $body:expr) => {
-        match $tree {
-            Dyn::F32($t) => {
-                type $T = f32;
-                $body
-            }
-            Dyn::F64($t) => {
-                type $T = f64;
-                $body
-            }
-        }
-    };
-}
+use crate::tree::PyTable;
 
 /// A k-d tree that accepts insertions and removals (`nbhd::DynamicKdTree`): a forest of static
 /// trees of growing sizes with removed points as tombstones. Every query answers exactly what
@@ -47,54 +25,32 @@ macro_rules! with_dyn {
 /// to themselves (another thread's call meanwhile raises "Already borrowed").
 #[pyclass(module = "nbhd._nbhd", name = "DynamicKdTree")]
 pub struct PyDynamicKdTree {
-    tree: Dyn,
+    /// Always a growing tree.
+    index: AnyIndex,
+}
+
+/// Inserts the rows of `arr` (of the tree's dtype `T`) into the growing `index`.
+fn insert_rows<T: nbhd::Scalar + numpy::Element>(
+    index: &mut AnyIndex,
+    py: Python<'_>,
+    arr: &Bound<'_, PyAny>,
+) -> PyResult<u32> {
+    let pts = Points::<T>::new(arr)?;
+    let view = pts.view().or_raise()?;
+    py.detach(|| index.insert(&view)).or_raise()
 }
 
 impl PyDynamicKdTree {
-    fn dtype(&self) -> Dtype {
-        match self.tree {
-            Dyn::F32(_) => Dtype::F32,
-            Dyn::F64(_) => Dtype::F64,
-        }
+    /// The growing tree's statistics.
+    fn growing(&self) -> nbhd::dynamic::DynamicStats {
+        self.index
+            .growing_stats()
+            .expect("a DynamicKdTree holds a growing tree")
     }
 
+    /// Indices given so far.
     fn next(&self) -> usize {
-        with_dyn!(&self.tree, t, _T => t.next_index() as usize)
-    }
-
-    /// As `KdTree.query`: a single point answered by the tree's search, or a batch as a table.
-    fn query<'py>(
-        &self,
-        py: Python<'py>,
-        x: &Bound<'py, PyAny>,
-        k: Option<usize>,
-        radius: Option<f64>,
-        sorted: bool,
-        threads: usize,
-    ) -> PyResult<Answer<'py>> {
-        let (arr, single) = queries(x, self.dtype())?;
-        let rows = self.next();
-        with_dyn!(&self.tree, t, T => {
-            let nbhd = neighborhood::<T>(k, radius, sorted)?;
-            if single {
-                let flat = arr.call_method1("reshape", (-1,))?;
-                let ro: PyReadonlyArray1<'_, T> = flat.cast::<PyArray1<T>>()?.readonly();
-                let q: Vec<T> = ro.as_array().to_vec();
-                let found = py.detach(|| {
-                    let mut out = Vec::new();
-                    t.search(Query::point(&q), nbhd, &mut out).map(|_| out)
-                }).or_raise()?;
-                Ok(Answer::One(pair(py, found)?))
-            } else {
-                let pts = Points::<T>::new(&arr)?;
-                let view = pts.view().or_raise()?;
-                let opts = TableOptions { exclude_self: false, threads };
-                let table = py
-                    .detach(|| t.neighborhoods_of(&view, nbhd, &opts))
-                    .or_raise()?;
-                Ok(Answer::Many(PyTable::new(py, table, rows)?))
-            }
-        })
+        self.index.source_len()
     }
 }
 
@@ -128,40 +84,41 @@ impl PyDynamicKdTree {
             non_finite: options::non_finite(non_finite)?,
             threads,
         };
-        let mut tree = match dtype {
-            "float32" => Dyn::F32(DynamicKdTree::new(dim, &options).or_raise()?),
-            "float64" => Dyn::F64(DynamicKdTree::new(dim, &options).or_raise()?),
+        let scalar = match dtype {
+            "float32" => ScalarType::F32,
+            "float64" => ScalarType::F64,
             other => {
                 return Err(value_err(format!(
                     "dtype {other:?}: \"float32\" or \"float64\""
                 )))
             }
         };
-        with_dyn!(&mut tree, t, _T => t.set_growth(growth).or_raise()?);
-        Ok(Self { tree })
+        let mut index = AnyIndex::growing(dim, scalar, &options).or_raise()?;
+        index.set_growth(growth).or_raise()?;
+        Ok(Self { index })
     }
 
     /// Inserts the rows of `points` (an (n, dim) array, converted to the tree's dtype) as one
     /// batch and returns the index of the first: the batch gets `first .. first + n`.
     fn insert(&mut self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<u32> {
-        let (arr, _) = float_array(points, Some(self.dtype()))?;
+        let (arr, _) = float_array(points, Some(dtype(&self.index)))?;
         if ndim(&arr)? != 2 {
             return Err(value_err(format!(
                 "points must be a 2-D array (n, d), not {}-D",
                 ndim(&arr)?
             )));
         }
-        with_dyn!(&mut self.tree, t, T => {
-            let pts = Points::<T>::new(&arr)?;
-            let view = pts.view().or_raise()?;
-            py.detach(|| t.insert(&view)).or_raise()
-        })
+        match dtype(&self.index) {
+            Dtype::F32 => insert_rows::<f32>(&mut self.index, py, &arr),
+            Dtype::F64 => insert_rows::<f64>(&mut self.index, py, &arr),
+        }
     }
 
     /// Removes the live points `indices` (any order; all or nothing). Their indices are never
     /// given again.
     fn remove(&mut self, py: Python<'_>, indices: Vec<u32>) -> PyResult<()> {
-        with_dyn!(&mut self.tree, t, _T => py.detach(|| t.remove(&indices)).or_raise())
+        let index = &mut self.index;
+        py.detach(|| index.remove(&indices)).or_raise()
     }
 
     /// Worker threads of the builds that `insert` and `remove` run: 0 a thread per core, 1
@@ -169,18 +126,18 @@ impl PyDynamicKdTree {
     /// starts at 0 whatever the bytes say: saved data is untrusted input.
     #[getter]
     fn threads(&self) -> usize {
-        with_dyn!(&self.tree, t, _T => t.options().threads)
+        self.index.options().threads
     }
 
     #[setter]
     fn set_threads(&mut self, threads: usize) -> PyResult<()> {
-        with_dyn!(&mut self.tree, t, _T => t.set_threads(threads).or_raise())
+        self.index.set_threads(threads).or_raise()
     }
 
     /// Live points.
     #[getter]
     fn size(&self) -> usize {
-        with_dyn!(&self.tree, t, _T => t.len())
+        self.index.len()
     }
 
     /// Indices given so far (live, removed and skipped): the rows of `neighborhoods`.
@@ -192,24 +149,24 @@ impl PyDynamicKdTree {
     /// Dimension of the points.
     #[getter]
     fn m(&self) -> usize {
-        with_dyn!(&self.tree, t, _T => t.dim())
+        self.index.dim()
     }
 
     /// The tree's scalar type: "float32" or "float64".
     #[getter]
     fn dtype_name(&self) -> &'static str {
-        self.dtype().numpy_name()
+        dtype(&self.index).numpy_name()
     }
 
     /// Whether `index` names a live point.
     fn is_live(&self, index: u32) -> bool {
-        with_dyn!(&self.tree, t, _T => t.is_live(index))
+        self.index.is_live(index)
     }
 
     /// `live`, `next_index` and `trees`: a list of (live, removed) points per static tree,
     /// oldest first.
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = with_dyn!(&self.tree, t, _T => t.stats());
+        let s = self.growing();
         let d = PyDict::new(py);
         d.set_item("live", s.live)?;
         d.set_item("next_index", s.next_index)?;
@@ -219,15 +176,10 @@ impl PyDynamicKdTree {
 
     /// The coordinates of the live point `index` (raises if removed, skipped or not given).
     fn point<'py>(&self, py: Python<'py>, index: u32) -> PyResult<Bound<'py, PyAny>> {
-        with_dyn!(&self.tree, t, _T => match t.point(index) {
-            Some(p) => Ok(vec1(py, p.to_vec()).into_any()),
-            None => {
-                // The library's error for this index: out of range, removed or skipped.
-                let mut out = Vec::new();
-                t.search(Query::stored(index), nbhd::Neighborhood::Knn { k: 1 }, &mut out)
-                    .or_raise()?;
-                Err(value_err(format!("index {index} is not live")))
-            }
+        with_index!(&self.index, t, _T => {
+            // the library's error for an index out of range, removed or skipped
+            let (p, _) = t.resolve(Query::stored(index)).or_raise()?;
+            Ok(vec1(py, p.to_vec()).into_any())
         })
     }
 
@@ -240,10 +192,14 @@ impl PyDynamicKdTree {
         k: usize,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        match self.query(py, x, Some(k), None, true, threads)? {
-            Answer::One(t) => Ok(t.into_any()),
-            Answer::Many(table) => table.dense(py, k.min(self.size())),
-        }
+        index::query(
+            &self.index,
+            py,
+            x,
+            index::spec(Some(k), None, true)?,
+            threads,
+        )?
+        .dense(py, k.min(self.size()))
     }
 
     /// All live points within `radius` of `x`; as `KdTree.radius`.
@@ -256,8 +212,14 @@ impl PyDynamicKdTree {
         sorted: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.query(py, x, None, Some(radius), sorted, threads)?
-            .into_py(py)
+        index::query(
+            &self.index,
+            py,
+            x,
+            index::spec(None, Some(radius), sorted)?,
+            threads,
+        )?
+        .into_py(py)
     }
 
     /// The `k` nearest among the live points within `radius` of `x`; as `KdTree.knn_radius`.
@@ -270,8 +232,8 @@ impl PyDynamicKdTree {
         radius: f64,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.query(py, x, Some(k), Some(radius), true, threads)?
-            .into_py(py)
+        let spec = index::spec(Some(k), Some(radius), true)?;
+        index::query(&self.index, py, x, spec, threads)?.into_py(py)
     }
 
     /// The neighbourhood of every live point as a `Table` with a row per index given (empty
@@ -287,20 +249,14 @@ impl PyDynamicKdTree {
         sorted: bool,
         threads: usize,
     ) -> PyResult<PyTable> {
-        let rows = self.next();
-        with_dyn!(&self.tree, t, T => {
-            let nbhd = neighborhood::<T>(k, radius, sorted)?;
-            let opts = TableOptions { exclude_self, threads };
-            let table = py.detach(|| t.neighborhoods(nbhd, &opts)).or_raise()?;
-            PyTable::new(py, table, rows)
-        })
+        let spec = index::spec(k, radius, sorted)?;
+        index::neighborhoods(&self.index, py, spec, exclude_self, threads)
     }
 
     /// The tree in the saved dynamic-tree format (docs/tree-file-format.md) as `bytes`; what
     /// `pickle` stores and `DynamicKdTree.from_bytes` reads back.
     fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        let bytes = py.detach(|| with_dyn!(&self.tree, t, _T => t.to_bytes()));
-        PyBytes::new(py, &bytes)
+        index::to_bytes(&self.index, py)
     }
 
     /// The dynamic tree saved in `data`, of the dtype it was saved with: it answers every
@@ -309,16 +265,9 @@ impl PyDynamicKdTree {
     /// differs.
     #[classmethod]
     fn from_bytes(cls: &Bound<'_, PyType>, data: &[u8]) -> PyResult<Self> {
-        let tree = cls
-            .py()
-            .detach(|| -> Result<Dyn, NbhdError> {
-                Ok(match SavedDynamicInfo::from_bytes(data)?.scalar {
-                    ScalarType::F32 => Dyn::F32(DynamicKdTree::from_bytes(data)?),
-                    ScalarType::F64 => Dyn::F64(DynamicKdTree::from_bytes(data)?),
-                })
-            })
-            .or_raise()?;
-        Ok(Self { tree })
+        Ok(Self {
+            index: index::from_bytes(cls.py(), data, true)?,
+        })
     }
 
     /// Pickling: `DynamicKdTree.from_bytes(tree.to_bytes())`.
@@ -331,7 +280,7 @@ impl PyDynamicKdTree {
     }
 
     fn __len__(&self) -> usize {
-        with_dyn!(&self.tree, t, _T => t.len())
+        self.index.len()
     }
 
     fn __repr__(&self) -> String {
@@ -340,7 +289,7 @@ impl PyDynamicKdTree {
             self.size(),
             self.next(),
             self.m(),
-            self.dtype().numpy_name()
+            dtype(&self.index).numpy_name()
         )
     }
 }

@@ -4,6 +4,7 @@
 //! geometry in f64); the GIL is released while the library runs.
 
 use glam::DVec3;
+use nbhd::geometry::{estimate_normals, NormalOptions};
 use nbhd::smooth as core;
 use nbhd::smooth::{Curvature, PointOutput, RobustOptions, SmoothOptions, SmoothResult};
 use pyo3::prelude::*;
@@ -77,7 +78,7 @@ fn result_dict<'py>(
     Ok(d)
 }
 
-/// The options of an analysis without steps (what the C ABI's `nbhd_estimate_normals` reads).
+/// The options of an analysis without steps (the curvatures; λ is not read).
 #[allow(clippy::too_many_arguments)]
 fn analysis_options(
     k: usize,
@@ -134,23 +135,19 @@ pub fn normals<'py>(
     non_finite: &str,
     threads: usize,
 ) -> PyResult<Bound<'py, PyTuple>> {
-    let opts = analysis_options(
+    let opts = NormalOptions {
         k,
-        epsilon,
-        epsilon_units,
-        orientation,
-        orientation_point,
-        non_finite,
-        "abs-linear",
-        "eq2.25",
+        epsilon: options::length(epsilon, epsilon_units)?,
+        orientation: options::orientation(orientation, orientation_point)?,
+        non_finite: options::non_finite(non_finite)?,
         threads,
-    )?;
+    };
     let pts = dvec3s(points)?;
-    let r = py.detach(|| core::analyze(&pts, &opts)).or_raise()?;
-    let o = &r.outputs;
+    let r = py.detach(|| estimate_normals(&pts, &opts)).or_raise()?;
+    let o = &r.normals;
     let n: Vec<DVec3> = o.iter().map(|o| o.normal).collect();
-    let c: Vec<f64> = o.iter().map(|o| o.covariance_quotient).collect();
-    let f: Vec<u8> = o.iter().map(|o| o.normal_flags).collect();
+    let c: Vec<f64> = o.iter().map(|o| o.surface_variation).collect();
+    let f: Vec<u8> = o.iter().map(|o| o.flags).collect();
     PyTuple::new(
         py,
         [

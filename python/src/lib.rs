@@ -7,6 +7,7 @@ mod arrays;
 mod dynamic;
 mod errors;
 mod geometry;
+mod index;
 mod io;
 mod options;
 mod tree;

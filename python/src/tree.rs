@@ -1,40 +1,16 @@
 //! `nbhd.KdTree` and `nbhd.Table`: the k-d tree of `nbhd::tree` over an (n, d) numpy array of
 //! float32 or float64, its single and batch queries, and its all-point tables as compressed rows.
 
-use nbhd::tree::SavedTreeInfo;
-use nbhd::{
-    BuildOptions, KdTree, NbhdError, Neighbor, NeighborSearch, NeighborTable, Neighborhood, Query,
-    Scalar, ScalarType, TableOptions,
-};
-use numpy::{Element, PyArray1, PyArrayMethods, PyReadonlyArray1};
+use nbhd::handle::AnyIndex;
+use nbhd::{BuildOptions, NbhdError, NeighborTable, Scalar};
+use numpy::{Element, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple, PyType};
 
-use crate::arrays::{as_rows, float_array, ndim, vec1, Dtype, Points};
+use crate::arrays::{float_array, ndim, vec1, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
+use crate::index::{self, dtype};
 use crate::options;
-
-/// The tree of either scalar type.
-enum Tree {
-    F32(KdTree<f32>),
-    F64(KdTree<f64>),
-}
-
-/// Runs `$body` with `$t` bound to the tree of either type and `$T` to its scalar type.
-macro_rules! with_tree {
-    ($tree:expr, $t:ident, $T:ident => $body:expr) => {
-        match $tree {
-            Tree::F32($t) => {
-                type $T = f32;
-                $body
-            }
-            Tree::F64($t) => {
-                type $T = f64;
-                $body
-            }
-        }
-    };
-}
 
 /// A k-d tree over the rows of an (n, d) array (thesis Chapter 3; `nbhd::KdTree`).
 ///
@@ -43,129 +19,8 @@ macro_rules! with_tree {
 /// releases the GIL while it runs.
 #[pyclass(frozen, module = "nbhd._nbhd", name = "KdTree")]
 pub struct PyKdTree {
-    tree: Tree,
-}
-
-/// `r` in the tree's type: a radius finite in f64 but not in `T` is
-/// [`NbhdError::RadiusOutOfRange`], as in the C ABI; NaN and negative radii are left for the
-/// library's own check.
-pub(crate) fn radius_in<T: Scalar>(r: f64) -> Result<T, NbhdError> {
-    let t = T::from_f64(r);
-    if r.is_finite() && !t.is_finite() {
-        let (scalar, max) = match T::TYPE {
-            ScalarType::F32 => ("f32", (f32::MAX as f64).sqrt()),
-            ScalarType::F64 => ("f64", f64::MAX.sqrt()),
-        };
-        return Err(NbhdError::RadiusOutOfRange {
-            radius: r,
-            scalar,
-            max,
-        });
-    }
-    Ok(t)
-}
-
-/// The neighbourhood named by `k` and/or `radius`.
-pub(crate) fn neighborhood<T: Scalar>(
-    k: Option<usize>,
-    radius: Option<f64>,
-    sorted: bool,
-) -> PyResult<Neighborhood<T>> {
-    Ok(match (k, radius) {
-        (Some(k), None) => Neighborhood::Knn { k },
-        (None, Some(r)) => Neighborhood::Radius {
-            radius: radius_in(r).or_raise()?,
-            sorted,
-        },
-        (Some(k), Some(r)) => Neighborhood::KnnRadius {
-            k,
-            radius: radius_in(r).or_raise()?,
-        },
-        (None, None) => return Err(value_err("give k, radius, or both")),
-    })
-}
-
-/// One query's neighbours as `(indices, sq_dists)` arrays.
-pub(crate) fn pair<'py, T: Scalar + Element>(
-    py: Python<'py>,
-    found: Vec<Neighbor<T>>,
-) -> PyResult<Bound<'py, PyTuple>> {
-    let idx: Vec<u32> = found.iter().map(|n| n.index).collect();
-    let d2: Vec<T> = found.iter().map(|n| n.sq_dist).collect();
-    PyTuple::new(py, [vec1(py, idx).into_any(), vec1(py, d2).into_any()])
-}
-
-/// `obj` as the tree's scalar type, (m, d) with whether it was a single 1-D point.
-pub(crate) fn queries<'py>(
-    obj: &Bound<'py, PyAny>,
-    dtype: Dtype,
-) -> PyResult<(Bound<'py, PyAny>, bool)> {
-    let (arr, _) = float_array(obj, Some(dtype))?;
-    as_rows(&arr, "the query")
-}
-
-impl PyKdTree {
-    fn dtype(&self) -> Dtype {
-        match self.tree {
-            Tree::F32(_) => Dtype::F32,
-            Tree::F64(_) => Dtype::F64,
-        }
-    }
-
-    fn source_len(&self) -> usize {
-        with_tree!(&self.tree, t, _T => t.source_len())
-    }
-
-    /// A single query (1-D `x`) answered by the tree's own search, or a batch (2-D `x`) as a
-    /// table, in parallel; the GIL released in both.
-    fn query<'py>(
-        &self,
-        py: Python<'py>,
-        x: &Bound<'py, PyAny>,
-        k: Option<usize>,
-        radius: Option<f64>,
-        sorted: bool,
-        threads: usize,
-    ) -> PyResult<Answer<'py>> {
-        let (arr, single) = queries(x, self.dtype())?;
-        let source_len = self.source_len();
-        with_tree!(&self.tree, t, T => {
-            let nbhd = neighborhood::<T>(k, radius, sorted)?;
-            if single {
-                let flat = arr.call_method1("reshape", (-1,))?;
-                let ro: PyReadonlyArray1<'_, T> = flat.cast::<PyArray1<T>>()?.readonly();
-                let q: Vec<T> = ro.as_array().to_vec();
-                let found = py.detach(|| {
-                    let mut out = Vec::new();
-                    t.search(Query::point(&q), nbhd, &mut out).map(|_| out)
-                }).or_raise()?;
-                Ok(Answer::One(pair(py, found)?))
-            } else {
-                let pts = Points::<T>::new(&arr)?;
-                let view = pts.view().or_raise()?;
-                let opts = TableOptions { exclude_self: false, threads };
-                let table = py
-                    .detach(|| t.neighborhoods_of(&view, nbhd, &opts))
-                    .or_raise()?;
-                Ok(Answer::Many(PyTable::new(py, table, source_len)?))
-            }
-        })
-    }
-}
-
-/// What a query returns: one point's `(indices, sq_dists)` or a batch's table.
-pub(crate) enum Answer<'py> {
-    One(Bound<'py, PyTuple>),
-    Many(PyTable),
-}
-
-impl<'py> Answer<'py> {
-    pub(crate) fn into_py(self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        match self {
-            Answer::One(t) => Ok(t.into_any()),
-            Answer::Many(t) => Ok(Bound::new(py, t)?.into_any()),
-        }
-    }
+    /// Always a static tree.
+    index: AnyIndex,
 }
 
 #[pymethods]
@@ -209,55 +64,62 @@ impl PyKdTree {
                 ndim(&arr)?
             )));
         }
-        let tree = match dtype {
+        let index = match dtype {
             Dtype::F32 => {
                 let pts = Points::<f32>::new(&arr)?;
                 let view = pts.view().or_raise()?;
-                Tree::F32(py.detach(|| KdTree::build(&view, &options)).or_raise()?)
+                py.detach(|| AnyIndex::build(&view, &options)).or_raise()?
             }
             Dtype::F64 => {
                 let pts = Points::<f64>::new(&arr)?;
                 let view = pts.view().or_raise()?;
-                Tree::F64(py.detach(|| KdTree::build(&view, &options)).or_raise()?)
+                py.detach(|| AnyIndex::build(&view, &options)).or_raise()?
             }
         };
-        Ok(Self { tree })
+        Ok(Self { index })
     }
 
     /// Number of points held (skipped non-finite points not counted).
     #[getter]
     fn size(&self) -> usize {
-        with_tree!(&self.tree, t, _T => t.len())
+        self.index.len()
     }
 
     /// Number of rows of the array the tree was built from (skipped points included).
     #[getter]
     fn n(&self) -> usize {
-        self.source_len()
+        self.index.source_len()
     }
 
     /// Dimension of the points.
     #[getter]
     fn m(&self) -> usize {
-        with_tree!(&self.tree, t, _T => t.dim())
+        self.index.dim()
     }
 
     /// The tree's scalar type: "float32" or "float64" (queries are converted to it).
     #[getter]
     fn dtype_name(&self) -> &'static str {
-        self.dtype().numpy_name()
+        dtype(&self.index).numpy_name()
     }
 
     /// Caller indices in tree order (the points of one leaf are adjacent).
     #[getter]
     fn tree_order<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        with_tree!(&self.tree, t, _T => vec1(py, t.tree_order().to_vec()))
+        let order = self
+            .index
+            .tree_order()
+            .expect("a KdTree holds a static tree");
+        vec1(py, order.to_vec())
     }
 
     /// Depth, node counts and memory: a dict of `points`, `dim`, `depth`, `nodes`, `leaves`,
     /// `max_leaf_points`, `bytes`.
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = with_tree!(&self.tree, t, _T => t.stats());
+        let s = self
+            .index
+            .tree_stats()
+            .expect("a KdTree holds a static tree");
         let d = PyDict::new(py);
         d.set_item("points", s.points)?;
         d.set_item("dim", s.dim)?;
@@ -271,18 +133,12 @@ impl PyKdTree {
 
     /// The build options as a dict (`pivot`, `median`, `leaf_size`, `non_finite`).
     fn options<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let o = *with_tree!(&self.tree, t, _T => t.options());
+        let o = *self.index.options();
         let d = PyDict::new(py);
         d.set_item("pivot", o.pivot.name())?;
         d.set_item("median", o.median.name())?;
         d.set_item("leaf_size", o.leaf_size)?;
-        d.set_item(
-            "non_finite",
-            match o.non_finite {
-                nbhd::NonFinitePolicy::Reject => "reject",
-                nbhd::NonFinitePolicy::Skip => "skip",
-            },
-        )?;
+        d.set_item("non_finite", o.non_finite.name())?;
         Ok(d)
     }
 
@@ -299,10 +155,14 @@ impl PyKdTree {
         k: usize,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        match self.query(py, x, Some(k), None, true, threads)? {
-            Answer::One(t) => Ok(t.into_any()),
-            Answer::Many(table) => table.dense(py, k.min(self.size())),
-        }
+        index::query(
+            &self.index,
+            py,
+            x,
+            index::spec(Some(k), None, true)?,
+            threads,
+        )?
+        .dense(py, k.min(self.size()))
     }
 
     /// All stored points within `radius` of `x` (plain Euclidean radius, inclusive:
@@ -318,8 +178,14 @@ impl PyKdTree {
         sorted: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.query(py, x, None, Some(radius), sorted, threads)?
-            .into_py(py)
+        index::query(
+            &self.index,
+            py,
+            x,
+            index::spec(None, Some(radius), sorted)?,
+            threads,
+        )?
+        .into_py(py)
     }
 
     /// The ε-k-neighbourhood of `x`: the `k` nearest among the stored points within `radius`
@@ -333,8 +199,8 @@ impl PyKdTree {
         radius: f64,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.query(py, x, Some(k), Some(radius), true, threads)?
-            .into_py(py)
+        let spec = index::spec(Some(k), Some(radius), true)?;
+        index::query(&self.index, py, x, spec, threads)?.into_py(py)
     }
 
     /// The neighbourhood of every stored point as a `Table` (row i for the caller's point i;
@@ -353,21 +219,15 @@ impl PyKdTree {
         sorted: bool,
         threads: usize,
     ) -> PyResult<PyTable> {
-        let source_len = self.source_len();
-        with_tree!(&self.tree, t, T => {
-            let nbhd = neighborhood::<T>(k, radius, sorted)?;
-            let opts = TableOptions { exclude_self, threads };
-            let table = py.detach(|| t.neighborhoods(nbhd, &opts)).or_raise()?;
-            PyTable::new(py, table, source_len)
-        })
+        let spec = index::spec(k, radius, sorted)?;
+        index::neighborhoods(&self.index, py, spec, exclude_self, threads)
     }
 
     /// The tree in the saved-tree format (docs/tree-file-format.md) as `bytes`: a versioned
     /// header with checksums, then the tree as built. `KdTree.from_bytes` reads it back; it is
     /// what `pickle` stores.
     fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        let bytes = py.detach(|| with_tree!(&self.tree, t, _T => t.to_bytes()));
-        PyBytes::new(py, &bytes)
+        index::to_bytes(&self.index, py)
     }
 
     /// The tree saved in `data` (by `to_bytes`, `pickle`, or the Rust and C saves), of the
@@ -376,16 +236,9 @@ impl PyKdTree {
     /// `DynamicKdTree`) raise `NbhdValueError` naming what differs.
     #[classmethod]
     fn from_bytes(cls: &Bound<'_, PyType>, data: &[u8]) -> PyResult<Self> {
-        let tree = cls
-            .py()
-            .detach(|| -> Result<Tree, NbhdError> {
-                Ok(match SavedTreeInfo::from_bytes(data)?.scalar {
-                    ScalarType::F32 => Tree::F32(KdTree::from_bytes(data)?),
-                    ScalarType::F64 => Tree::F64(KdTree::from_bytes(data)?),
-                })
-            })
-            .or_raise()?;
-        Ok(Self { tree })
+        Ok(Self {
+            index: index::from_bytes(cls.py(), data, false)?,
+        })
     }
 
     /// Pickling: `KdTree.from_bytes(tree.to_bytes())`.
@@ -397,16 +250,16 @@ impl PyKdTree {
     }
 
     fn __len__(&self) -> usize {
-        self.source_len()
+        self.index.source_len()
     }
 
     fn __repr__(&self) -> String {
         format!(
             "KdTree(n={}, m={}, dtype={}, pivot={})",
-            self.source_len(),
-            self.m(),
-            self.dtype().numpy_name(),
-            with_tree!(&self.tree, t, _T => t.options().pivot.name())
+            self.index.source_len(),
+            self.index.dim(),
+            dtype(&self.index).numpy_name(),
+            self.index.options().pivot.name()
         )
     }
 }

@@ -46,6 +46,7 @@ mod batch;
 mod persist;
 mod search;
 
+use std::any::Any;
 use std::sync::{Arc, OnceLock};
 
 use crate::cloud::NonFinitePolicy;
@@ -78,8 +79,9 @@ struct Part<T> {
     bbox_lo: Vec<T>,
     /// Largest coordinates of the tree's points.
     bbox_hi: Vec<T>,
-    /// The tree prepared for the grouped batch search (`batch.rs`), made on first use.
-    cells: Arc<OnceLock<batch::Cells<T>>>,
+    /// The tree prepared for the grouped batch search (`batch.rs`, its cells of the forest's
+    /// dimension), made on first use.
+    cells: Arc<OnceLock<Box<dyn Any + Send + Sync>>>,
 }
 
 impl<T: Scalar> Part<T> {
@@ -96,11 +98,6 @@ impl<T: Scalar> Part<T> {
             bbox_hi,
             cells: Arc::default(),
         }
-    }
-
-    /// The tree prepared for the grouped batch search.
-    fn cells(&self) -> &batch::Cells<T> {
-        self.cells.get_or_init(|| batch::Cells::new(self))
     }
 }
 
@@ -288,6 +285,19 @@ impl<T: Scalar> DynamicKdTree<T> {
     /// [`NbhdError::NonFinite`] naming the position in the batch of the first non-finite
     /// point (under [`NonFinitePolicy::Reject`]); [`NbhdError::TooManyPoints`] if the indices
     /// would pass `u32::MAX - 1`; [`NbhdError::OutOfMemory`]; [`NbhdError::ThreadPool`].
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, DynamicKdTree, NeighborIndex, PointsView, Query};
+    ///
+    /// let mut tree = DynamicKdTree::<f64>::new(2, &BuildOptions::default())?;
+    /// assert_eq!(tree.insert(&PointsView::from_flat(&[0.0, 0.0, 1.0, 0.0], 2)?)?, 0);
+    /// assert_eq!(tree.insert(&PointsView::from_flat(&[5.0, 5.0], 2)?)?, 2);
+    /// tree.remove(&[1])?;
+    /// let mut out = Vec::new();
+    /// tree.knn(Query::point(&[0.9, 0.0]), 1, &mut out)?;
+    /// assert_eq!(out[0].index, 0); // index 1 is removed; the others keep theirs
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
     pub fn insert(&mut self, view: &PointsView<'_>) -> Result<u32> {
         if view.dim() != self.dim {
             return Err(NbhdError::DimensionMismatch {

@@ -1,19 +1,16 @@
-//! Queries on the forest: one result set filled by the descents of every tree
-//! (`src/tree/search.rs`, thesis Algorithm 9), the trees' caller indices shifted to the
-//! forest's indices and removed points left out; the all-point tables and the batch tables
-//! through the table writer of `src/table.rs`.
-
-use rayon::prelude::*;
+//! The forest's traversals, its part of the one query family (`src/index/`): one result set
+//! filled by the descents of every tree (`src/tree/search.rs`, thesis Algorithm 9), the trees'
+//! caller indices shifted to the forest's indices and removed points left out; the box
+//! descents of every tree likewise; the forest's points in its trees' orders for its tables.
 
 use super::{bit, DynamicKdTree};
-use crate::error::{NbhdError, Result};
-use crate::parallel::with_threads;
-use crate::points::PointsView;
-use crate::query::result_set::{ResultSet, WithinRadius};
-use crate::query::{order, resolve_query, Neighbor, NeighborHeap, NeighborSearch};
-use crate::query::{Neighborhood, Query};
+use crate::error::Result;
+use crate::index::{self, NeighborIndex, StoredPoints};
+use crate::query::result_set::ResultSet;
+use crate::query::{order, resolve_query, Neighbor, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
-use crate::table::{check_knn_total, rows_in_work_order, NeighborTable, TableOptions};
+use crate::table::NeighborTable;
+use crate::tree::KdTree;
 
 /// A tree's view of the forest-wide result set: the tree's caller index `i` is the forest's
 /// index `lo + i` (an increasing map, so the `(sq_dist, index)` order is the same).
@@ -133,187 +130,9 @@ impl<T: Scalar> DynamicKdTree<T> {
         }
     }
 
-    /// The search proper, on a validated query.
-    pub(super) fn search_resolved(
-        &self,
-        q: &[T],
-        exclude: Option<u32>,
-        nbhd: Neighborhood<T>,
-        out: &mut Vec<Neighbor<T>>,
-    ) {
-        let (k, sq_radius) = nbhd.limits();
-        if k == usize::MAX {
-            out.clear();
-            self.collect(q, exclude, &mut WithinRadius { out, sq_radius });
-            if nbhd.is_sorted() {
-                out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
-            }
-        } else {
-            let mut heap = NeighborHeap::new(out, k, sq_radius);
-            self.collect(q, exclude, &mut heap);
-            heap.finish();
-        }
-    }
-
-    /// The `k` nearest live points to `query`, by `(sq_dist, index)`.
-    pub fn knn(&self, query: Query<'_, T>, k: usize, out: &mut Vec<Neighbor<T>>) -> Result<()> {
-        self.search(query, Neighborhood::Knn { k }, out)
-    }
-
-    /// All live points within `radius` (inclusive) of `query`, by `(sq_dist, index)`.
-    pub fn radius(&self, query: Query<'_, T>, radius: T, out: &mut Vec<Neighbor<T>>) -> Result<()> {
-        self.search(
-            query,
-            Neighborhood::Radius {
-                radius,
-                sorted: true,
-            },
-            out,
-        )
-    }
-
-    /// The ε-k-neighbourhood: the `k` nearest among the live points within `radius`.
-    pub fn knn_radius(
-        &self,
-        query: Query<'_, T>,
-        k: usize,
-        radius: T,
-        out: &mut Vec<Neighbor<T>>,
-    ) -> Result<()> {
-        self.search(query, Neighborhood::KnnRadius { k, radius }, out)
-    }
-
-    /// The neighbourhood of every live point, row `i` for index `i` (`next_index()` rows;
-    /// points not live get empty rows), computed in parallel in tree order; identical bytes
-    /// for any thread count, and those of a static tree over the live points.
-    pub fn neighborhoods(
-        &self,
-        nbhd: Neighborhood<T>,
-        options: &TableOptions,
-    ) -> Result<NeighborTable<T>> {
-        nbhd.validate()?;
-        check_knn_total(self.live, self.live, nbhd, options.exclude_self)?;
-        with_threads(options.threads, || {
-            let work: Vec<u32> = self
-                .parts
-                .iter()
-                .flat_map(|p| p.tree.tree_order().iter().map(move |&i| i + p.lo))
-                .filter(|&g| !bit(&self.not_live, g))
-                .collect();
-            rows_in_work_order(
-                self.next as usize,
-                work.len(),
-                |w| work[w] as usize,
-                |w, row, _| {
-                    let g = work[w];
-                    let exclude = options.exclude_self.then_some(g);
-                    self.search_resolved(self.stored(g), exclude, nbhd, row);
-                    Ok(())
-                },
-            )
-        })?
-    }
-
-    /// The neighbourhoods of a batch of query points (row `i` for query `i`), identical for
-    /// any thread count and the rows of single queries. In 1 to 3 dimensions a dense batch (at
-    /// least half as many queries as live points) is answered in small
-    /// groups of nearby queries, each group descending every tree once
-    /// (`src/dynamic/batch.rs`); other batches one by one, in the order of the leaves of the
-    /// largest tree they fall into. `options.exclude_self` does not apply.
-    ///
-    /// Errors: those of the neighbourhood, [`NbhdError::DimensionMismatch`],
-    /// [`NbhdError::NonFiniteQuery`] naming the first query (by position) with a non-finite
-    /// coordinate, [`NbhdError::OutOfMemory`], [`NbhdError::ThreadPool`].
-    pub fn neighborhoods_of(
-        &self,
-        queries: &PointsView<'_>,
-        nbhd: Neighborhood<T>,
-        options: &TableOptions,
-    ) -> Result<NeighborTable<T>> {
-        nbhd.validate()?;
-        let d = self.dim;
-        if queries.dim() != d {
-            return Err(NbhdError::DimensionMismatch {
-                expected: d,
-                got: queries.dim(),
-            });
-        }
-        check_knn_total(queries.len(), self.live, nbhd, false)?;
-        let n = queries.len();
-        let mut packed: Vec<T> = Vec::new();
-        packed
-            .try_reserve_exact(n * d)
-            .map_err(|_| NbhdError::OutOfMemory {
-                what: "a copy of the query points",
-                bytes: (n * d * std::mem::size_of::<T>()) as u128,
-            })?;
-        packed.resize(n * d, T::ZERO);
-        for (i, q) in packed.chunks_exact_mut(d).enumerate() {
-            queries.read_point(i, q);
-            if let Some(coordinate) = q.iter().position(|c| !c.is_finite()) {
-                return Err(NbhdError::NonFiniteQuery {
-                    query: Some(i),
-                    coordinate,
-                });
-            }
-        }
-        with_threads(options.threads, || {
-            let (order, leaves) = self.query_order(&packed);
-            if self.parts.is_empty() {
-                return rows_in_work_order(n, 0, |w| w, |_, _, _| Ok(()));
-            }
-            // Grouped only for dense batches: measured (`benches/dynamic.rs`) 1.2x the static
-            // tree's per-query batch with as many queries as points, but 1.9x for a frame of
-            // 10k queries against 300k points, where groups are far apart and preparing the
-            // trees' cells is not repaid; such batches take the single-query descents.
-            let dense = n.saturating_mul(DENSE) >= self.live;
-            match d {
-                _ if !dense => {}
-                3 => return self.grouped_rows::<3>(&packed, &order, &leaves, nbhd),
-                2 => return self.grouped_rows::<2>(&packed, &order, &leaves, nbhd),
-                1 => return self.grouped_rows::<1>(&packed, &order, &leaves, nbhd),
-                _ => {}
-            }
-            rows_in_work_order(
-                n,
-                n,
-                |w| order[w] as usize,
-                |w, row, _| {
-                    let at = order[w] as usize * d;
-                    self.search_resolved(&packed[at..at + d], None, nbhd, row);
-                    Ok(())
-                },
-            )
-        })?
-    }
-
-    /// The indices of the packed `queries` ordered by the first position of the leaf of the
-    /// largest tree each falls into, ties by index (a counting sort), and those positions in
-    /// that order.
-    fn query_order(&self, queries: &[T]) -> (Vec<u32>, Vec<u32>) {
-        let n = queries.len() / self.dim;
-        let Some(big) = self.parts.iter().max_by_key(|p| p.tree.len()) else {
-            return ((0..n as u32).collect(), vec![0; n]);
-        };
-        let tree = &big.tree;
-        let leaf_of: Vec<u32> = queries
-            .par_chunks_exact(self.dim)
-            .map(|q| tree.leaf_position(q))
-            .collect();
-        let mut starts = vec![0u32; tree.len() + 1];
-        for &l in &leaf_of {
-            starts[l as usize + 1] += 1;
-        }
-        for p in 0..tree.len() {
-            starts[p + 1] += starts[p];
-        }
-        let mut order = vec![0u32; n];
-        for (i, &l) in leaf_of.iter().enumerate() {
-            order[starts[l as usize] as usize] = i as u32;
-            starts[l as usize] += 1;
-        }
-        let leaves = order.iter().map(|&i| leaf_of[i as usize]).collect();
-        (order, leaves)
+    /// The tree the regions of a batch of queries are taken from: the largest.
+    fn largest(&self) -> Option<&KdTree<T>> {
+        self.parts.iter().map(|p| &*p.tree).max_by_key(|t| t.len())
     }
 }
 
@@ -333,29 +152,107 @@ impl<T: Scalar> NeighborSearch<T> for DynamicKdTree<T> {
         nbhd: Neighborhood<T>,
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()> {
-        nbhd.validate()?;
+        index::search(self, query, nbhd, out)
+    }
+}
+
+/// The forest's part of the one query family (`src/index/`): every query is the static tree's,
+/// the forest's traversals visiting each of its trees; tables have one row per index given
+/// (`next_index()` rows; points not live get empty rows), and a dense batch of queries is
+/// answered in groups of nearby queries (`batch.rs`).
+impl<T: Scalar> NeighborIndex<T> for DynamicKdTree<T> {
+    fn len(&self) -> usize {
+        self.live
+    }
+
+    fn resolve<'q>(&'q self, query: Query<'q, T>) -> Result<(&'q [T], Option<u32>)> {
         match query {
-            Query::Point { .. } => {
-                let (q, exclude) =
-                    resolve_query(query, self.dim, self.next as usize, &[], |_| &[])?;
-                self.search_resolved(q, exclude, nbhd, out);
-            }
+            Query::Point { .. } => resolve_query(query, self.dim, self.next as usize, &[], |_| &[]),
             Query::Stored {
                 index,
                 exclude_self,
             } => {
                 self.check_live(index)?;
-                let exclude = exclude_self.then_some(index);
-                self.search_resolved(self.stored(index), exclude, nbhd, out);
+                Ok((self.stored(index), exclude_self.then_some(index)))
             }
         }
-        Ok(())
+    }
+
+    #[inline]
+    fn visit<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, set: &mut C) {
+        self.collect(q, exclude, set);
+    }
+
+    fn visit_box(&self, min: &[T], max: &[T], scratch: &mut Vec<T>, out: &mut Vec<u32>) {
+        for part in &self.parts {
+            let outside =
+                (0..self.dim).any(|j| part.bbox_hi[j] < min[j] || part.bbox_lo[j] > max[j]);
+            if outside {
+                continue;
+            }
+            let from = out.len();
+            part.tree.collect_in_box(min, max, scratch, out);
+            let mut kept = from;
+            for i in from..out.len() {
+                let g = out[i] + part.lo;
+                if part.dead == 0 || !bit(&self.not_live, g) {
+                    out[kept] = g;
+                    kept += 1;
+                }
+            }
+            out.truncate(kept);
+        }
+    }
+
+    fn with_stored<R>(&self, f: impl FnOnce(&StoredPoints<'_, T>) -> R) -> R {
+        let work: Vec<u32> = self
+            .parts
+            .iter()
+            .flat_map(|p| p.tree.tree_order().iter().map(move |&i| i + p.lo))
+            .filter(|&g| !bit(&self.not_live, g))
+            .collect();
+        f(&StoredPoints {
+            len: work.len(),
+            at: &|w| (work[w], self.stored(work[w])),
+        })
+    }
+
+    fn region_key(&self, q: &[T]) -> u32 {
+        self.largest().map_or(0, |t| t.leaf_position(q))
+    }
+
+    fn region_keys(&self) -> usize {
+        self.largest().map_or(1, |t| t.len())
+    }
+
+    fn grouped_batch(
+        &self,
+        queries: &[T],
+        order: &[u32],
+        keys: &[u32],
+        nbhd: Neighborhood<T>,
+    ) -> Option<Result<NeighborTable<T>>> {
+        // Grouped only for dense batches: measured (`benches/dynamic.rs`) 1.2x the static
+        // tree's per-query batch with as many queries as points, but 1.9x for a frame of
+        // 10k queries against 300k points, where groups are far apart and preparing the
+        // trees' cells is not repaid; such batches take the single-query descents.
+        let dense = order.len().saturating_mul(DENSE) >= self.live;
+        if !dense || self.parts.is_empty() {
+            return None;
+        }
+        match self.dim {
+            3 => Some(self.grouped_rows::<3>(queries, order, keys, nbhd)),
+            2 => Some(self.grouped_rows::<2>(queries, order, keys, nbhd)),
+            1 => Some(self.grouped_rows::<1>(queries, order, keys, nbhd)),
+            _ => None,
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::query::NeighborHeap;
     use crate::tree::BuildOptions;
 
     /// Counts the candidates offered from the indices `from..` before passing them on.

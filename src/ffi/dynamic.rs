@@ -5,14 +5,16 @@ use std::ffi::{c_int, c_void};
 
 use super::args::{check_optional, deref, init_out};
 use super::enums::{nbhd_scalar_type, CEnum};
-use super::query::{run, At, Results};
+use super::query::{query as single_query, At, Results};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::table::{hand_out, nbhd_neighborhoods, AnyTable};
+use super::table::{nbhd_neighborhoods, neighborhoods, neighborhoods_of};
+use super::tree::{hand_out_index, IndexHandle};
 use super::types::{
     nbhd_build_options, nbhd_neighborhood_spec, nbhd_points, nbhd_table_options,
-    read_build_options, read_table_options, NbhdArg, PointsArg,
+    read_build_options, PointsArg,
 };
-use crate::dynamic::DynamicKdTree;
+use crate::handle::AnyIndex;
+use crate::query::NeighborhoodSpec;
 use crate::scalar::ScalarType;
 
 /// A k-d tree that accepts insertions and removals (opaque); see nbhd_dynamic_create.
@@ -27,24 +29,19 @@ use crate::scalar::ScalarType;
 /// nbhd_dynamic_insert and nbhd_dynamic_remove must not run at the same time as any other
 /// call on the same tree.
 pub struct nbhd_dynamic_tree {
-    pub(crate) inner: AnyDynamic,
+    /// Always a growing tree.
+    pub(crate) inner: AnyIndex,
 }
 
-/// A dynamic tree of either scalar type.
-pub(crate) enum AnyDynamic {
-    F32(DynamicKdTree<f32>),
-    F64(DynamicKdTree<f64>),
+impl IndexHandle for nbhd_dynamic_tree {
+    const GROWING: bool = true;
+    fn index(&self) -> &AnyIndex {
+        &self.inner
+    }
+    fn new(inner: AnyIndex) -> Self {
+        Self { inner }
+    }
 }
-
-macro_rules! with_dynamic {
-    ($tree:expr, $t:ident => $body:expr) => {
-        match $tree {
-            AnyDynamic::F32($t) => $body,
-            AnyDynamic::F64($t) => $body,
-        }
-    };
-}
-pub(crate) use with_dynamic;
 
 /// Size and shape of a dynamic tree.
 #[repr(C)]
@@ -97,13 +94,9 @@ pub unsafe extern "C" fn nbhd_dynamic_create(
                 "scalar_type {scalar_type} is not a value of nbhd_scalar_type"
             ))
         })?;
-        let inner = match ScalarType::from(scalar) {
-            ScalarType::F32 => AnyDynamic::F32(DynamicKdTree::new(dim, &options)?),
-            ScalarType::F64 => AnyDynamic::F64(DynamicKdTree::new(dim, &options)?),
-        };
-        let handle = Box::into_raw(Box::new(nbhd_dynamic_tree { inner }));
-        // SAFETY: `out` was checked by `init_out`; the handle is a fresh Box the caller owns.
-        unsafe { out.write(handle) };
+        let inner = AnyIndex::growing(dim, ScalarType::from(scalar), &options)?;
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out_index(out, inner) };
         Ok(())
     })
 }
@@ -140,7 +133,7 @@ pub unsafe extern "C" fn nbhd_dynamic_insert(
         let arg = unsafe { PointsArg::read(points, "points") }?;
         // SAFETY: the caller's description of the point memory is true (contract above).
         let view = unsafe { arg.view() }?;
-        let first = with_dynamic!(&mut tree.inner, t => t.insert(&view)?);
+        let first = tree.inner.insert(&view)?;
         if !out_first.is_null() {
             // SAFETY: non-NULL, aligned (checked above) and writable (caller).
             unsafe { out_first.write(first) };
@@ -185,7 +178,7 @@ pub unsafe extern "C" fn nbhd_dynamic_remove(
         // SAFETY: non-NULL and aligned (checked); a live handle used by no other thread
         // (caller).
         let tree = unsafe { &mut *tree };
-        with_dynamic!(&mut tree.inner, t => t.remove(ids)?);
+        tree.inner.remove(ids)?;
         Ok(())
     })
 }
@@ -210,7 +203,7 @@ pub unsafe extern "C" fn nbhd_dynamic_set_threads(
         // SAFETY: non-NULL and aligned (checked); a live handle used by no other thread
         // (caller).
         let tree = unsafe { &mut *tree };
-        with_dynamic!(&mut tree.inner, t => t.set_threads(threads)?);
+        tree.inner.set_threads(threads)?;
         Ok(())
     })
 }
@@ -255,11 +248,11 @@ pub unsafe extern "C" fn nbhd_dynamic_tree_stats(
         let out = unsafe { init_out(out_stats, "out_stats", nbhd_dynamic_stats::default()) }?;
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
-        let (scalar_type, dim) = match &tree.inner {
-            AnyDynamic::F32(t) => (nbhd_scalar_type::F32, t.dim()),
-            AnyDynamic::F64(t) => (nbhd_scalar_type::F64, t.dim()),
-        };
-        let s = with_dynamic!(&tree.inner, t => t.stats());
+        let index = &tree.inner;
+        let (scalar_type, dim) = (index.scalar_type().into(), index.dim());
+        let s = index
+            .growing_stats()
+            .expect("an nbhd_dynamic_tree holds a growing tree");
         let stats = nbhd_dynamic_stats {
             live: s.live,
             next_index: s.next_index as usize,
@@ -271,27 +264,6 @@ pub unsafe extern "C" fn nbhd_dynamic_tree_stats(
         // SAFETY: `out` was checked by `init_out`.
         unsafe { out.write(stats) };
         Ok(())
-    })
-}
-
-/// The common body of the single queries.
-///
-/// # Safety
-/// As nbhd_dynamic_knn.
-unsafe fn query(
-    func: &str,
-    tree: *const nbhd_dynamic_tree,
-    at: At,
-    nbhd: NbhdArg,
-    out: Results,
-) -> nbhd_status {
-    guard(func, || {
-        // SAFETY: `count` is NULL or writable (caller).
-        let count = unsafe { init_out(out.count, "count", 0) }?;
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
-        // SAFETY: the buffers are as the caller describes (contract of nbhd_dynamic_knn).
-        with_dynamic!(&tree.inner, t => unsafe { run(t, at, nbhd, out, count) })
     })
 }
 
@@ -318,11 +290,11 @@ pub unsafe extern "C" fn nbhd_dynamic_knn(
     };
     // SAFETY: the caller's contract is the one `query` requires.
     unsafe {
-        self::query(
+        single_query(
             "nbhd_dynamic_knn",
             tree,
             At::Point(query),
-            NbhdArg::Knn(k),
+            NeighborhoodSpec::knn(k),
             out,
         )
     }
@@ -348,9 +320,9 @@ pub unsafe extern "C" fn nbhd_dynamic_radius(
         capacity,
         count,
     };
-    let nbhd = NbhdArg::Radius(radius);
+    let nbhd = NeighborhoodSpec::radius(radius);
     // SAFETY: the caller's contract is the one `query` requires.
-    unsafe { self::query("nbhd_dynamic_radius", tree, At::Point(query), nbhd, out) }
+    unsafe { single_query("nbhd_dynamic_radius", tree, At::Point(query), nbhd, out) }
 }
 
 /// The `k` nearest among the live points within `radius` of the point `query`; as
@@ -375,9 +347,9 @@ pub unsafe extern "C" fn nbhd_dynamic_knn_radius(
         capacity,
         count,
     };
-    let nbhd = NbhdArg::KnnRadius(k, radius);
+    let nbhd = NeighborhoodSpec::knn_radius(k, radius);
     // SAFETY: the caller's contract is the one `query` requires.
-    unsafe { self::query("nbhd_dynamic_knn_radius", tree, At::Point(query), nbhd, out) }
+    unsafe { single_query("nbhd_dynamic_knn_radius", tree, At::Point(query), nbhd, out) }
 }
 
 /// The `k` nearest neighbours of the live point `index`, optionally without the point itself;
@@ -407,7 +379,15 @@ pub unsafe extern "C" fn nbhd_dynamic_knn_index(
         exclude_self,
     };
     // SAFETY: the caller's contract is the one `query` requires.
-    unsafe { self::query("nbhd_dynamic_knn_index", tree, at, NbhdArg::Knn(k), out) }
+    unsafe {
+        single_query(
+            "nbhd_dynamic_knn_index",
+            tree,
+            at,
+            NeighborhoodSpec::knn(k),
+            out,
+        )
+    }
 }
 
 /// All live points within `radius` of the live point `index`; as nbhd_tree_radius_index,
@@ -436,9 +416,9 @@ pub unsafe extern "C" fn nbhd_dynamic_radius_index(
         index,
         exclude_self,
     };
-    let nbhd = NbhdArg::Radius(radius);
+    let nbhd = NeighborhoodSpec::radius(radius);
     // SAFETY: the caller's contract is the one `query` requires.
-    unsafe { self::query("nbhd_dynamic_radius_index", tree, at, nbhd, out) }
+    unsafe { single_query("nbhd_dynamic_radius_index", tree, at, nbhd, out) }
 }
 
 /// The `k` nearest within `radius` of the live point `index`; as
@@ -469,9 +449,9 @@ pub unsafe extern "C" fn nbhd_dynamic_knn_radius_index(
         index,
         exclude_self,
     };
-    let nbhd = NbhdArg::KnnRadius(k, radius);
+    let nbhd = NeighborhoodSpec::knn_radius(k, radius);
     // SAFETY: the caller's contract is the one `query` requires.
-    unsafe { self::query("nbhd_dynamic_knn_radius_index", tree, at, nbhd, out) }
+    unsafe { single_query("nbhd_dynamic_knn_radius_index", tree, at, nbhd, out) }
 }
 
 /// The neighbourhood `*spec` of every live point, as a new table in `*out_table`: row i for
@@ -488,23 +468,8 @@ pub unsafe extern "C" fn nbhd_dynamic_neighborhoods(
     options: *const nbhd_table_options,
     out_table: *mut *mut nbhd_neighborhoods,
 ) -> nbhd_status {
-    guard("nbhd_dynamic_neighborhoods", || {
-        // SAFETY: `out_table` is NULL or writable (caller).
-        let out = unsafe { init_out(out_table, "out_table", std::ptr::null_mut()) }?;
-        // SAFETY: `tree` is NULL or a live handle; `spec`, `options` NULL or readable (caller).
-        let (tree, nbhd, options) = unsafe {
-            (
-                deref(tree, "tree")?,
-                NbhdArg::read(spec)?,
-                read_table_options(options)?,
-            )
-        };
-        let table: AnyTable =
-            with_dynamic!(&tree.inner, t => t.neighborhoods(nbhd.to_core()?, &options)?.into());
-        // SAFETY: `out` was checked by `init_out`.
-        unsafe { hand_out(out, table) };
-        Ok(())
-    })
+    // SAFETY: the caller's contract is the one `neighborhoods` requires.
+    unsafe { neighborhoods("nbhd_dynamic_neighborhoods", tree, spec, options, out_table) }
 }
 
 /// The neighbourhood `*spec` of each point of `*queries` among the live points, as a new
@@ -520,25 +485,7 @@ pub unsafe extern "C" fn nbhd_dynamic_neighborhoods_of(
     options: *const nbhd_table_options,
     out_table: *mut *mut nbhd_neighborhoods,
 ) -> nbhd_status {
-    guard("nbhd_dynamic_neighborhoods_of", || {
-        // SAFETY: `out_table` is NULL or writable (caller).
-        let out = unsafe { init_out(out_table, "out_table", std::ptr::null_mut()) }?;
-        // SAFETY: `tree` is NULL or a live handle; the structs NULL or readable (caller).
-        let (tree, queries, nbhd, options) = unsafe {
-            (
-                deref(tree, "tree")?,
-                PointsArg::read(queries, "queries")?,
-                NbhdArg::read(spec)?,
-                read_table_options(options)?,
-            )
-        };
-        // SAFETY: the caller's description of the query memory is true (contract above).
-        let view = unsafe { queries.view() }?;
-        let table: AnyTable = with_dynamic!(&tree.inner, t => {
-            t.neighborhoods_of(&view, nbhd.to_core()?, &options)?.into()
-        });
-        // SAFETY: `out` was checked by `init_out`.
-        unsafe { hand_out(out, table) };
-        Ok(())
-    })
+    let name = "nbhd_dynamic_neighborhoods_of";
+    // SAFETY: the caller's contract is the one `neighborhoods_of` requires.
+    unsafe { neighborhoods_of(name, tree, queries, spec, options, out_table) }
 }

@@ -3,12 +3,11 @@
 
 use super::args::{check_optional, check_ptr, deref, init_out};
 use super::status::{guard, nbhd_status, FfiError};
-use super::tree::{nbhd_tree, with_tree};
+use super::tree::nbhd_tree;
 use super::types::{nbhd_points, PointsArg};
 use crate::error::NbhdError;
 use crate::filter::{
-    radius_outlier_removal, statistical_outlier_removal, voxel_grid, RadiusOutlierOptions,
-    StatisticalOutlierOptions, VoxelGridOptions,
+    voxel_grid, RadiusOutlierOptions, StatisticalOutlierOptions, VoxelGridOptions,
 };
 use crate::scalar::ScalarType;
 
@@ -45,7 +44,7 @@ pub unsafe extern "C" fn nbhd_tree_spacing(
         let out = unsafe { init_out(out, "out", nbhd_spacing::default()) }?;
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
-        let s = with_tree!(&tree.inner, t => t.spacing(threads))?;
+        let s = tree.inner.spacing(threads)?;
         // SAFETY: `out` is non-NULL, aligned and writable (checked by init_out).
         unsafe {
             out.write(nbhd_spacing {
@@ -137,7 +136,7 @@ pub unsafe extern "C" fn nbhd_remove_statistical_outliers(
             std_ratio,
             threads,
         };
-        let result = with_tree!(&tree.inner, t => statistical_outlier_removal(t, &options))?;
+        let result = tree.inner.statistical_outlier_removal(&options)?;
         // SAFETY: the buffers are as the caller describes (contract above).
         unsafe { write_kept(&result, kept, capacity, count, mask) }
     })
@@ -178,7 +177,7 @@ pub unsafe extern "C" fn nbhd_remove_radius_outliers(
             min_neighbors,
             threads,
         };
-        let result = with_tree!(&tree.inner, t => radius_outlier_removal(t, &options))?;
+        let result = tree.inner.radius_outlier_removal(&options)?;
         // SAFETY: the buffers are as the caller describes (contract above).
         unsafe { write_kept(&result, kept, capacity, count, mask) }
     })

@@ -2,7 +2,7 @@
 //! non-finite policy — nothing of smoothing) and an output description with strides, so that
 //! the normals (and PCL's curvature, the surface variation) are written straight into a
 //! caller's point type such as `pcl::Normal` or `pcl::PointNormal`. The export converts its
-//! arguments and calls [`crate::smooth::estimate_normals_from`] (normals, surface variation and
+//! arguments and calls [`crate::geometry::estimate_normals_from`] (normals, surface variation and
 //! flags, nothing else); nothing is computed here.
 
 use std::ffi::c_void;
@@ -10,12 +10,11 @@ use std::ffi::c_void;
 use super::args::{check_aligned, check_optional};
 use super::enums::{nbhd_non_finite_policy, nbhd_orientation, nbhd_scalar_type, nbhd_units};
 use super::fields::{c_field, CStruct};
-use super::smoothing_io::{nbhd_progress_fn, read_points, Progress};
+use super::smoothing_io::{nbhd_progress_fn, read_points, Progress, Strided};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::nbhd_points;
-use crate::error::NbhdError;
+use crate::geometry::{estimate_normals_from, Neighbors, NormalEstimate, NormalOptions};
 use crate::scalar::ScalarType;
-use crate::smooth::{self, Curvature, Neighbors, NormalEstimate, SmoothOptions};
 
 /// Options of nbhd_estimate_normals. Start from nbhd_normal_options_default() and change
 /// what you need.
@@ -91,9 +90,9 @@ pub struct nbhd_normals_output {
     pub flags: *mut u8,
 }
 
-/// The C form of the core's options that the normals read, with no progress callback.
-impl From<SmoothOptions> for nbhd_normal_options {
-    fn from(d: SmoothOptions) -> Self {
+/// The C form of the core's options, with no progress callback.
+impl From<NormalOptions> for nbhd_normal_options {
+    fn from(d: NormalOptions) -> Self {
         let (epsilon_units, epsilon) = nbhd_units::of_length(d.epsilon);
         let (orientation, orientation_point) = nbhd_orientation::of_core(d.orientation);
         Self {
@@ -115,99 +114,30 @@ impl From<SmoothOptions> for nbhd_normal_options {
 /// progress callback.
 #[no_mangle]
 pub extern "C" fn nbhd_normal_options_default() -> nbhd_normal_options {
-    let d = || SmoothOptions::default().into();
+    let d = || NormalOptions::default().into();
     guard_value("nbhd_normal_options_default", d(), d)
 }
 
-/// Reads `*options` field by field (NULL gives the defaults) into the core's options of an
-/// analysis without steps, and the call's progress callback.
+/// Reads `*options` field by field (NULL gives the defaults) into the core's options, and the
+/// call's progress callback.
 ///
 /// # Safety
 /// `options` must be NULL or point to a readable `nbhd_normal_options`.
 unsafe fn read_options(
     options: *const nbhd_normal_options,
-) -> Result<(SmoothOptions, Progress), FfiError> {
-    let defaults = SmoothOptions::default().into();
+) -> Result<(NormalOptions, Progress), FfiError> {
+    let defaults = NormalOptions::default().into();
     // SAFETY: forwarded from the caller.
     let o = unsafe { CStruct::options(options, &defaults) }?;
-    let core = SmoothOptions {
+    let core = NormalOptions {
         k: c_field!(o.k),
         epsilon: c_field!(o.epsilon_units as enum)?.length(c_field!(o.epsilon)),
-        steps: 0,
-        // the normals do not read λ; absolute, it needs no spacing (coincident points)
-        lambda: Curvature::Absolute(1.0),
         orientation: c_field!(o.orientation as enum)?.to_core(c_field!(o.orientation_point))?,
         non_finite: c_field!(o.non_finite as enum)?.into(),
-        outputs: true,
         threads: c_field!(o.threads),
-        ..SmoothOptions::default()
     };
     let progress = Progress::new(c_field!(o.progress), c_field!(o.progress_user_data));
     Ok((core, progress))
-}
-
-/// One strided output array: where, how far apart, how many values per point.
-struct Strided {
-    at: *mut u8,
-    stride: usize,
-    scalar: ScalarType,
-}
-
-impl Strided {
-    /// Checks a strided array of `count` points of `width` values named `what`: the stride
-    /// (0 = packed) holds one point's values and the span does not overflow.
-    fn new(
-        at: *mut c_void,
-        stride: usize,
-        scalar: ScalarType,
-        width: usize,
-        count: usize,
-        what: &str,
-    ) -> Result<Self, FfiError> {
-        let size = width * scalar.size();
-        let stride = if stride == 0 { size } else { stride };
-        if stride < size {
-            return Err(FfiError::InvalidArgument(format!(
-                "out->{what}_stride {stride} is smaller than {width} value(s) of {} bytes",
-                scalar.size()
-            )));
-        }
-        if (count.max(1) - 1)
-            .checked_mul(stride)
-            .and_then(|b| b.checked_add(size))
-            .is_none_or(|b| b > isize::MAX as usize)
-        {
-            return Err(NbhdError::SizeOverflow {
-                what: format!("out->{what} with {count} points and stride {stride}"),
-            }
-            .into());
-        }
-        Ok(Self {
-            at: at.cast(),
-            stride,
-            scalar,
-        })
-    }
-
-    /// Writes the values of point `i`, unaligned.
-    ///
-    /// # Safety
-    /// The array must be writable for point `i` in the layout checked by [`Strided::new`], and
-    /// no Rust borrow of it may be live.
-    unsafe fn write(&self, i: usize, values: &[f64]) {
-        let size = self.scalar.size();
-        for (c, &v) in values.iter().enumerate() {
-            // SAFETY: inside point i's values of the caller's writable array (caller); the
-            // offset cannot overflow (checked in `new`); unaligned writes.
-            unsafe {
-                let p = self.at.add(i * self.stride + c * size);
-                match self.scalar {
-                    ScalarType::F32 => p.cast::<f32>().write_unaligned(v as f32),
-                    ScalarType::F64 => p.cast::<f64>().write_unaligned(v),
-                }
-            }
-        }
-    }
 }
 
 /// The caller's nbhd_normals_output, read and checked for `count` points.
@@ -317,10 +247,8 @@ pub unsafe extern "C" fn nbhd_estimate_normals(
         let out = unsafe { NormalsOut::read(out, pts.len()) }?;
         // SAFETY: forwarded from the caller.
         let (opts, mut progress) = unsafe { read_options(options) }?;
-        let result =
-            smooth::estimate_normals_from(&pts, Neighbors::default(), &opts, &mut |f, s| {
-                progress.report(f, s)
-            })?;
+        let report = &mut |f, s| progress.report(f, s);
+        let result = estimate_normals_from(&pts, Neighbors::default(), &opts, report)?;
         // SAFETY: the arrays are writable for the points in the checked layouts (caller); the
         // input view was dropped in `read_points`, so nothing borrowed overlaps.
         unsafe { out.write(&result.normals) };
@@ -337,10 +265,9 @@ mod tests {
     fn defaults_mirror_the_core() {
         // SAFETY: NULL asks for the defaults.
         let (a, _) = unsafe { read_options(std::ptr::null()) }.unwrap();
-        let d = SmoothOptions::default();
+        let d = NormalOptions::default();
         assert_eq!((a.k, a.epsilon, a.threads), (d.k, d.epsilon, d.threads));
         assert_eq!(a.non_finite, d.non_finite);
-        assert_eq!((a.steps, a.outputs), (0, true));
         let c = nbhd_normal_options_default();
         // SAFETY: a live, initialised options struct.
         let (b, _) = unsafe { read_options(&c) }.unwrap();
@@ -371,7 +298,8 @@ mod tests {
         // SAFETY: the descriptors match `data` and `rec`.
         let st = unsafe { nbhd_estimate_normals(&pts, std::ptr::null(), &out) };
         assert_eq!(st, nbhd_status::Ok);
-        let core = smooth::analyze(&s.points, &SmoothOptions::default()).unwrap();
+        let core = crate::smooth::analyze(&s.points, &crate::smooth::SmoothOptions::default());
+        let core = core.unwrap();
         for (r, o) in rec.iter().zip(&core.outputs) {
             assert_eq!(&r[..3], &o.normal.as_vec3().to_array());
             assert_eq!(r[3], 7.0);

@@ -6,13 +6,11 @@ use std::ffi::{c_char, c_void, CStr};
 use std::path::PathBuf;
 
 use super::args::{deref, init_out};
-use super::dynamic::{nbhd_dynamic_tree, with_dynamic, AnyDynamic};
+use super::dynamic::nbhd_dynamic_tree;
 use super::status::{guard, nbhd_status, FfiError};
-use super::tree::{nbhd_tree, with_tree, AnyTree};
-use crate::dynamic::{DynamicKdTree, SavedDynamicInfo};
+use super::tree::{hand_out_index, nbhd_tree, IndexHandle};
 use crate::error::NbhdError;
-use crate::scalar::ScalarType;
-use crate::tree::{KdTree, SavedTreeInfo};
+use crate::handle::AnyIndex;
 
 /// The path C passed: a NUL-terminated string (bytes on Unix, UTF-8 elsewhere).
 ///
@@ -101,23 +99,86 @@ fn read_file(path: &std::path::Path, what: &str) -> Result<Vec<u8>, NbhdError> {
     })
 }
 
-/// The tree saved in exactly `bytes`, of the scalar type its header names.
-fn load_any(bytes: &[u8]) -> Result<AnyTree, NbhdError> {
-    Ok(match SavedTreeInfo::from_bytes(bytes)?.scalar {
-        ScalarType::F32 => AnyTree::F32(KdTree::from_bytes(bytes)?),
-        ScalarType::F64 => AnyTree::F64(KdTree::from_bytes(bytes)?),
+/// The body of nbhd_tree_save and nbhd_dynamic_save.
+///
+/// # Safety
+/// As nbhd_tree_save.
+unsafe fn save<H: IndexHandle>(func: &str, tree: *const H, path: *const c_char) -> nbhd_status {
+    guard(func, || {
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: `path` is NULL or NUL-terminated (caller).
+        let path = unsafe { read_path(path) }?;
+        tree.index().save_file(&path)?;
+        Ok(())
     })
 }
 
-/// Stores a new handle for `inner` in `out`.
+/// The body of nbhd_tree_save_to_buffer and nbhd_dynamic_save_to_buffer.
 ///
 /// # Safety
-/// `out` was checked by `init_out`.
-unsafe fn hand_out(out: *mut *mut nbhd_tree, inner: AnyTree) {
-    let handle = Box::into_raw(Box::new(nbhd_tree { inner }));
-    // SAFETY: `out` is non-NULL, aligned and writable (checked by the caller); the handle is a
-    // fresh Box the C caller now owns.
-    unsafe { out.write(handle) };
+/// As nbhd_tree_save_to_buffer.
+unsafe fn save_to_buffer<H: IndexHandle>(
+    func: &str,
+    tree: *const H,
+    buffer: *mut c_void,
+    capacity: usize,
+    size: *mut usize,
+) -> nbhd_status {
+    guard(func, || {
+        // SAFETY: `size` is NULL or writable (caller).
+        let size = unsafe { init_out(size, "size", 0) }?;
+        // SAFETY: `tree` is NULL or a live handle (caller).
+        let index = unsafe { deref(tree, "tree") }?.index();
+        let needed = index.saved_len();
+        // SAFETY: `size` was checked by `init_out`; `buffer` is as the caller describes.
+        unsafe { into_buffer(size, needed, buffer, capacity, |dst| index.save(dst)) }
+    })
+}
+
+/// The body of nbhd_tree_load and nbhd_dynamic_load.
+///
+/// # Safety
+/// As nbhd_tree_load.
+unsafe fn load<H: IndexHandle>(
+    func: &str,
+    path: *const c_char,
+    out_tree: *mut *mut H,
+) -> nbhd_status {
+    guard(func, || {
+        // SAFETY: `out_tree` is NULL or writable (caller).
+        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
+        // SAFETY: `path` is NULL or NUL-terminated (caller).
+        let path = unsafe { read_path(path) }?;
+        let what = if H::GROWING { "dynamic tree" } else { "tree" };
+        let bytes = read_file(&path, what)?;
+        let index = AnyIndex::from_bytes(&bytes, H::GROWING)?;
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out_index(out, index) };
+        Ok(())
+    })
+}
+
+/// The body of nbhd_tree_load_from_buffer and nbhd_dynamic_load_from_buffer.
+///
+/// # Safety
+/// As nbhd_tree_load_from_buffer.
+unsafe fn load_from_buffer<H: IndexHandle>(
+    func: &str,
+    data: *const c_void,
+    size: usize,
+    out_tree: *mut *mut H,
+) -> nbhd_status {
+    guard(func, || {
+        // SAFETY: `out_tree` is NULL or writable (caller).
+        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
+        // SAFETY: `data` is NULL or readable for `size` bytes, not written (caller).
+        let bytes = unsafe { input_bytes(data, size) }?;
+        let index = AnyIndex::from_bytes(bytes, H::GROWING)?;
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out_index(out, index) };
+        Ok(())
+    })
 }
 
 /// Writes `tree` to the file `path` (created, or truncated if it exists) in the saved-tree
@@ -136,14 +197,8 @@ pub unsafe extern "C" fn nbhd_tree_save(
     tree: *const nbhd_tree,
     path: *const c_char,
 ) -> nbhd_status {
-    guard("nbhd_tree_save", || {
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
-        // SAFETY: `path` is NULL or NUL-terminated (caller).
-        let path = unsafe { read_path(path) }?;
-        with_tree!(&tree.inner, t => t.save_file(&path))?;
-        Ok(())
-    })
+    // SAFETY: the caller's contract is the one `save` requires.
+    unsafe { save("nbhd_tree_save", tree, path) }
 }
 
 /// Writes `tree` in the saved-tree format into the caller's `buffer` of `capacity` bytes, and
@@ -165,23 +220,9 @@ pub unsafe extern "C" fn nbhd_tree_save_to_buffer(
     capacity: usize,
     size: *mut usize,
 ) -> nbhd_status {
-    guard("nbhd_tree_save_to_buffer", || {
-        // SAFETY: `size` is NULL or writable (caller).
-        let size = unsafe { init_out(size, "size", 0) }?;
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
-        let needed = with_tree!(&tree.inner, t => t.saved_len());
-        // SAFETY: `size` was checked by `init_out`; `buffer` is as the caller describes.
-        unsafe {
-            into_buffer(
-                size,
-                needed,
-                buffer,
-                capacity,
-                |dst| with_tree!(&tree.inner, t => t.save(dst)),
-            )
-        }
-    })
+    let name = "nbhd_tree_save_to_buffer";
+    // SAFETY: the caller's contract is the one `save_to_buffer` requires.
+    unsafe { save_to_buffer(name, tree, buffer, capacity, size) }
 }
 
 /// Loads the tree saved in the file `path` (by nbhd_tree_save or nbhd_tree_save_to_buffer,
@@ -210,17 +251,8 @@ pub unsafe extern "C" fn nbhd_tree_load(
     path: *const c_char,
     out_tree: *mut *mut nbhd_tree,
 ) -> nbhd_status {
-    guard("nbhd_tree_load", || {
-        // SAFETY: `out_tree` is NULL or writable (caller).
-        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
-        // SAFETY: `path` is NULL or NUL-terminated (caller).
-        let path = unsafe { read_path(path) }?;
-        let bytes = read_file(&path, "tree")?;
-        let inner = load_any(&bytes)?;
-        // SAFETY: `out` was checked by `init_out`.
-        unsafe { hand_out(out, inner) };
-        Ok(())
-    })
+    // SAFETY: the caller's contract is the one `load` requires.
+    unsafe { load("nbhd_tree_load", path, out_tree) }
 }
 
 /// Loads the tree saved in the `size` bytes at `data` (as nbhd_tree_save_to_buffer wrote
@@ -241,35 +273,9 @@ pub unsafe extern "C" fn nbhd_tree_load_from_buffer(
     size: usize,
     out_tree: *mut *mut nbhd_tree,
 ) -> nbhd_status {
-    guard("nbhd_tree_load_from_buffer", || {
-        // SAFETY: `out_tree` is NULL or writable (caller).
-        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
-        // SAFETY: `data` is NULL or readable for `size` bytes, not written (caller).
-        let bytes = unsafe { input_bytes(data, size) }?;
-        let inner = load_any(bytes)?;
-        // SAFETY: `out` was checked by `init_out`.
-        unsafe { hand_out(out, inner) };
-        Ok(())
-    })
-}
-
-/// The dynamic tree saved in exactly `bytes`, of the scalar type its header names.
-fn load_any_dynamic(bytes: &[u8]) -> Result<AnyDynamic, NbhdError> {
-    Ok(match SavedDynamicInfo::from_bytes(bytes)?.scalar {
-        ScalarType::F32 => AnyDynamic::F32(DynamicKdTree::from_bytes(bytes)?),
-        ScalarType::F64 => AnyDynamic::F64(DynamicKdTree::from_bytes(bytes)?),
-    })
-}
-
-/// Stores a new dynamic-tree handle for `inner` in `out`.
-///
-/// # Safety
-/// `out` was checked by `init_out`.
-unsafe fn hand_out_dynamic(out: *mut *mut nbhd_dynamic_tree, inner: AnyDynamic) {
-    let handle = Box::into_raw(Box::new(nbhd_dynamic_tree { inner }));
-    // SAFETY: `out` is non-NULL, aligned and writable (checked by the caller); the handle is a
-    // fresh Box the C caller now owns.
-    unsafe { out.write(handle) };
+    let name = "nbhd_tree_load_from_buffer";
+    // SAFETY: the caller's contract is the one `load_from_buffer` requires.
+    unsafe { load_from_buffer(name, data, size, out_tree) }
 }
 
 /// Writes the dynamic tree `tree` to the file `path` (created, or truncated if it exists) in
@@ -290,14 +296,8 @@ pub unsafe extern "C" fn nbhd_dynamic_save(
     tree: *const nbhd_dynamic_tree,
     path: *const c_char,
 ) -> nbhd_status {
-    guard("nbhd_dynamic_save", || {
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
-        // SAFETY: `path` is NULL or NUL-terminated (caller).
-        let path = unsafe { read_path(path) }?;
-        with_dynamic!(&tree.inner, t => t.save_file(&path))?;
-        Ok(())
-    })
+    // SAFETY: the caller's contract is the one `save` requires.
+    unsafe { save("nbhd_dynamic_save", tree, path) }
 }
 
 /// Writes `tree` in the saved dynamic-tree format into the caller's `buffer` of `capacity`
@@ -319,23 +319,9 @@ pub unsafe extern "C" fn nbhd_dynamic_save_to_buffer(
     capacity: usize,
     size: *mut usize,
 ) -> nbhd_status {
-    guard("nbhd_dynamic_save_to_buffer", || {
-        // SAFETY: `size` is NULL or writable (caller).
-        let size = unsafe { init_out(size, "size", 0) }?;
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
-        let needed = with_dynamic!(&tree.inner, t => t.saved_len());
-        // SAFETY: `size` was checked by `init_out`; `buffer` is as the caller describes.
-        unsafe {
-            into_buffer(
-                size,
-                needed,
-                buffer,
-                capacity,
-                |dst| with_dynamic!(&tree.inner, t => t.save(dst)),
-            )
-        }
-    })
+    let name = "nbhd_dynamic_save_to_buffer";
+    // SAFETY: the caller's contract is the one `save_to_buffer` requires.
+    unsafe { save_to_buffer(name, tree, buffer, capacity, size) }
 }
 
 /// Loads the dynamic tree saved in the file `path` (by nbhd_dynamic_save or
@@ -365,17 +351,8 @@ pub unsafe extern "C" fn nbhd_dynamic_load(
     path: *const c_char,
     out_tree: *mut *mut nbhd_dynamic_tree,
 ) -> nbhd_status {
-    guard("nbhd_dynamic_load", || {
-        // SAFETY: `out_tree` is NULL or writable (caller).
-        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
-        // SAFETY: `path` is NULL or NUL-terminated (caller).
-        let path = unsafe { read_path(path) }?;
-        let bytes = read_file(&path, "dynamic tree")?;
-        let inner = load_any_dynamic(&bytes)?;
-        // SAFETY: `out` was checked by `init_out`.
-        unsafe { hand_out_dynamic(out, inner) };
-        Ok(())
-    })
+    // SAFETY: the caller's contract is the one `load` requires.
+    unsafe { load("nbhd_dynamic_load", path, out_tree) }
 }
 
 /// Loads the dynamic tree saved in the `size` bytes at `data` (as
@@ -396,14 +373,7 @@ pub unsafe extern "C" fn nbhd_dynamic_load_from_buffer(
     size: usize,
     out_tree: *mut *mut nbhd_dynamic_tree,
 ) -> nbhd_status {
-    guard("nbhd_dynamic_load_from_buffer", || {
-        // SAFETY: `out_tree` is NULL or writable (caller).
-        let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
-        // SAFETY: `data` is NULL or readable for `size` bytes, not written (caller).
-        let bytes = unsafe { input_bytes(data, size) }?;
-        let inner = load_any_dynamic(bytes)?;
-        // SAFETY: `out` was checked by `init_out`.
-        unsafe { hand_out_dynamic(out, inner) };
-        Ok(())
-    })
+    let name = "nbhd_dynamic_load_from_buffer";
+    // SAFETY: the caller's contract is the one `load_from_buffer` requires.
+    unsafe { load_from_buffer(name, data, size, out_tree) }
 }

@@ -14,8 +14,9 @@ use super::smooth::nbhd_smooth_options;
 use super::smoothing_io::{nbhd_point_geometry, nbhd_smooth_summary, read_points, Outputs};
 use super::status::{guard, nbhd_status, FfiError};
 use super::table::nbhd_neighborhoods;
-use super::tree::{nbhd_tree, with_tree};
+use super::tree::nbhd_tree;
 use super::types::nbhd_points;
+use crate::handle::AnyIndex;
 use crate::smooth::robust::{smooth_robust_from, RobustOptions};
 use crate::smooth::source::tree_neighbors;
 use crate::smooth::{smooth_from, Neighbors, SmoothOptions, SmoothResult};
@@ -89,7 +90,11 @@ unsafe fn on_tree(tree: *const nbhd_tree, method: &Method, out: &Outputs) -> Res
     let tree = unsafe { deref(tree, "tree") }?;
     // SAFETY: forwarded from the caller.
     let k = unsafe { method.table_k() }?;
-    let (points, table) = with_tree!(&tree.inner, t => tree_neighbors(t, k))?;
+    let (points, table) = match &tree.inner {
+        AnyIndex::StaticF32(t) => tree_neighbors(t, k),
+        AnyIndex::StaticF64(t) => tree_neighbors(t, k),
+        _ => unreachable!("an nbhd_tree holds a static tree"),
+    }?;
     // SAFETY: forwarded from the caller.
     let result = unsafe { method.run(&points, &table, out.wants_geometry()) }?;
     let scalar = tree.inner.scalar_type();

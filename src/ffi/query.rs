@@ -6,10 +6,10 @@ use std::ffi::c_void;
 
 use super::args::{check_aligned, check_optional, check_ptr, deref, init_out};
 use super::status::{guard, nbhd_status, FfiError};
-use super::tree::{nbhd_tree, with_tree};
-use super::types::NbhdArg;
+use super::tree::{nbhd_tree, IndexHandle};
 use crate::error::NbhdError;
-use crate::query::{Neighbor, NeighborSearch, Query};
+use crate::query::{Neighbor, NeighborSearch, NeighborhoodSpec, Query};
+use crate::with_index;
 use crate::Scalar;
 
 /// Scalar types with a per-thread result vector, so that a loop of single queries does not
@@ -73,11 +73,11 @@ pub(crate) struct Results {
 /// As documented on nbhd_tree_knn: `tree` a live handle or NULL; `query` NULL or `dim`
 /// readable values of the tree's scalar type; `indices` and `sq_dists` NULL or writable for
 /// `capacity` values; `count` NULL or writable.
-unsafe fn query(
+pub(crate) unsafe fn query<H: IndexHandle>(
     func: &str,
-    tree: *const nbhd_tree,
+    tree: *const H,
     at: At,
-    nbhd: NbhdArg,
+    nbhd: NeighborhoodSpec,
     out: Results,
 ) -> nbhd_status {
     guard(func, || {
@@ -86,18 +86,18 @@ unsafe fn query(
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
         // SAFETY: the buffers are as the caller describes (contract above).
-        with_tree!(&tree.inner, t => unsafe { run(t, at, nbhd, out, count) })
+        with_index!(tree.index(), t, _T => unsafe { run(t, at, nbhd, out, count) })
     })
 }
 
-/// Runs one query on a typed tree (static or dynamic) and copies the result out.
+/// Runs one query on a typed index (static or growing) and copies the result out.
 ///
 /// # Safety
 /// As for [`query`]; `count` is checked and writable.
-pub(crate) unsafe fn run<T: FfiScalar, S: NeighborSearch<T>>(
+unsafe fn run<T: FfiScalar, S: NeighborSearch<T>>(
     tree: &S,
     at: At,
-    nbhd: NbhdArg,
+    nbhd: NeighborhoodSpec,
     out: Results,
     count: *mut usize,
 ) -> Result<(), FfiError> {
@@ -128,7 +128,7 @@ pub(crate) unsafe fn run<T: FfiScalar, S: NeighborSearch<T>>(
         },
     };
     T::with_scratch(|found| {
-        tree.search(query, nbhd.to_core()?, found)?;
+        tree.search(query, nbhd.to::<T>()?, found)?;
         // SAFETY: `count` is non-NULL, aligned and writable (checked by the caller of `run`).
         unsafe { count.write(found.len()) };
         if found.len() > out.capacity {
@@ -199,7 +199,7 @@ pub unsafe extern "C" fn nbhd_tree_knn(
             "nbhd_tree_knn",
             tree,
             At::Point(query),
-            NbhdArg::Knn(k),
+            NeighborhoodSpec::knn(k),
             out,
         )
     }
@@ -230,7 +230,7 @@ pub unsafe extern "C" fn nbhd_tree_radius(
         capacity,
         count,
     };
-    let nbhd = NbhdArg::Radius(radius);
+    let nbhd = NeighborhoodSpec::radius(radius);
     // SAFETY: the caller's contract is the one `query` requires.
     unsafe { self::query("nbhd_tree_radius", tree, At::Point(query), nbhd, out) }
 }
@@ -258,7 +258,7 @@ pub unsafe extern "C" fn nbhd_tree_knn_radius(
         capacity,
         count,
     };
-    let nbhd = NbhdArg::KnnRadius(k, radius);
+    let nbhd = NeighborhoodSpec::knn_radius(k, radius);
     // SAFETY: the caller's contract is the one `query` requires.
     unsafe { self::query("nbhd_tree_knn_radius", tree, At::Point(query), nbhd, out) }
 }
@@ -295,7 +295,15 @@ pub unsafe extern "C" fn nbhd_tree_knn_index(
         exclude_self,
     };
     // SAFETY: the caller's contract is the one `query` requires.
-    unsafe { self::query("nbhd_tree_knn_index", tree, at, NbhdArg::Knn(k), out) }
+    unsafe {
+        self::query(
+            "nbhd_tree_knn_index",
+            tree,
+            at,
+            NeighborhoodSpec::knn(k),
+            out,
+        )
+    }
 }
 
 /// All points within `radius` of the stored point `index`, optionally without the point
@@ -324,7 +332,7 @@ pub unsafe extern "C" fn nbhd_tree_radius_index(
         index,
         exclude_self,
     };
-    let nbhd = NbhdArg::Radius(radius);
+    let nbhd = NeighborhoodSpec::radius(radius);
     // SAFETY: the caller's contract is the one `query` requires.
     unsafe { self::query("nbhd_tree_radius_index", tree, at, nbhd, out) }
 }
@@ -357,7 +365,7 @@ pub unsafe extern "C" fn nbhd_tree_knn_radius_index(
         index,
         exclude_self,
     };
-    let nbhd = NbhdArg::KnnRadius(k, radius);
+    let nbhd = NeighborhoodSpec::knn_radius(k, radius);
     // SAFETY: the caller's contract is the one `query` requires.
     unsafe { self::query("nbhd_tree_knn_radius_index", tree, at, nbhd, out) }
 }

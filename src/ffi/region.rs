@@ -6,10 +6,11 @@ use std::ffi::c_void;
 
 use super::args::{check_aligned, check_optional, check_ptr, deref, init_out};
 use super::status::{guard, nbhd_status, FfiError};
-use super::tree::{nbhd_tree, with_tree};
+use super::tree::nbhd_tree;
 use crate::error::NbhdError;
-use crate::tree::KdTree;
-use crate::Scalar;
+use crate::index::NeighborIndex;
+use crate::scalar::Scalar;
+use crate::with_index;
 
 /// `len` values of `T` at `p`, after the NULL and alignment checks (an empty slice for
 /// `len` 0 without reading `p`, which may then be NULL).
@@ -95,7 +96,7 @@ pub unsafe extern "C" fn nbhd_tree_box(
         let tree = unsafe { deref(tree, "tree") }?;
         check_optional(indices.cast_const(), "indices")?;
         // SAFETY: the pointers are as the caller describes (contract above).
-        with_tree!(&tree.inner, t => unsafe { one_box(t, min, max, indices, capacity, count) })
+        with_index!(&tree.inner, t, _T => unsafe { one_box(t, min, max, indices, capacity, count) })
     })
 }
 
@@ -103,15 +104,15 @@ pub unsafe extern "C" fn nbhd_tree_box(
 ///
 /// # Safety
 /// As nbhd_tree_box; `count` checked and writable.
-unsafe fn one_box<T: Scalar>(
-    tree: &KdTree<T>,
+unsafe fn one_box<T: Scalar, I: NeighborIndex<T>>(
+    tree: &I,
     min: *const c_void,
     max: *const c_void,
     indices: *mut u32,
     capacity: usize,
     count: *mut usize,
 ) -> Result<(), FfiError> {
-    let dim = tree.stats().dim;
+    let dim = tree.dim();
     // SAFETY: `min` and `max` are NULL or `dim` readable values of `T` (caller).
     let (lo, hi) = unsafe {
         (
@@ -181,7 +182,7 @@ pub unsafe extern "C" fn nbhd_tree_boxes(
             total,
         };
         // SAFETY: the pointers are as the caller describes (contract above).
-        with_tree!(&tree.inner, t => unsafe { many_boxes(t, boxes, n_boxes, threads, out) })
+        with_index!(&tree.inner, t, _T => unsafe { many_boxes(t, boxes, n_boxes, threads, out) })
     })
 }
 
@@ -197,15 +198,15 @@ struct BatchOut {
 ///
 /// # Safety
 /// As nbhd_tree_boxes; `out.total` and `out.offsets` checked.
-unsafe fn many_boxes<T: Scalar>(
-    tree: &KdTree<T>,
+unsafe fn many_boxes<T: Scalar, I: NeighborIndex<T>>(
+    tree: &I,
     boxes: *const c_void,
     n_boxes: usize,
     threads: usize,
     out: BatchOut,
 ) -> Result<(), FfiError> {
     crate::parallel::check_threads(threads)?;
-    let dim = tree.stats().dim;
+    let dim = tree.dim();
     let len = n_boxes
         .checked_mul(2 * dim)
         .filter(|&l| l.checked_mul(std::mem::size_of::<T>()).is_some())

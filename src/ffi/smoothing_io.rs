@@ -10,6 +10,7 @@ use super::args::{check_aligned, check_optional, check_ptr};
 use super::enums::nbhd_stage;
 use super::status::FfiError;
 use super::types::{nbhd_points, PointsArg};
+use crate::error::NbhdError;
 use crate::points::PointsView;
 use crate::scalar::ScalarType;
 use crate::smooth::{PointOutput, SmoothResult, Stage};
@@ -140,29 +141,76 @@ pub(super) unsafe fn read_points(
     Ok((arg, pts))
 }
 
-/// Writes `points` to `out`, three coordinates of `scalar` each, point i at byte
-/// `i * stride`: the input's layout ([`PointsArg`]) or packed (`stride` = 3 values). Only the
-/// coordinates are written; other bytes of a strided layout are left alone.
-///
-/// # Safety
-/// `out` must be non-NULL and writable for `points.len()` points of that layout (for the
-/// input's layout, checked by [`read_points`]), and no Rust borrow of that memory may be live.
-pub(super) unsafe fn write_coords(
-    scalar: ScalarType,
+/// One strided output array of a caller's (coordinates, normals, curvatures): where, how far
+/// apart, in which scalar type. The one writer of values into a caller's strided layout, the
+/// output twin of [`PointsView`], which reads one.
+pub(super) struct Strided {
+    at: *mut u8,
     stride: usize,
-    points: &[DVec3],
-    out: *mut c_void,
-) {
-    let size = scalar.size();
-    for (i, p) in points.iter().enumerate() {
-        for (c, v) in p.to_array().into_iter().enumerate() {
-            // SAFETY: `out` is writable for the layout (caller), and `offset` stays inside it;
-            // the writes are unaligned; no borrow of the memory is live (caller).
+    scalar: ScalarType,
+}
+
+impl Strided {
+    /// Checks a strided array of `count` points of `width` values named `what`: the stride
+    /// (0 = packed) holds one point's values and the span does not overflow.
+    pub(super) fn new(
+        at: *mut c_void,
+        stride: usize,
+        scalar: ScalarType,
+        width: usize,
+        count: usize,
+        what: &str,
+    ) -> Result<Self, FfiError> {
+        let size = width * scalar.size();
+        let stride = if stride == 0 { size } else { stride };
+        if stride < size {
+            return Err(FfiError::InvalidArgument(format!(
+                "out->{what}_stride {stride} is smaller than {width} value(s) of {} bytes",
+                scalar.size()
+            )));
+        }
+        if (count.max(1) - 1)
+            .checked_mul(stride)
+            .and_then(|b| b.checked_add(size))
+            .is_none_or(|b| b > isize::MAX as usize)
+        {
+            return Err(NbhdError::SizeOverflow {
+                what: format!("out->{what} with {count} points and stride {stride}"),
+            }
+            .into());
+        }
+        Ok(Self {
+            at: at.cast(),
+            stride,
+            scalar,
+        })
+    }
+
+    /// The layout of a caller's points, already checked as a [`PointsView`] of them (`stride`
+    /// resolved, the span in the address space): where smoothed coordinates go back.
+    pub(super) fn of_points(at: *mut c_void, stride: usize, scalar: ScalarType) -> Self {
+        Self {
+            at: at.cast(),
+            stride,
+            scalar,
+        }
+    }
+
+    /// Writes the values of point `i`, unaligned.
+    ///
+    /// # Safety
+    /// The array must be writable for point `i` in the layout checked by [`Strided::new`], and
+    /// no Rust borrow of it may be live.
+    pub(super) unsafe fn write(&self, i: usize, values: &[f64]) {
+        let size = self.scalar.size();
+        for (c, &v) in values.iter().enumerate() {
+            // SAFETY: inside point i's values of the caller's writable array (caller); the
+            // offset cannot overflow (checked in `new`); unaligned writes.
             unsafe {
-                let at = out.cast::<u8>().add(i * stride + c * size);
-                match scalar {
-                    ScalarType::F32 => at.cast::<f32>().write_unaligned(v as f32),
-                    ScalarType::F64 => at.cast::<f64>().write_unaligned(v),
+                let p = self.at.add(i * self.stride + c * size);
+                match self.scalar {
+                    ScalarType::F32 => p.cast::<f32>().write_unaligned(v as f32),
+                    ScalarType::F64 => p.cast::<f64>().write_unaligned(v),
                 }
             }
         }
@@ -257,8 +305,8 @@ impl Outputs {
         !self.geometry.is_null()
     }
 
-    /// Writes the result: the coordinates (if asked) in the layout `scalar`/`stride` (see
-    /// [`write_coords`]), the geometry and the summary (if asked).
+    /// Writes the result: the coordinates (if asked) in the layout `scalar`/`stride` (the
+    /// input points' layout, [`Strided::of_points`]), the geometry and the summary (if asked).
     ///
     /// # Safety
     /// Each non-NULL pointer must be writable for `result.points.len()` points in that layout
@@ -266,8 +314,11 @@ impl Outputs {
     /// be live (the input view is dropped in [`read_points`]).
     pub(super) unsafe fn write(&self, result: &SmoothResult, scalar: ScalarType, stride: usize) {
         if !self.coords.is_null() {
-            // SAFETY: forwarded from the caller.
-            unsafe { write_coords(scalar, stride, &result.points, self.coords) };
+            let out = Strided::of_points(self.coords, stride, scalar);
+            for (i, p) in result.points.iter().enumerate() {
+                // SAFETY: point `i` of the caller's layout, writable (caller).
+                unsafe { out.write(i, &p.to_array()) };
+            }
         }
         if !self.geometry.is_null() {
             // straight into the caller's array: a copy of a million elements first would be

@@ -235,6 +235,15 @@ impl FfiError {
 impl fmt::Display for FfiError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            // the core names units as Rust and Python spell them; C users set an enum
+            FfiError::Core(e @ NbhdError::Degenerate { relative, .. }) => {
+                let units = if *relative { "RELATIVE" } else { "ABSOLUTE" };
+                write!(f, "{e} (epsilon_units NBHD_UNITS_{units}")?;
+                if *relative {
+                    f.write_str("; set NBHD_UNITS_ABSOLUTE for a length in the points' units")?;
+                }
+                f.write_str(")")
+            }
             FfiError::Core(e) => e.fmt(f),
             FfiError::Null(what) => write!(f, "argument {what} is NULL"),
             FfiError::Misaligned { what, addr, align } => write!(

@@ -5,11 +5,14 @@ use std::ffi::c_void;
 
 use super::args::{deref, init_out};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::tree::{nbhd_tree, with_tree};
+use super::tree::{nbhd_tree, IndexHandle};
 use super::types::{
-    nbhd_neighborhood_spec, nbhd_points, nbhd_table_options, read_table_options, NbhdArg, PointsArg,
+    nbhd_neighborhood_spec, nbhd_points, nbhd_table_options, read_spec, read_table_options,
+    PointsArg,
 };
+use crate::handle::AnyTable;
 use crate::table::{NeighborTable, TableOptions};
+use crate::with_table;
 
 /// A table of neighbourhoods (opaque): row i holds the neighbours of point i (or of query i),
 /// ordered by (squared distance, index). Made by nbhd_tree_neighborhoods or
@@ -35,33 +38,6 @@ impl nbhd_neighborhoods {
     }
 }
 
-/// A table of either scalar type.
-pub(super) enum AnyTable {
-    F32(NeighborTable<f32>),
-    F64(NeighborTable<f64>),
-}
-
-impl From<NeighborTable<f32>> for AnyTable {
-    fn from(t: NeighborTable<f32>) -> Self {
-        AnyTable::F32(t)
-    }
-}
-
-impl From<NeighborTable<f64>> for AnyTable {
-    fn from(t: NeighborTable<f64>) -> Self {
-        AnyTable::F64(t)
-    }
-}
-
-macro_rules! with_table {
-    ($table:expr, $t:ident => $body:expr) => {
-        match $table {
-            AnyTable::F32($t) => $body,
-            AnyTable::F64($t) => $body,
-        }
-    };
-}
-
 /// The default table options: each point left out of its own row, the shared thread pool.
 #[no_mangle]
 pub extern "C" fn nbhd_table_options_default() -> nbhd_table_options {
@@ -73,7 +49,7 @@ pub extern "C" fn nbhd_table_options_default() -> nbhd_table_options {
 ///
 /// # Safety
 /// `out` was checked by `init_out`.
-pub(super) unsafe fn hand_out(out: *mut *mut nbhd_neighborhoods, table: AnyTable) {
+unsafe fn hand_out(out: *mut *mut nbhd_neighborhoods, table: AnyTable) {
     let handle = Box::into_raw(Box::new(nbhd_neighborhoods { table }));
     // SAFETY: `out` is non-NULL, aligned and writable (checked by the caller); the handle is
     // a fresh Box that the C caller now owns.
@@ -107,19 +83,33 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods(
     options: *const nbhd_table_options,
     out_table: *mut *mut nbhd_neighborhoods,
 ) -> nbhd_status {
-    guard("nbhd_tree_neighborhoods", || {
+    // SAFETY: the caller's contract is the one `neighborhoods` requires.
+    unsafe { neighborhoods("nbhd_tree_neighborhoods", tree, spec, options, out_table) }
+}
+
+/// The body of nbhd_tree_neighborhoods and nbhd_dynamic_neighborhoods.
+///
+/// # Safety
+/// As nbhd_tree_neighborhoods.
+pub(super) unsafe fn neighborhoods<H: IndexHandle>(
+    func: &str,
+    tree: *const H,
+    spec: *const nbhd_neighborhood_spec,
+    options: *const nbhd_table_options,
+    out_table: *mut *mut nbhd_neighborhoods,
+) -> nbhd_status {
+    guard(func, || {
         // SAFETY: `out_table` is NULL or writable (caller).
         let out = unsafe { init_out(out_table, "out_table", std::ptr::null_mut()) }?;
         // SAFETY: `tree` is NULL or a live handle; `spec`, `options` NULL or readable (caller).
         let (tree, nbhd, options) = unsafe {
             (
                 deref(tree, "tree")?,
-                NbhdArg::read(spec)?,
+                read_spec(spec)?,
                 read_table_options(options)?,
             )
         };
-        let table: AnyTable =
-            with_tree!(&tree.inner, t => t.neighborhoods(nbhd.to_core()?, &options)?.into());
+        let table = tree.index().neighborhoods(nbhd, &options)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out(out, table) };
         Ok(())
@@ -151,7 +141,24 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods_of(
     options: *const nbhd_table_options,
     out_table: *mut *mut nbhd_neighborhoods,
 ) -> nbhd_status {
-    guard("nbhd_tree_neighborhoods_of", || {
+    let name = "nbhd_tree_neighborhoods_of";
+    // SAFETY: the caller's contract is the one `neighborhoods_of` requires.
+    unsafe { neighborhoods_of(name, tree, queries, spec, options, out_table) }
+}
+
+/// The body of nbhd_tree_neighborhoods_of and nbhd_dynamic_neighborhoods_of.
+///
+/// # Safety
+/// As nbhd_tree_neighborhoods_of.
+pub(super) unsafe fn neighborhoods_of<H: IndexHandle>(
+    func: &str,
+    tree: *const H,
+    queries: *const nbhd_points,
+    spec: *const nbhd_neighborhood_spec,
+    options: *const nbhd_table_options,
+    out_table: *mut *mut nbhd_neighborhoods,
+) -> nbhd_status {
+    guard(func, || {
         // SAFETY: `out_table` is NULL or writable (caller).
         let out = unsafe { init_out(out_table, "out_table", std::ptr::null_mut()) }?;
         // SAFETY: `tree` is NULL or a live handle; the structs NULL or readable (caller).
@@ -159,15 +166,13 @@ pub unsafe extern "C" fn nbhd_tree_neighborhoods_of(
             (
                 deref(tree, "tree")?,
                 PointsArg::read(queries, "queries")?,
-                NbhdArg::read(spec)?,
+                read_spec(spec)?,
                 read_table_options(options)?,
             )
         };
         // SAFETY: the caller's description of the query memory is true (contract above).
         let view = unsafe { queries.view() }?;
-        let table: AnyTable = with_tree!(&tree.inner, t => {
-            t.neighborhoods_of(&view, nbhd.to_core()?, &options)?.into()
-        });
+        let table = tree.index().neighborhoods_of(&view, nbhd, &options)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out(out, table) };
         Ok(())

@@ -4,41 +4,51 @@ use super::args::{check_aligned, check_ptr, deref, init_out};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::{nbhd_build_options, nbhd_points, nbhd_stats, read_build_options, PointsArg};
 use crate::error::NbhdError;
-use crate::scalar::ScalarType;
-use crate::tree::{BuildOptions, KdTree};
-use crate::NeighborSearch;
+use crate::handle::AnyIndex;
+use crate::index::NeighborIndex;
+use crate::query::Query;
+use crate::scalar::Scalar;
+use crate::tree::BuildOptions;
+use crate::with_index;
 
 /// A built k-d tree (opaque). It holds its own copy of the points, in the scalar type of the
 /// points it was built from, and is immutable: any number of threads may query one tree at
 /// once. Made by nbhd_tree_build or nbhd_tree_load(_from_buffer), freed by nbhd_tree_free.
 pub struct nbhd_tree {
-    pub(crate) inner: AnyTree,
+    /// Always a static tree.
+    pub(crate) inner: AnyIndex,
 }
 
-/// A tree of either scalar type.
-pub(crate) enum AnyTree {
-    F32(KdTree<f32>),
-    F64(KdTree<f64>),
+/// The C handles of an index, nbhd_tree and nbhd_dynamic_tree: each holds the core's
+/// [`AnyIndex`], so that an export serving both is one body over it.
+pub(crate) trait IndexHandle: Sized {
+    /// Whether the handle holds a growing tree.
+    const GROWING: bool;
+    /// The index behind the handle.
+    fn index(&self) -> &AnyIndex;
+    /// A handle of this kind holding `index` (of the kind [`Self::GROWING`] says).
+    fn new(index: AnyIndex) -> Self;
 }
 
-/// Runs `$body` with `$t` bound to the typed tree inside an [`AnyTree`], for both types.
-macro_rules! with_tree {
-    ($tree:expr, $t:ident => $body:expr) => {
-        match $tree {
-            $crate::ffi::tree::AnyTree::F32($t) => $body,
-            $crate::ffi::tree::AnyTree::F64($t) => $body,
-        }
-    };
-}
-pub(crate) use with_tree;
-
-impl AnyTree {
-    pub(crate) fn scalar_type(&self) -> ScalarType {
-        match self {
-            AnyTree::F32(_) => ScalarType::F32,
-            AnyTree::F64(_) => ScalarType::F64,
-        }
+impl IndexHandle for nbhd_tree {
+    const GROWING: bool = false;
+    fn index(&self) -> &AnyIndex {
+        &self.inner
     }
+    fn new(inner: AnyIndex) -> Self {
+        Self { inner }
+    }
+}
+
+/// Moves `index` into a fresh handle in `*out`.
+///
+/// # Safety
+/// `out` was checked by `init_out`.
+pub(crate) unsafe fn hand_out_index<H: IndexHandle>(out: *mut *mut H, index: AnyIndex) {
+    let handle = Box::into_raw(Box::new(H::new(index)));
+    // SAFETY: `out` is non-NULL, aligned and writable (checked by the caller); the handle is a
+    // fresh Box the caller now owns.
+    unsafe { out.write(handle) };
 }
 
 /// The default build options: sliding-midpoint pivots, Floyd-Rivest selection, leaf size 12,
@@ -88,13 +98,8 @@ pub unsafe extern "C" fn nbhd_tree_build(
         };
         // SAFETY: the caller's description of the point memory is true (contract above).
         let view = unsafe { arg.view() }?;
-        let inner = match arg.scalar {
-            ScalarType::F32 => AnyTree::F32(KdTree::build(&view, &options)?),
-            ScalarType::F64 => AnyTree::F64(KdTree::build(&view, &options)?),
-        };
-        let handle = Box::into_raw(Box::new(nbhd_tree { inner }));
-        // SAFETY: `out` was checked by `init_out`; the handle is a fresh Box the caller now owns.
-        unsafe { out.write(handle) };
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out_index(out, AnyIndex::build(&view, &options)?) };
         Ok(())
     })
 }
@@ -159,13 +164,9 @@ pub unsafe extern "C" fn nbhd_tree_build_indices(
         };
         // SAFETY: the caller's description of the point memory is true (contract above).
         let view = unsafe { arg.view() }?;
-        let inner = match arg.scalar {
-            ScalarType::F32 => AnyTree::F32(KdTree::build_subset(&view, indices, &options)?),
-            ScalarType::F64 => AnyTree::F64(KdTree::build_subset(&view, indices, &options)?),
-        };
-        let handle = Box::into_raw(Box::new(nbhd_tree { inner }));
-        // SAFETY: `out` was checked by `init_out`; the handle is a fresh Box the caller now owns.
-        unsafe { out.write(handle) };
+        let tree = AnyIndex::build_subset(&view, indices, &options)?;
+        // SAFETY: `out` was checked by `init_out`.
+        unsafe { hand_out_index(out, tree) };
         Ok(())
     })
 }
@@ -214,9 +215,11 @@ pub unsafe extern "C" fn nbhd_tree_stats(
         let out = unsafe { init_out(out_stats, "out_stats", nbhd_stats::default()) }?;
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
-        let scalar = tree.inner.scalar_type();
-        let stats =
-            with_tree!(&tree.inner, t => nbhd_stats::new(t.stats(), t.source_len(), scalar));
+        let index = &tree.inner;
+        let shape = index
+            .tree_stats()
+            .expect("an nbhd_tree holds a static tree");
+        let stats = nbhd_stats::new(shape, index.source_len(), index.scalar_type());
         // SAFETY: `out` was checked by `init_out`.
         unsafe { out.write(stats) };
         Ok(())
@@ -246,7 +249,7 @@ pub unsafe extern "C" fn nbhd_tree_point(
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
         // SAFETY: `out_coords` is NULL or writable for `dim` values of the tree's type (caller).
-        with_tree!(&tree.inner, t => unsafe { copy_point(t, index, out_coords) })
+        with_index!(&tree.inner, t, _T => unsafe { copy_point(t, index, out_coords) })
     })
 }
 
@@ -254,18 +257,18 @@ pub unsafe extern "C" fn nbhd_tree_point(
 ///
 /// # Safety
 /// `out` NULL or writable for `dim` values of `T`.
-unsafe fn copy_point<T: crate::Scalar>(
-    t: &KdTree<T>,
+unsafe fn copy_point<T: Scalar, I: NeighborIndex<T>>(
+    t: &I,
     index: usize,
     out: *mut std::ffi::c_void,
 ) -> Result<(), FfiError> {
     check_aligned(out.cast_const(), std::mem::align_of::<T>(), "out_coords")?;
     let count = t.source_len();
-    let coords = u32::try_from(index)
-        .ok()
-        .filter(|&i| (i as usize) < count)
-        .ok_or(NbhdError::IndexOutOfRange { index, count })
-        .and_then(|i| t.point(i).ok_or(NbhdError::SkippedPoint { index }))?;
+    let index = u32::try_from(index).map_err(|_| NbhdError::IndexOutOfRange { index, count })?;
+    let (coords, _) = t.resolve(Query::Stored {
+        index,
+        exclude_self: false,
+    })?;
     // SAFETY: `out` is non-NULL and aligned for `T` (checked above) and writable for `dim`
     // values of `T` (caller); `coords` holds `dim` values and cannot overlap a caller's buffer.
     unsafe { std::ptr::copy_nonoverlapping(coords.as_ptr(), out.cast::<T>(), coords.len()) };

@@ -11,10 +11,10 @@ use super::fields::{c_field, CStruct};
 use super::status::FfiError;
 use crate::error::NbhdError;
 use crate::points::PointsView;
+use crate::query::NeighborhoodSpec;
 use crate::scalar::ScalarType;
 use crate::table::TableOptions;
 use crate::tree::{BuildOptions, TreeStats};
-use crate::Scalar;
 
 /// Describes `count` points of dimension `dim` in a caller's buffer, read in place (the tree
 /// copies what it needs; the buffer may be freed once nbhd_tree_build returns).
@@ -229,56 +229,22 @@ pub struct nbhd_neighborhood_spec {
     pub radius: f64,
 }
 
-/// A neighbourhood as the C ABI receives it, before conversion to the tree's scalar type.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum NbhdArg {
-    Knn(usize),
-    Radius(f64),
-    KnnRadius(usize, f64),
-}
-
-impl NbhdArg {
-    /// The core's neighbourhood in scalar type `T` (the radius rounded to `T`; the core
-    /// validates `k` and the radius).
-    /// The core's neighbourhood in the tree's type `T`. A finite radius that overflows `T` (or
-    /// whose square does) is refused here, with the value the caller passed.
-    pub(crate) fn to_core<T: Scalar>(self) -> Result<crate::Neighborhood<T>, FfiError> {
-        use crate::Neighborhood;
-        let radius = |r: f64| {
-            let t = T::from_f64(r);
-            if r.is_finite() && r >= 0.0 && !(t * t).is_finite() {
-                Err(crate::query::radius_out_of_range::<T>(r))
-            } else {
-                Ok(t)
-            }
-        };
-        Ok(match self {
-            NbhdArg::Knn(k) => Neighborhood::Knn { k },
-            NbhdArg::Radius(r) => Neighborhood::Radius {
-                radius: radius(r)?,
-                sorted: true,
-            },
-            NbhdArg::KnnRadius(k, r) => Neighborhood::KnnRadius {
-                k,
-                radius: radius(r)?,
-            },
-        })
-    }
-
-    /// Reads `*spec` field by field.
-    ///
-    /// # Safety
-    /// `spec` must be NULL or point to a readable `nbhd_neighborhood_spec`.
-    pub(crate) unsafe fn read(spec: *const nbhd_neighborhood_spec) -> Result<Self, FfiError> {
-        // SAFETY: forwarded from the caller.
-        let s = unsafe { CStruct::argument(spec, "spec") }?;
-        let (k, radius) = (c_field!(s.k), c_field!(s.radius));
-        Ok(match c_field!(s.kind as enum)? {
-            nbhd_neighborhood_kind::Knn => NbhdArg::Knn(k),
-            nbhd_neighborhood_kind::Radius => NbhdArg::Radius(radius),
-            nbhd_neighborhood_kind::KnnRadius => NbhdArg::KnnRadius(k, radius),
-        })
-    }
+/// Reads `*spec` field by field into the core's neighbourhood (its radius still a plain `f64`,
+/// converted to an index's type by [`NeighborhoodSpec::to`]).
+///
+/// # Safety
+/// `spec` must be NULL or point to a readable `nbhd_neighborhood_spec`.
+pub(crate) unsafe fn read_spec(
+    spec: *const nbhd_neighborhood_spec,
+) -> Result<NeighborhoodSpec, FfiError> {
+    // SAFETY: forwarded from the caller.
+    let s = unsafe { CStruct::argument(spec, "spec") }?;
+    let (k, radius) = (c_field!(s.k), c_field!(s.radius));
+    Ok(match c_field!(s.kind as enum)? {
+        nbhd_neighborhood_kind::Knn => NeighborhoodSpec::knn(k),
+        nbhd_neighborhood_kind::Radius => NeighborhoodSpec::radius(radius),
+        nbhd_neighborhood_kind::KnnRadius => NeighborhoodSpec::knn_radius(k, radius),
+    })
 }
 
 /// Options of nbhd_tree_neighborhoods. Start from nbhd_table_options_default().

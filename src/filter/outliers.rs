@@ -1,10 +1,10 @@
 //! Statistical and radius outlier removal.
 
 use crate::error::{NbhdError, Result};
-use crate::query::{NeighborSearch, Neighborhood};
+use crate::index::NeighborIndex;
+use crate::query::Neighborhood;
 use crate::scalar::Scalar;
 use crate::table::TableOptions;
-use crate::tree::KdTree;
 
 /// The points a filter keeps.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -59,8 +59,22 @@ impl Default for StatisticalOutlierOptions {
 ///
 /// Errors: `k` = 0 ([`NbhdError::ZeroK`]); `k` not below the number of points, or a
 /// non-finite `std_ratio`, or too many threads ([`NbhdError::InvalidOption`]).
-pub fn statistical_outlier_removal<T: Scalar>(
-    tree: &KdTree<T>,
+///
+/// ```
+/// use nbhd::filter::{statistical_outlier_removal, StatisticalOutlierOptions};
+/// use nbhd::{BuildOptions, KdTree, PointsView};
+///
+/// // a row of points one apart, and one far away
+/// let mut pts: Vec<f32> = (0..20).flat_map(|i| [i as f32, 0.0]).collect();
+/// pts.extend([5.0, 40.0]);
+/// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+/// let options = StatisticalOutlierOptions { k: 2, std_ratio: 1.0, threads: 0 };
+/// let kept = statistical_outlier_removal(&tree, &options)?;
+/// assert_eq!(kept.indices, (0..20).collect::<Vec<u32>>());
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+pub fn statistical_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
     options: &StatisticalOutlierOptions,
 ) -> Result<Kept> {
     let k = options.k;
@@ -73,16 +87,16 @@ pub fn statistical_outlier_removal<T: Scalar>(
             reason: format!("{} is not finite", options.std_ratio),
         });
     }
-    if k >= tree.len() {
+    if k >= index.len() {
         return Err(NbhdError::InvalidOption {
             name: "k",
             reason: format!(
                 "{k} nearest other points need more than {k} points; the tree holds {}",
-                tree.len()
+                index.len()
             ),
         });
     }
-    let table = tree.neighborhoods(
+    let table = index.neighborhoods(
         Neighborhood::Knn { k },
         &TableOptions {
             exclude_self: true,
@@ -117,7 +131,7 @@ pub fn statistical_outlier_removal<T: Scalar>(
             .filter(|&&(_, x)| x <= threshold)
             .map(|&(i, _)| i)
             .collect(),
-        source_len: tree.source_len(),
+        source_len: index.source_len(),
     })
 }
 
@@ -140,8 +154,19 @@ pub struct RadiusOutlierOptions {
 ///
 /// Errors: a negative, NaN or infinite radius ([`NbhdError::InvalidRadius`]), one too large
 /// for the tree's type ([`NbhdError::RadiusOutOfRange`]), too many threads.
-pub fn radius_outlier_removal<T: Scalar>(
-    tree: &KdTree<T>,
+///
+/// ```
+/// use nbhd::filter::{radius_outlier_removal, RadiusOutlierOptions};
+/// use nbhd::{BuildOptions, KdTree, PointsView};
+///
+/// let pts = [0.0f64, 0.0, 1.0, 0.0, 2.0, 0.0, 9.0, 9.0];
+/// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+/// let options = RadiusOutlierOptions { radius: 1.0, min_neighbors: 1, threads: 0 };
+/// assert_eq!(radius_outlier_removal(&tree, &options)?.indices, [0, 1, 2]);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+pub fn radius_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
     options: &RadiusOutlierOptions,
 ) -> Result<Kept> {
     let r = options.radius;
@@ -153,19 +178,16 @@ pub fn radius_outlier_removal<T: Scalar>(
         return Err(crate::query::radius_out_of_range::<T>(r));
     }
     let m = options.min_neighbors;
-    let positions = tree.tree_order();
     if m == 0 {
         crate::parallel::check_threads(options.threads)?;
-        let mut all = positions.to_vec();
-        all.sort_unstable();
         return Ok(Kept {
-            indices: all,
-            source_len: tree.source_len(),
+            indices: index.indices(),
+            source_len: index.source_len(),
         });
     }
     let nbhd = Neighborhood::KnnRadius { k: m, radius };
     nbhd.validate()?;
-    let table = tree.neighborhoods(
+    let table = index.neighborhoods(
         nbhd,
         &TableOptions {
             exclude_self: true,
@@ -177,6 +199,6 @@ pub fn radius_outlier_removal<T: Scalar>(
             .filter(|&i| table.indices_of(i).len() >= m)
             .map(|i| i as u32)
             .collect(),
-        source_len: tree.source_len(),
+        source_len: index.source_len(),
     })
 }

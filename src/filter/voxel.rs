@@ -269,6 +269,19 @@ fn grid<T: Scalar>(lo: &[T], hi: &[T], inv: Vec<T>) -> Result<Grid<T>> {
 /// holds more than 2^64 voxels (all [`NbhdError::InvalidOption`] naming `leaf`); too many
 /// threads. (PCL 1.13 instead warns and returns the input unchanged when
 /// `Π (⌊(max − min) · inv⌋ + 1)` exceeds 2^31 − 1; nbhd's 64-bit voxel numbers go further.)
+///
+/// ```
+/// use nbhd::filter::{voxel_grid, VoxelGridOptions};
+/// use nbhd::PointsView;
+///
+/// let pts = [0.1f32, 0.1, 0.2, 0.3, 1.5, 0.5];
+/// let grid = voxel_grid::<f32>(&PointsView::from_flat(&pts, 2)?, &VoxelGridOptions::cube(1.0))?;
+/// assert_eq!(grid.len(), 2);
+/// assert_eq!(grid.members_of(0), [0, 1]);
+/// let c = grid.centroid(0);
+/// assert!((c[0] - 0.15).abs() < 1e-6 && (c[1] - 0.2).abs() < 1e-6);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn voxel_grid<T: Scalar>(
     view: &PointsView<'_>,
     options: &VoxelGridOptions,

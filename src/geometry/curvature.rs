@@ -27,11 +27,23 @@
 
 use super::normals::{check_table, LocalFrame};
 use crate::error::Result;
+use crate::named_option;
+use crate::names::OptionName;
 use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
 
 /// Directional curvature of eq. 2.20 from `p` with normal `n` toward `x`; 0 when `x == p`.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::directional_curvature;
+///
+/// // on the unit sphere, with the outward normal, every direction curves by -1
+/// let p = DVec3::Z;
+/// let x = DVec3::new(0.6, 0.0, 0.8);
+/// assert!((directional_curvature(p, DVec3::Z, x) + 1.0).abs() < 1e-12);
+/// ```
 #[inline]
 pub fn directional_curvature(p: DVec3, n: DVec3, x: DVec3) -> f64 {
     offset_curvature(n, x - p)
@@ -59,6 +71,16 @@ pub enum DensityForm {
     Quadratic,
 }
 
+impl OptionName for DensityForm {
+    const OPTION: &'static str = "density";
+    const WHAT: &'static str = "density";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (DensityForm::AbsLinear, "abs-linear"),
+        (DensityForm::Quadratic, "quadratic"),
+    ];
+}
+named_option!(DensityForm);
+
 /// How the principal curvatures are read off the Weingarten estimate `W_i`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum PrincipalFormula {
@@ -79,6 +101,17 @@ pub enum PrincipalFormula {
     /// one line).
     ExactMoments,
 }
+
+impl OptionName for PrincipalFormula {
+    const OPTION: &'static str = "formula";
+    const WHAT: &'static str = "formula";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (PrincipalFormula::Eq225, "eq2.25"),
+        (PrincipalFormula::ExactMoments, "exact-moments"),
+    ];
+    const ALIASES: &'static [(&'static str, Self)] = &[("eq225", PrincipalFormula::Eq225)];
+}
+named_option!(PrincipalFormula);
 
 /// Principal curvatures and directions at one point (eq. 2.25 from the eigenvalues of the
 /// Weingarten estimate restricted to the tangent plane).
@@ -121,6 +154,22 @@ impl PrincipalCurvatures {
 /// Weingarten estimate (eq. 2.26–2.29) at `p` with covariance `frame` over `neighbors`
 /// (`N_i`, without `p`). Neighbours that coincide with `p` or lie exactly on its normal line
 /// have no tangential direction and are left out; with none left, both curvatures are 0.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::{local_frame, principal_curvatures, DensityForm, PrincipalFormula};
+///
+/// // points of a parabolic cylinder z = x²/2 (curvature 1 along x, 0 along y) around the origin
+/// let around: Vec<DVec3> = (-3..=3)
+///     .flat_map(|i| (-3..=3).map(move |j| (i as f64 * 0.05, j as f64 * 0.05)))
+///     .filter(|&(x, y)| (x, y) != (0.0, 0.0))
+///     .map(|(x, y)| DVec3::new(x, y, 0.5 * x * x))
+///     .collect();
+/// let frame = local_frame(DVec3::ZERO, &around);
+/// let c = principal_curvatures(DVec3::ZERO, &frame, &around, DensityForm::AbsLinear, PrincipalFormula::ExactMoments);
+/// let (most, least) = (c.k1.abs().max(c.k2.abs()), c.k1.abs().min(c.k2.abs()));
+/// assert!((most - 1.0).abs() < 0.1 && least < 0.1); // the signs follow the normal's
+/// ```
 pub fn principal_curvatures(
     p: DVec3,
     frame: &LocalFrame,
@@ -244,6 +293,21 @@ fn eigen2(a11: f64, a12: f64, a22: f64, e1: DVec3, e2: DVec3) -> (f64, f64, DVec
 
 /// [`principal_curvatures`] of every point over its row of `table`, in parallel; the result
 /// does not depend on the number of threads.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::curvature::all_principal_curvatures;
+/// use nbhd::geometry::{local_frames, neighbors::neighbor_table};
+/// use nbhd::geometry::{DensityForm, PrincipalFormula};
+/// use nbhd::Neighborhood;
+///
+/// let points: Vec<DVec3> = (0..100).map(|i| DVec3::new((i % 10) as f64, (i / 10) as f64, 0.0)).collect();
+/// let table = neighbor_table(&points, Neighborhood::Knn { k: 8 }, true)?;
+/// let frames = local_frames(&points, &table)?;
+/// let c = all_principal_curvatures(&points, &table, &frames, DensityForm::AbsLinear, PrincipalFormula::Eq225)?;
+/// assert!(c.iter().all(|c| c.k1.abs() < 1e-9 && c.k2.abs() < 1e-9)); // a plane is flat
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn all_principal_curvatures(
     points: &[DVec3],
     table: &NeighborTable<f64>,

@@ -57,6 +57,18 @@ impl LocalFrame {
 }
 
 /// The covariance frame of `p` and its `neighbors` (eq. 2.8–2.10).
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::local_frame;
+///
+/// let p = DVec3::ZERO;
+/// let around = [DVec3::X, DVec3::Y, -DVec3::X, -DVec3::Y, DVec3::new(1.0, 1.0, 0.0)];
+/// let frame = local_frame(p, &around);
+/// assert!(frame.is_regular());
+/// assert!(frame.normal.z.abs() > 1.0 - 1e-12); // the plane z = 0
+/// assert_eq!(frame.count, 6);
+/// ```
 pub fn local_frame(p: DVec3, neighbors: &[DVec3]) -> LocalFrame {
     frame_of(neighbors.iter().map(|&x| x - p), neighbors.len() + 1)
 }
@@ -224,6 +236,18 @@ fn checked_eigenvalues(values: DVec3, count: usize) -> (DVec3, u8) {
 
 /// The frame of every point over its row of `table` (neighbours without the point itself),
 /// in parallel; the result does not depend on the number of threads.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::{local_frames, neighbors::neighbor_table};
+/// use nbhd::Neighborhood;
+///
+/// let points: Vec<DVec3> = (0..100).map(|i| DVec3::new((i % 10) as f64, (i / 10) as f64, 0.0)).collect();
+/// let table = neighbor_table(&points, Neighborhood::Knn { k: 8 }, true)?;
+/// let frames = local_frames(&points, &table)?;
+/// assert!(frames.iter().all(|f| f.normal.z.abs() > 1.0 - 1e-12));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn local_frames(points: &[DVec3], table: &NeighborTable<f64>) -> Result<Vec<LocalFrame>> {
     check_table(points, table)?;
     Ok((0..points.len())
@@ -254,6 +278,16 @@ pub(crate) fn check_table(points: &[DVec3], table: &NeighborTable<f64>) -> Resul
         });
     }
     Ok(())
+}
+
+/// `λ0/(λ0 + λ1 + λ2)` of ascending eigenvalues, 0 when they all vanish.
+pub(crate) fn quotient_of(values: DVec3) -> f64 {
+    let s = values.x + values.y + values.z;
+    if s > 0.0 {
+        values.x / s
+    } else {
+        0.0
+    }
 }
 
 #[cfg(test)]

@@ -4,6 +4,8 @@
 
 use super::normals::{check_table, LocalFrame};
 use crate::error::{NbhdError, Result};
+use crate::named_option;
+use crate::names::OptionName;
 use crate::table::NeighborTable;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -26,8 +28,74 @@ pub enum Orientation {
     Propagate,
 }
 
+/// The kinds of [`Orientation`], by name (`unoriented`, `toward-point`, `away-from-point`,
+/// `propagate`): what the command line and Python pass, the point given beside it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum OrientationKind {
+    /// [`Orientation::Unoriented`].
+    #[default]
+    Unoriented,
+    /// [`Orientation::TowardViewpoint`].
+    TowardPoint,
+    /// [`Orientation::AwayFrom`].
+    AwayFromPoint,
+    /// [`Orientation::Propagate`].
+    Propagate,
+}
+
+impl OptionName for OrientationKind {
+    const OPTION: &'static str = "orientation";
+    const WHAT: &'static str = "orientation";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (OrientationKind::Unoriented, "unoriented"),
+        (OrientationKind::TowardPoint, "toward-point"),
+        (OrientationKind::AwayFromPoint, "away-from-point"),
+        (OrientationKind::Propagate, "propagate"),
+    ];
+    const ALIASES: &'static [(&'static str, Self)] = &[
+        ("none", OrientationKind::Unoriented),
+        ("toward-viewpoint", OrientationKind::TowardPoint),
+    ];
+}
+named_option!(OrientationKind);
+
+impl Orientation {
+    /// The orientation of kind `kind`, with `point` for the kinds that have one.
+    pub fn of_kind(kind: OrientationKind, point: DVec3) -> Self {
+        match kind {
+            OrientationKind::Unoriented => Orientation::Unoriented,
+            OrientationKind::TowardPoint => Orientation::TowardViewpoint(point),
+            OrientationKind::AwayFromPoint => Orientation::AwayFrom(point),
+            OrientationKind::Propagate => Orientation::Propagate,
+        }
+    }
+
+    /// The orientation's kind.
+    pub fn kind(&self) -> OrientationKind {
+        match self {
+            Orientation::Unoriented => OrientationKind::Unoriented,
+            Orientation::TowardViewpoint(_) => OrientationKind::TowardPoint,
+            Orientation::AwayFrom(_) => OrientationKind::AwayFromPoint,
+            Orientation::Propagate => OrientationKind::Propagate,
+        }
+    }
+}
+
 /// Flips normals in place as `orientation` asks. Only the sign of `frame.normal` changes (the
 /// tangent frame keeps `major × minor` parallel to the normal after the call).
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::{local_frames, neighbors::neighbor_table, orient, Orientation};
+/// use nbhd::Neighborhood;
+///
+/// let points: Vec<DVec3> = (0..100).map(|i| DVec3::new((i % 10) as f64, (i / 10) as f64, 0.0)).collect();
+/// let table = neighbor_table(&points, Neighborhood::Knn { k: 8 }, true)?;
+/// let mut frames = local_frames(&points, &table)?;
+/// orient(&points, &table, &mut frames, Orientation::TowardViewpoint(DVec3::new(0.0, 0.0, 10.0)))?;
+/// assert!(frames.iter().all(|f| f.normal.z > 0.0));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn orient(
     points: &[DVec3],
     table: &NeighborTable<f64>,
@@ -366,8 +434,47 @@ fn propagate(
     }
     let (order, rank) = locality_order(points);
     report(0.05)?;
-    let mut rows = edge_rows(table, &order, &rank, normals);
+    let rows = edge_rows(table, &order, &rank, normals);
     report(0.1)?;
+    let Forest { edges, comp } = spanning_forest(table, &rank, rows, report)?;
+    let (tdeg, tadj) = adjacency(n, &edges);
+    drop(edges);
+    // the top point of each tree (largest z, then smallest index), in the caller's numbering
+    let mut top: Vec<u32> = vec![u32::MAX; n];
+    for (i, p) in points.iter().enumerate() {
+        let c = comp[rank[i] as usize] as usize;
+        let t = top[c];
+        if t == u32::MAX || p.z > points[t as usize].z {
+            top[c] = i as u32;
+        }
+    }
+    let normal: Vec<DVec3> = order.par_iter().map(|&i| normals[i as usize]).collect();
+    let seeds = top
+        .into_iter()
+        .filter(|&t| t != u32::MAX)
+        .map(|t| rank[t as usize]);
+    let keep = agree_from(seeds, &normal, &tdeg, &tadj);
+    Ok(rank.par_iter().map(|&r| keep[r as usize]).collect())
+}
+
+/// A spanning forest of points in the locality order.
+struct Forest {
+    /// Its edges, as pairs of points.
+    edges: Vec<(u32, u32)>,
+    /// The component of each point, named by its smallest point.
+    comp: Vec<u32>,
+}
+
+/// Borůvka's rounds over `rows` (see [`propagate`]): the edges of the maximum spanning forest
+/// as pairs of points in the locality order `rank` gives, and each point's component, named by
+/// its smallest point. Reports progress from 0.1 to 0.9.
+fn spanning_forest(
+    table: &NeighborTable<f64>,
+    rank: &[u32],
+    mut rows: EdgeRows,
+    report: &mut dyn FnMut(f64) -> Result<()>,
+) -> Result<Forest> {
+    let n = rank.len();
     // the ends of the edge a key names, in the locality order: the row of a place is its
     // quotient by k when every row has k entries
     let offsets = table.offsets();
@@ -382,36 +489,12 @@ fn propagate(
         };
         (rank[row], rank[table.indices()[place] as usize])
     };
-    // Borůvka's rounds; components are named by their smallest point (locality order)
     let mut comp: Vec<u32> = (0..n as u32).collect();
     let mut parent = comp.clone();
     let mut roots = comp.clone();
     let best: Vec<AtomicU64> = (0..n).map(|_| AtomicU64::new(0)).collect();
-    let mut tree: Vec<(u32, u32)> = Vec::with_capacity(n);
-    loop {
-        let live: usize = {
-            // the rows cut into blocks, each with its own edges
-            let EdgeRows { off, live, to, key } = &mut rows;
-            let (mut live, mut to, mut key) = (&mut live[..], &mut to[..], &mut key[..]);
-            let mut blocks = Vec::with_capacity(n.div_ceil(BLOCK_ROWS));
-            for start in (0..n).step_by(BLOCK_ROWS) {
-                let end = (start + BLOCK_ROWS).min(n);
-                let len = off[end] - off[start];
-                let (l, l_rest) = std::mem::take(&mut live).split_at_mut(end - start);
-                let (t, t_rest) = std::mem::take(&mut to).split_at_mut(len);
-                let (k, k_rest) = std::mem::take(&mut key).split_at_mut(len);
-                blocks.push((start, l, t, k));
-                (live, to, key) = (l_rest, t_rest, k_rest);
-            }
-            let (off, comp, best) = (&off[..], &comp[..], &best[..]);
-            blocks
-                .into_par_iter()
-                .map(|(start, l, t, k)| sweep(start, off, l, t, k, comp, best))
-                .sum()
-        };
-        if live == 0 {
-            break;
-        }
+    let mut forest: Vec<(u32, u32)> = Vec::with_capacity(n);
+    while sweep_all(&mut rows, &comp, &best) > 0 {
         let picks: Vec<(u32, u32)> = roots
             .par_iter()
             .filter_map(|&c| {
@@ -423,7 +506,7 @@ fn propagate(
             let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
             if ra != rb {
                 parent[ra.max(rb) as usize] = ra.min(rb);
-                tree.push((a, b));
+                forest.push((a, b));
             }
         }
         // every old root straight to its new root, then the points' components in one step
@@ -435,11 +518,40 @@ fn propagate(
         roots.retain(|&r| parent[r as usize] == r);
         report(0.1 + 0.8 * (1.0 - roots.len() as f64 / n as f64))?;
     }
-    drop(rows);
-    drop(best);
-    // the forest as adjacency lists
+    Ok(Forest {
+        edges: forest,
+        comp,
+    })
+}
+
+/// One Borůvka round's [`sweep`] of every row, in parallel over blocks of rows, each with its
+/// own edges; returns the edges still live (between components).
+fn sweep_all(rows: &mut EdgeRows, comp: &[u32], best: &[AtomicU64]) -> usize {
+    let n = comp.len();
+    let EdgeRows { off, live, to, key } = rows;
+    let (mut live, mut to, mut key) = (&mut live[..], &mut to[..], &mut key[..]);
+    let mut blocks = Vec::with_capacity(n.div_ceil(BLOCK_ROWS));
+    for start in (0..n).step_by(BLOCK_ROWS) {
+        let end = (start + BLOCK_ROWS).min(n);
+        let len = off[end] - off[start];
+        let (l, l_rest) = std::mem::take(&mut live).split_at_mut(end - start);
+        let (t, t_rest) = std::mem::take(&mut to).split_at_mut(len);
+        let (k, k_rest) = std::mem::take(&mut key).split_at_mut(len);
+        blocks.push((start, l, t, k));
+        (live, to, key) = (l_rest, t_rest, k_rest);
+    }
+    let off = &off[..];
+    blocks
+        .into_par_iter()
+        .map(|(start, l, t, k)| sweep(start, off, l, t, k, comp, best))
+        .sum()
+}
+
+/// The forest of `n` points as adjacency lists: the neighbours of point `u` are
+/// `tadj[tdeg[u]..tdeg[u + 1]]`.
+fn adjacency(n: usize, forest: &[(u32, u32)]) -> (Vec<usize>, Vec<u32>) {
     let mut tdeg = vec![0usize; n + 1];
-    for &(a, b) in &tree {
+    for &(a, b) in forest {
         tdeg[a as usize + 1] += 1;
         tdeg[b as usize + 1] += 1;
     }
@@ -448,32 +560,30 @@ fn propagate(
     }
     let mut tadj = vec![0u32; tdeg[n]];
     let mut at = tdeg.clone();
-    for &(a, b) in &tree {
+    for &(a, b) in forest {
         tadj[at[a as usize]] = b;
         at[a as usize] += 1;
         tadj[at[b as usize]] = a;
         at[b as usize] += 1;
     }
-    drop(at);
-    drop(tree);
-    // the top point of each tree (largest z, then smallest index), in the caller's numbering
-    let mut top: Vec<u32> = vec![u32::MAX; n];
-    for (i, p) in points.iter().enumerate() {
-        let c = comp[rank[i] as usize] as usize;
-        let t = top[c];
-        if t == u32::MAX || p.z > points[t as usize].z {
-            top[c] = i as u32;
-        }
-    }
-    // A breadth-first walk from each top decides which normals keep their sign: a normal
-    // agrees with its parent's, `⟨±n_parent, n⟩ ≥ 0` (the sign only negates the dot product,
-    // exactly).
-    let normal: Vec<DVec3> = order.par_iter().map(|&i| normals[i as usize]).collect();
+    (tdeg, tadj)
+}
+
+/// A breadth-first walk of the forest from each seed decides which normals keep their sign:
+/// the seed's if `n_z ≥ 0`, then each normal agrees with its parent's, `⟨±n_parent, n⟩ ≥ 0`
+/// (the sign only negates the dot product, exactly).
+fn agree_from(
+    seeds: impl Iterator<Item = u32>,
+    normal: &[DVec3],
+    tdeg: &[usize],
+    tadj: &[u32],
+) -> Vec<bool> {
+    let n = normal.len();
     let mut keep = vec![false; n];
     let mut done = vec![false; n];
     let mut queue: Vec<u32> = Vec::with_capacity(n);
-    for seed in top.into_iter().filter(|&t| t != u32::MAX) {
-        let seed = rank[seed as usize] as usize;
+    for seed in seeds {
+        let seed = seed as usize;
         keep[seed] = normal[seed].z >= 0.0;
         done[seed] = true;
         let mut head = queue.len();
@@ -492,7 +602,7 @@ fn propagate(
             }
         }
     }
-    Ok(rank.par_iter().map(|&r| keep[r as usize]).collect())
+    keep
 }
 
 #[cfg(test)]

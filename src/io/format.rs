@@ -1,10 +1,8 @@
-//! What a file is: its format (by extension or by its first bytes), how its numbers are
-//! encoded, and how precisely it holds coordinates.
+//! What a file is: its format (by extension or by its first bytes) and how its numbers are
+//! encoded.
 
 use std::path::Path;
 
-use super::cloud::PointCloud;
-use super::value::Ty;
 #[cfg(doc)]
 use super::{ReadOptions, TextColumns};
 
@@ -87,51 +85,4 @@ pub enum Encoding {
     BinaryBigEndian,
     /// LZF-compressed, stored field by field (PCD `binary_compressed` only).
     BinaryCompressed,
-}
-
-/// Width of the stored floating-point values (coordinates, normals, scalar fields).
-///
-/// The default is [`Single`](Precision::Single), because that is what other tools load:
-/// PCL's `PointXYZ`, `PointNormal`, `PointXYZRGB` are `float` types and its loaders match a
-/// field only if its type is `float` (a `double` x is "Failed to find match for field 'x'"
-/// and the point stays 0); MeshLab and CloudCompare read both.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Precision {
-    /// 32-bit `float` (PLY `float`, PCD `F 4`): what PCL's point types hold, about 7 digits.
-    #[default]
-    Single,
-    /// 64-bit `double` (PLY `double`, PCD `F 8`): exact for nbhd's `f64` values.
-    Double,
-    /// As the cloud was read ([`PointCloud::source_precision`]): double if the file held
-    /// the coordinates more precisely than a `float` does, single otherwise.
-    Keep,
-}
-
-impl Precision {
-    /// Whether `cloud` is written in single precision.
-    pub fn is_single_for(self, cloud: &PointCloud) -> bool {
-        match self {
-            Precision::Single => true,
-            Precision::Double => false,
-            Precision::Keep => cloud.source_precision != Some(Precision::Double),
-        }
-    }
-
-    /// The precision a file's coordinate type holds.
-    pub(crate) fn of_type(ty: Ty) -> Precision {
-        match ty {
-            Ty::F64 | Ty::I32 | Ty::U32 | Ty::I64 | Ty::U64 => Precision::Double,
-            _ => Precision::Single,
-        }
-    }
-
-    /// The precision text coordinates need: double if one is not exactly a `float`.
-    pub(crate) fn of_text(positions: &[[f64; 3]]) -> Precision {
-        let exact = |v: f64| !v.is_finite() || v as f32 as f64 == v;
-        if positions.iter().all(|p| p.iter().all(|&v| exact(v))) {
-            Precision::Single
-        } else {
-            Precision::Double
-        }
-    }
 }

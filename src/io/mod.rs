@@ -73,9 +73,9 @@ mod value;
 mod write;
 mod xyz;
 
-pub use cloud::{Aabb, Grid, PointCloud, ScalarField};
+pub use cloud::{Aabb, Grid, PointCloud, Precision, ScalarField};
 pub use error::{IoError, IoErrorKind, Location};
-pub use format::{Encoding, Format, Precision};
+pub use format::{Encoding, Format};
 pub use meta::{FieldType, LasHeader, LasVlr, Metadata, Viewpoint};
 pub use read::{
     read, read_as, read_bytes, read_bytes_with, read_with, ReadInfo, ReadOptions, TextColumns,

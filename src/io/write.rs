@@ -5,8 +5,9 @@ use std::io::Write;
 use std::path::Path;
 
 use super::cloud::PointCloud;
+use super::cloud::Precision;
 use super::error::{Fail, IoError, IoErrorKind, PResult};
-use super::format::{Encoding, Format, Precision};
+use super::format::{Encoding, Format};
 #[cfg(feature = "las")]
 use super::las;
 use super::meta::Viewpoint;

@@ -15,7 +15,8 @@ mod heap;
 pub(crate) mod order;
 pub mod pca_sweep;
 pub(crate) mod region;
-pub(crate) mod result_set;
+#[doc(hidden)]
+pub mod result_set;
 
 use crate::error::{NbhdError, Result};
 use crate::scalar::Scalar;
@@ -125,6 +126,97 @@ impl<T: Scalar> Neighborhood<T> {
     /// Whether the result must be ordered by `(sq_dist, index)`.
     pub fn is_sorted(&self) -> bool {
         !matches!(self, Neighborhood::Radius { sorted: false, .. })
+    }
+}
+
+/// A neighbourhood as the front doors take it, its radius a plain `f64` (the C ABI, the command
+/// line and Python): the `k` nearest (`k` alone), all within `radius` (`radius` alone, ordered
+/// unless `sorted` is `false`) or the ε-k-neighbourhood (both). [`NeighborhoodSpec::to`] makes it
+/// the [`Neighborhood`] of an index's scalar type, the one place a radius is converted.
+///
+/// ```
+/// use nbhd::{Neighborhood, NeighborhoodSpec};
+///
+/// assert_eq!(NeighborhoodSpec::knn(4).to::<f32>()?, Neighborhood::Knn { k: 4 });
+/// let eps_k = NeighborhoodSpec::knn_radius(4, 0.5).to::<f64>()?;
+/// assert_eq!(eps_k, Neighborhood::KnnRadius { k: 4, radius: 0.5 });
+/// // a radius whose square a float cannot hold
+/// assert!(NeighborhoodSpec::radius(1e30).to::<f32>().is_err());
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NeighborhoodSpec {
+    /// How many nearest points (≥ 1), if bounded by a count.
+    pub k: Option<usize>,
+    /// Plain Euclidean radius (finite, ≥ 0, inclusive), if bounded by a distance.
+    pub radius: Option<f64>,
+    /// Order a radius query's result by `(sq_dist, index)` (k-nearest results always are).
+    pub sorted: bool,
+}
+
+impl NeighborhoodSpec {
+    /// The `k` nearest points.
+    pub fn knn(k: usize) -> Self {
+        Self {
+            k: Some(k),
+            radius: None,
+            sorted: true,
+        }
+    }
+
+    /// Every point within `radius`, ordered.
+    pub fn radius(radius: f64) -> Self {
+        Self {
+            k: None,
+            radius: Some(radius),
+            sorted: true,
+        }
+    }
+
+    /// The `k` nearest among the points within `radius`.
+    pub fn knn_radius(k: usize, radius: f64) -> Self {
+        Self {
+            k: Some(k),
+            radius: Some(radius),
+            sorted: true,
+        }
+    }
+
+    /// The neighbourhood in the scalar type `T`, checked ([`Neighborhood::validate`]): a
+    /// negative, NaN or infinite radius is [`NbhdError::InvalidRadius`], a finite one whose
+    /// square `T` cannot hold [`NbhdError::RadiusOutOfRange`], both naming the value given;
+    /// neither `k` nor a radius is [`NbhdError::InvalidOption`].
+    pub fn to<T: Scalar>(&self) -> Result<Neighborhood<T>> {
+        let radius = |r: f64| {
+            if !(r.is_finite() && r >= 0.0) {
+                return Err(NbhdError::InvalidRadius(r));
+            }
+            let t = T::from_f64(r);
+            if (t * t).is_finite() {
+                Ok(t)
+            } else {
+                Err(radius_out_of_range::<T>(r))
+            }
+        };
+        let nbhd = match (self.k, self.radius) {
+            (Some(k), None) => Neighborhood::Knn { k },
+            (None, Some(r)) => Neighborhood::Radius {
+                radius: radius(r)?,
+                sorted: self.sorted,
+            },
+            (Some(k), Some(r)) => Neighborhood::KnnRadius {
+                k,
+                radius: radius(r)?,
+            },
+            (None, None) => {
+                return Err(NbhdError::InvalidOption {
+                    name: "neighborhood",
+                    reason: "give k, a radius, or both".into(),
+                })
+            }
+        };
+        nbhd.validate()?;
+        Ok(nbhd)
     }
 }
 

@@ -4,11 +4,11 @@
 //! the single-query descent (`src/tree/search.rs`), the grouped all-point search
 //! (`src/tree/group_search.rs`) and the baselines — only offer; what is kept is decided here:
 //!
-//! - [`NeighborHeap`] (`src/query/heap.rs`): the k nearest within a radius, any `k`;
-//! - [`SortedRow`]: the same for small `k`, kept sorted by insertion;
-//! - [`KnnRow`]: the same for one single `f32` query, sorted by insertion (its first leaf
+//! - `NeighborHeap` (`src/query/heap.rs`): the k nearest within a radius, any `k`;
+//! - `SortedRow`: the same for small `k`, kept sorted by insertion;
+//! - `KnnRow`: the same for one single `f32` query, sorted by insertion (its first leaf
 //!   as one sorted block);
-//! - [`WithinRadius`]: every point within a radius.
+//! - `WithinRadius`: every point within a radius.
 //!
 //! All of them order by `(sq_dist, index)` (`src/query/order.rs`).
 
@@ -17,7 +17,7 @@ use crate::scalar::Scalar;
 use crate::select::network::sort32;
 
 /// Where a search puts its candidates.
-pub(crate) trait ResultSet<T: Scalar> {
+pub trait ResultSet<T: Scalar> {
     /// The worst key `(sq_dist, index)` a candidate must precede to be accepted:
     /// `(sq_radius, u32::MAX)` while the set is not full (caller indices are below `u32::MAX`),
     /// then its worst member.

@@ -15,6 +15,7 @@
 
 use super::Rng;
 use crate::error::{NbhdError, Result};
+use crate::index::NeighborIndex;
 use crate::query::{Neighbor, Neighborhood, Query};
 use crate::table::TableOptions;
 use crate::{BuildOptions, KdTree, PointsView};

@@ -31,35 +31,24 @@ use crate::NonFinitePolicy;
 use glam::DVec3;
 use rayon::prelude::*;
 use source::knn_rows;
-pub use source::{Neighbors, SearchMethod};
 
-mod nearest;
-mod normals;
+pub(crate) use crate::cloud::finite_subset;
+use crate::geometry::neighbors::cut_to;
+use crate::geometry::normals::quotient_of;
+pub use crate::geometry::source;
+pub use crate::geometry::{Neighbors, SearchMethod};
+pub(crate) use crate::index::check_spacing;
+pub use crate::index::{Length, Units};
+use crate::named_option;
+use crate::names::OptionName;
+pub(crate) use crate::progress::progress_in_units;
+pub use crate::progress::Stage;
+/// The fast exact k-nearest table the robust smoothing's rows start from (`src/tree/`).
+pub(crate) use crate::tree::exact_knn as nearest;
 pub mod robust;
-pub mod source;
-pub use normals::{estimate_normals, estimate_normals_from, NormalEstimate, NormalsResult};
 pub use robust::{
     smooth_robust, smooth_robust_report, smooth_robust_with_progress, RobustOptions, RobustReport,
 };
-
-/// A length, absolute or in units of the input's mean spacing `h`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Length {
-    /// In the points' own units.
-    Absolute(f64),
-    /// Multiples of `h`.
-    Relative(f64),
-}
-
-impl Length {
-    /// The absolute value for spacing `h`.
-    pub fn resolve(self, h: f64) -> f64 {
-        match self {
-            Length::Absolute(v) => v,
-            Length::Relative(v) => v * h,
-        }
-    }
-}
 
 /// A curvature (inverse length), absolute or in units of `1/h`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,6 +57,16 @@ pub enum Curvature {
     Absolute(f64),
     /// Multiples of `1/h`.
     Relative(f64),
+}
+
+impl Curvature {
+    /// The curvature `value` in `units` (relative: multiples of `1/h`).
+    pub fn new(value: f64, units: Units) -> Self {
+        match units {
+            Units::Absolute => Curvature::Absolute(value),
+            Units::Relative => Curvature::Relative(value),
+        }
+    }
 }
 
 impl Curvature {
@@ -95,6 +94,18 @@ pub enum Weighting {
     /// `g_cont` (2.32): 1 below λ, `λ²/(λ² + 10(|κ| − λ)²)` from it on.
     Continuous,
 }
+
+impl OptionName for Weighting {
+    const OPTION: &'static str = "weighting";
+    const WHAT: &'static str = "weighting";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (Weighting::Isotropic, "isotropic"),
+        (Weighting::Sharp, "sharp"),
+        (Weighting::Continuous, "continuous"),
+    ];
+    const ALIASES: &'static [(&'static str, Self)] = &[("cont", Weighting::Continuous)];
+}
+named_option!(Weighting);
 
 impl Weighting {
     /// `g_ij` of the neighbour at offset `d = x_j − p_i` of a point with unit normal `n`, for
@@ -141,21 +152,6 @@ pub enum FeatureCriterion {
     PrincipalCurvature(Curvature),
     /// Directional curvature (2.35): some neighbour has `|κ_ij| > D`.
     DirectionalCurvature(Curvature),
-}
-
-/// What the run is doing when the progress callback is called.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// Neighbourhood search (and the spacing estimate).
-    Neighbors,
-    /// Normals and curvatures of a step.
-    Geometry,
-    /// Moving the points.
-    Step,
-    /// Per-point outputs of the result.
-    Outputs,
-    /// Finished.
-    Done,
 }
 
 /// Settings of [`smooth`]. `Default` gives the faithful anisotropic method with the settings
@@ -227,6 +223,19 @@ impl Default for SmoothOptions {
 }
 
 impl SmoothOptions {
+    /// The normals' part of these options (`k`, `epsilon`, `orientation`, `non_finite`,
+    /// `threads`): [`crate::geometry::estimate_normals`] with them gives the normals this
+    /// smoothing's analysis reports, bit for bit.
+    pub fn normal_options(&self) -> crate::geometry::NormalOptions {
+        crate::geometry::NormalOptions {
+            k: self.k,
+            epsilon: self.epsilon,
+            orientation: self.orientation,
+            non_finite: self.non_finite,
+            threads: self.threads,
+        }
+    }
+
     /// Isotropic fairing with the settings of `docs/smoothing-results.md` (2 steps of τ = 0.5).
     pub fn isotropic() -> Self {
         Self {
@@ -412,36 +421,6 @@ impl Criteria {
     }
 }
 
-/// The finite points of `points` as `policy` asks: `None` when every point is finite (use
-/// `points` as they are), otherwise the original index of every finite point and the finite
-/// points themselves. [`NonFinitePolicy::Reject`] names the first non-finite point
-/// ([`NbhdError::NonFinite`]); an empty set, or one without finite points, is
-/// [`NbhdError::EmptyInput`].
-pub(crate) fn finite_subset(
-    points: &[DVec3],
-    policy: NonFinitePolicy,
-) -> Result<Option<(Vec<usize>, Vec<DVec3>)>> {
-    if points.is_empty() {
-        return Err(NbhdError::EmptyInput);
-    }
-    if all_finite(points) {
-        return Ok(None);
-    }
-    match policy {
-        NonFinitePolicy::Reject => check_points(points).map(|_| None),
-        NonFinitePolicy::Skip => {
-            let index: Vec<usize> = (0..points.len())
-                .filter(|&i| points[i].is_finite())
-                .collect();
-            if index.is_empty() {
-                return Err(NbhdError::EmptyInput);
-            }
-            let finite = index.iter().map(|&i| points[i]).collect();
-            Ok(Some((index, finite)))
-        }
-    }
-}
-
 impl PointOutput {
     /// The outputs of a point skipped for its non-finite coordinates: NaN everywhere, flagged
     /// [`crate::geometry::normals::FLAG_SKIPPED`].
@@ -517,62 +496,24 @@ pub(crate) fn check_not_degenerate(
     Ok(())
 }
 
-/// Refuses relative parameters (`relative`) when the mean spacing `h` cannot scale them
-/// (not > 0 or not finite: fewer than two distinct points).
-pub(crate) fn check_spacing(h: f64, relative: bool) -> Result<()> {
-    if relative && !(h > 0.0 && h.is_finite()) {
-        return Err(NbhdError::InvalidOption {
-            name: "epsilon",
-            reason: "relative parameters need a mean spacing > 0 (at least two distinct points)"
-                .into(),
-        });
-    }
-    Ok(())
-}
-
-/// Refuses an empty set ([`NbhdError::EmptyInput`]) and names the first point with a NaN or
-/// infinite coordinate ([`NbhdError::NonFinite`]).
-fn check_points(points: &[DVec3]) -> Result<()> {
-    if points.is_empty() {
-        return Err(NbhdError::EmptyInput);
-    }
-    match points.iter().enumerate().find_map(|(i, p)| {
-        p.to_array()
-            .iter()
-            .position(|c| !c.is_finite())
-            .map(|c| (i, c))
-    }) {
-        Some((index, coordinate)) => Err(NbhdError::NonFinite { index, coordinate }),
-        None => Ok(()),
-    }
-}
-
-/// Whether every coordinate of `points` is finite: a parallel scan (a million points are 24 MB
-/// to read, and the scan precedes every smoothing and normal estimate).
-fn all_finite(points: &[DVec3]) -> bool {
-    points
-        .par_iter()
-        .with_min_len(1 << 14)
-        .all(|p| p.is_finite())
-}
-
-/// A reporter of progress counted in units out of `total` (steps or iterations, plus one for
-/// the rest): it hands `progress` the fraction done, clamped to `[0, 1]`, and turns a `false`
-/// into [`NbhdError::Cancelled`].
-pub(crate) fn progress_in_units<'a, P: FnMut(f64, Stage) -> bool + ?Sized>(
-    total: f64,
-    progress: &'a mut P,
-) -> impl FnMut(f64, Stage) -> Result<()> + 'a {
-    move |f, s| {
-        if progress((f / total).clamp(0.0, 1.0), s) {
-            Ok(())
-        } else {
-            Err(NbhdError::Cancelled)
-        }
-    }
-}
-
 /// Smooths `points` with `options` (see the module documentation).
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::smooth::{smooth, SmoothOptions};
+///
+/// // a wavy patch of the plane z = 0: smoothing flattens it
+/// let points: Vec<DVec3> = (0..900)
+///     .map(|i| {
+///         let (x, y) = ((i % 30) as f64, (i / 30) as f64);
+///         DVec3::new(x, y, 0.05 * ((x + y) * 2.0).sin())
+///     })
+///     .collect();
+/// let result = smooth(&points, &SmoothOptions::isotropic())?;
+/// let spread = |p: &[DVec3]| p.iter().map(|p| p.z.abs()).sum::<f64>();
+/// assert!(spread(&result.points) < spread(&points));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn smooth(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult> {
     smooth_with_progress(points, options, &mut |_, _| true)
 }
@@ -709,6 +650,17 @@ fn smooth_finite(
 
 /// The per-point outputs (Section 7.3) of `points` themselves, without smoothing: the
 /// neighbourhoods, thresholds and orientation of `options` apply.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::smooth::{analyze, SmoothOptions};
+///
+/// let points: Vec<DVec3> = (0..400).map(|i| DVec3::new((i % 20) as f64, (i / 20) as f64, 0.0)).collect();
+/// let result = analyze(&points, &SmoothOptions::default())?;
+/// assert_eq!(result.points, points); // nothing moves
+/// assert!(result.outputs.iter().all(|o| o.max_principal_curvature < 1e-9));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn analyze(points: &[DVec3], options: &SmoothOptions) -> Result<SmoothResult> {
     analyze_from(points, Neighbors::default(), options)
 }
@@ -726,41 +678,6 @@ pub fn analyze_from(
         ..*options
     };
     smooth_from(points, neighbors, &opts, &mut |_, _| true)
-}
-
-/// Rows of `knn` cut to the points within `eps` (the ε-k-neighbourhood, Section 2.1.1: the
-/// k nearest among those within ε are the within-ε prefix of the k nearest).
-fn within(knn: &NeighborTable<f64>, eps: f64) -> NeighborTable<f64> {
-    let e2 = eps * eps;
-    let mut offsets = Vec::with_capacity(knn.len() + 1);
-    offsets.push(0);
-    let (mut idx, mut d2) = (
-        Vec::with_capacity(knn.total()),
-        Vec::with_capacity(knn.total()),
-    );
-    for i in 0..knn.len() {
-        for (&j, &d) in knn.indices_of(i).iter().zip(knn.sq_dists_of(i)) {
-            if d <= e2 {
-                idx.push(j);
-                d2.push(d);
-            }
-        }
-        offsets.push(idx.len());
-    }
-    NeighborTable::from_parts(offsets, idx, d2).unwrap_or_default()
-}
-
-/// [`within`] taking the table: rows are sorted by distance, so when every row's farthest
-/// neighbour is within ε (the usual case for the defaults) the table is returned as it is,
-/// without a copy.
-fn cut_to(knn: NeighborTable<f64>, eps: f64) -> NeighborTable<f64> {
-    let e2 = eps * eps;
-    let inside = |i: usize| knn.sq_dists_of(i).last().is_none_or(|&d| d <= e2);
-    if (0..knn.len()).all(inside) {
-        knn
-    } else {
-        within(&knn, eps)
-    }
 }
 
 /// The index rows of a neighbour table with the points stored in another order: row `s` holds
@@ -898,16 +815,6 @@ fn step_into(cur: &[DVec3], rows: &Rows, criteria: &Criteria, tau: f64, next: &m
             }
             *out = p + tau * acc / row.len() as f64;
         });
-}
-
-/// `λ0/(λ0 + λ1 + λ2)` of ascending eigenvalues, 0 when they all vanish.
-fn quotient_of(values: DVec3) -> f64 {
-    let s = values.x + values.y + values.z;
-    if s > 0.0 {
-        values.x / s
-    } else {
-        0.0
-    }
 }
 
 /// The per-point outputs (Section 7.3) of `points` with the neighbourhoods `table`: the

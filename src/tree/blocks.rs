@@ -8,6 +8,7 @@
 use super::search::TreeView;
 use super::{group_search, KdTree};
 use crate::error::Result;
+use crate::index::answer;
 use crate::query::Neighborhood;
 use crate::scalar::Scalar;
 use crate::table::{rows_in_work_order, NeighborTable, CHUNK};
@@ -65,7 +66,7 @@ impl<T: Scalar> KdTree<T> {
                 |w, row, _| {
                     let pos = start + w;
                     let exclude = exclude_self.then_some(self.ids[pos]);
-                    self.search_resolved(self.point_at(pos), exclude, nbhd, row);
+                    answer(self, self.point_at(pos), exclude, nbhd, row);
                     Ok(())
                 },
             )
@@ -108,7 +109,7 @@ fn grouped<T: Scalar, const D: usize, R>(
 
 #[cfg(test)]
 mod tests {
-    use crate::{BuildOptions, KdTree, Neighborhood, PointsView, TableOptions};
+    use crate::{BuildOptions, KdTree, NeighborIndex, Neighborhood, PointsView, TableOptions};
 
     /// Every block's rows are the whole table's rows of its points, in any dimension, for
     /// k-nearest, bounded and radius neighbourhoods, with and without the point itself; the

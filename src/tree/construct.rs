@@ -53,6 +53,16 @@ impl<T: Scalar> KdTree<T> {
     /// coordinate (unless `options.non_finite` skips them), [`NbhdError::InvalidOption`] for a
     /// leaf size of 0,
     /// [`NbhdError::ThreadPool`] if a requested pool cannot be created.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, PivotPolicy, PointsView};
+    ///
+    /// let rows = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let options = BuildOptions { pivot: PivotPolicy::CyclicMedian, ..BuildOptions::default() };
+    /// let tree = KdTree::<f32>::build(&PointsView::from_rows(&rows)?, &options)?;
+    /// assert_eq!((tree.len(), tree.stats().dim), (3, 3));
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
     pub fn build(view: &PointsView<'_>, options: &BuildOptions) -> Result<Self> {
         options.validate()?;
         Self::build_selected(view, Selection::All(view.len()), options)
@@ -66,9 +76,9 @@ impl<T: Scalar> KdTree<T> {
     ///
     /// Queries by stored point ([`crate::query::Query::Stored`]) take the caller's index; an
     /// index of `view` that is not listed answers [`NbhdError::SkippedPoint`], as a skipped
-    /// non-finite point does. All-point tables ([`Self::neighborhoods`]) have a row for every
-    /// point of `view` (row `i` for caller index `i`): the listed points' rows are their
-    /// neighbourhoods among the listed points, the other rows are empty.
+    /// non-finite point does. All-point tables ([`crate::NeighborIndex::neighborhoods`]) have
+    /// a row for every point of `view` (row `i` for caller index `i`): the listed points' rows
+    /// are their neighbourhoods among the listed points, the other rows are empty.
     ///
     /// Errors: as [`Self::build`] (non-finite points among the listed ones are rejected or
     /// skipped as `options.non_finite` says; an empty list gives a tree of no point), plus

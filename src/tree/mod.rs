@@ -1,23 +1,31 @@
 //! The k-d tree (thesis Chapter 3): built with a selectable pivot policy and median
 //! algorithm, holding its own compact copy of the points in tree order plus the map to the
-//! caller's indices, answering the exact queries of Chapter 5.
+//! caller's indices; the static flavour of the neighbour index, answering the exact queries of
+//! Chapter 5 through [`NeighborIndex`] (`src/index/`).
 //!
-//! This file holds the tree type, its accessors and the single-query search. Around it:
+//! This file holds the tree type, its accessors and its part of the index: the descents a
+//! query runs. Around it:
 //! - `construct.rs`: [`KdTree::build`], from the caller's points to the tree's arrays (the
 //!   driver: which layout, which build, how many threads);
 //! - `build.rs`, `presorted.rs`, `split.rs`, `layout.rs`, `node.rs`: the recursive build
 //!   itself (Algorithm 3.1) and what it works on;
-//! - `neighborhoods.rs`: the table driver, [`KdTree::neighborhoods`] and
-//!   [`KdTree::neighborhoods_of`];
-//! - `search.rs`, `group_search.rs`: the descents that answer one query or a group, and
-//!   `kernel.rs`, the leaf arithmetic they share;
-//! - `range.rs`: box (orthogonal range) queries, [`KdTree::in_box`] and [`KdTree::in_boxes`];
-//! - `spacing.rs`: the nearest-neighbour spacing `h`, [`KdTree::spacing`];
+//! - `search.rs`: the descent that answers one query (Algorithm 9), and `kernel.rs`, the leaf
+//!   arithmetic it shares with the grouped search;
+//! - `group_search.rs`: the grouped search, one descent per group of nearby queries, for the
+//!   tree's own points and for a forest of trees (`src/dynamic/`); `neighborhoods.rs` runs it
+//!   as the fast path of the tree's tables, `blocks.rs` a block of tree positions at a time;
+//! - `boxes.rs`: the descent of a box query (Algorithms 2 and 3);
+//! - `exact_knn.rs`: the fast exact k-nearest table of 3-D `f64` points, searched in `f32`
+//!   and proven exact in `f64` ([`exact_knn_table`]);
+//! - `part.rs`: what a forest reads of one of its trees;
 //! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
 
 mod blocks;
+mod boxes;
 mod build;
 mod construct;
+mod envelope;
+pub(crate) mod exact_knn;
 pub(crate) mod group_search;
 mod kernel;
 mod layout;
@@ -25,34 +33,36 @@ mod neighborhoods;
 mod node;
 pub mod options;
 mod part;
-pub(crate) mod persist;
+mod persist;
 mod presorted;
-mod range;
 mod search;
-mod spacing;
 mod split;
 
 use std::sync::OnceLock;
 
 use crate::error::Result;
+use crate::index::{self, NeighborIndex, StoredPoints};
 use crate::parallel::with_threads;
-use crate::query::order;
 use crate::query::resolve_query;
-use crate::query::result_set::{
-    Key32, KnnBuf, KnnRow, ResultSet, RowEntry, SortedRow, WithinRadius,
-};
-use crate::query::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
-use crate::scalar::{Scalar, ScalarType};
+use crate::query::result_set::ResultSet;
+use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
+use crate::scalar::Scalar;
+use crate::table::NeighborTable;
 pub(crate) use blocks::Blocks;
+pub(crate) use envelope::{
+    check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size, u32_at,
+    u64_at, write_saved, written_by, Kind, DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
+};
+pub use envelope::{LoadOptions, Persist, FORMAT_VERSION, HEADER_LEN, MAGIC};
+#[doc(hidden)]
+pub use envelope::{SavedFormat, SavedHeader};
+pub use exact_knn::exact_knn_table;
 use node::{Descent, Node};
 pub use options::{
     max_unbalanced_depth, BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE,
 };
-pub use persist::{LoadOptions, SavedTreeInfo, FORMAT_VERSION, HEADER_LEN, MAGIC};
-pub use range::IndexRows;
+pub use persist::SavedTreeInfo;
 use search::TreeView;
-pub(crate) use spacing::mean_distance;
-pub use spacing::Spacing;
 
 /// Shape and memory of a built tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -216,34 +226,6 @@ impl<T: Scalar> KdTree<T> {
             None => search::search(&self.view(), q, exclude, out),
         }
     }
-
-    /// The `k` nearest neighbours of `query`, by `(sq_dist, index)`.
-    pub fn knn(&self, query: Query<'_, T>, k: usize, out: &mut Vec<Neighbor<T>>) -> Result<()> {
-        self.search(query, Neighborhood::Knn { k }, out)
-    }
-
-    /// All points within `radius` (inclusive) of `query`, by `(sq_dist, index)`.
-    pub fn radius(&self, query: Query<'_, T>, radius: T, out: &mut Vec<Neighbor<T>>) -> Result<()> {
-        self.search(
-            query,
-            Neighborhood::Radius {
-                radius,
-                sorted: true,
-            },
-            out,
-        )
-    }
-
-    /// The ε-k-neighbourhood: the `k` nearest among the points within `radius` of `query`.
-    pub fn knn_radius(
-        &self,
-        query: Query<'_, T>,
-        k: usize,
-        radius: T,
-        out: &mut Vec<Neighbor<T>>,
-    ) -> Result<()> {
-        self.search(query, Neighborhood::KnnRadius { k, radius }, out)
-    }
 }
 
 impl<T: Scalar> NeighborSearch<T> for KdTree<T> {
@@ -261,67 +243,61 @@ impl<T: Scalar> NeighborSearch<T> for KdTree<T> {
         nbhd: Neighborhood<T>,
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()> {
-        nbhd.validate()?;
+        index::search(self, query, nbhd, out)
+    }
+}
+
+/// The static tree's part of the one query family (`src/index/`): its descents, and its
+/// grouped all-point search (`group_search.rs`) as the fast path of its tables.
+impl<T: Scalar> NeighborIndex<T> for KdTree<T> {
+    fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    fn resolve<'q>(&'q self, query: Query<'q, T>) -> Result<(&'q [T], Option<u32>)> {
         // The reverse index map is only made for stored-point queries.
         let positions: &[u32] = match query {
             Query::Stored { .. } => self.positions(),
             Query::Point { .. } => &[],
         };
-        let (q, exclude) = resolve_query(query, self.dim, self.source_len, positions, |p| {
+        resolve_query(query, self.dim, self.source_len, positions, |p| {
             self.point_at(p)
-        })?;
-        self.search_resolved(q, exclude, nbhd, out);
-        Ok(())
+        })
     }
-}
 
-impl<T: Scalar> KdTree<T> {
-    /// The search proper, on validated input.
-    fn search_resolved(
+    #[inline(always)]
+    fn visit<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, set: &mut C) {
+        // a tree of no point is one empty leaf: nothing to find
+        if !self.ids.is_empty() {
+            self.run(q, exclude, set);
+        }
+    }
+
+    fn visit_box(&self, min: &[T], max: &[T], scratch: &mut Vec<T>, out: &mut Vec<u32>) {
+        self.collect_in_box(min, max, scratch, out);
+    }
+
+    fn with_stored<R>(&self, f: impl FnOnce(&StoredPoints<'_, T>) -> R) -> R {
+        f(&StoredPoints {
+            len: self.len(),
+            at: &|pos| (self.ids[pos], self.point_at(pos)),
+        })
+    }
+
+    fn region_key(&self, q: &[T]) -> u32 {
+        self.leaf_position(q)
+    }
+
+    fn region_keys(&self) -> usize {
+        self.len()
+    }
+
+    fn grouped_table(
         &self,
-        q: &[T],
-        exclude: Option<u32>,
         nbhd: Neighborhood<T>,
-        out: &mut Vec<Neighbor<T>>,
-    ) {
-        if self.ids.is_empty() {
-            out.clear();
-            return;
-        }
-        let (k, sq_radius) = nbhd.limits();
-        if k == usize::MAX {
-            out.clear();
-            self.run(q, exclude, &mut WithinRadius { out, sq_radius });
-            if nbhd.is_sorted() {
-                out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
-            }
-        } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
-            if k <= KNN_ROW_MAX_K {
-                let mut buf = [Key32::default(); KNN_ROW_MAX_K];
-                let mut row = KnnRow::new(&mut buf[..k], sq_radius);
-                self.run(q, exclude, &mut row);
-                out.clear();
-                out.extend(row.held().map(|e| {
-                    let (sq_dist, index) = e.pair();
-                    Neighbor { index, sq_dist }
-                }));
-            } else {
-                let mut buf = [0u64; 2 * SORTED_MAX_K];
-                let mut set = KnnBuf::new(&mut buf[..2 * k], k, sq_radius);
-                self.run(q, exclude, &mut set);
-                out.clear();
-                out.extend(set.finish().iter().map(|&e| {
-                    let (sq_dist, index) = order::unkey32(e);
-                    Neighbor { index, sq_dist }
-                }));
-            }
-        } else if k <= SORTED_MAX_K {
-            search_sorted::<T, Neighbor<T>>(self, q, exclude, k, sq_radius, out);
-        } else {
-            let mut heap = NeighborHeap::new(out, k, sq_radius);
-            self.run(q, exclude, &mut heap);
-            heap.finish();
-        }
+        exclude_self: bool,
+    ) -> Option<Result<NeighborTable<T>>> {
+        self.grouped_all(nbhd, exclude_self)
     }
 }
 
@@ -342,39 +318,3 @@ fn descent_bucket(points: usize) -> usize {
 /// Trees of more points than this take the larger leaves of [`descent_bucket`]: 3 MB of `f32`
 /// coordinates, beyond the 1-2 MB of a core's own cache (the 123k set, 1.5 MB, kept 32's speed).
 const LARGE_TREE: usize = 1 << 18;
-
-/// Single kNN queries up to this `k` keep their candidates on the call stack (`f32`: sorted in a
-/// [`KnnRow`] up to [`KNN_ROW_MAX_K`], unsorted in a [`KnnBuf`] above; `f64`: sorted by
-/// insertion); larger ones in a heap in the result vector.
-const SORTED_MAX_K: usize = 32;
-
-/// `f32` single kNN queries up to this `k` insert into a sorted row, larger ones append to a
-/// buffer selected when full: on the 77k torus (README "Single queries, the floor, and copies
-/// of a point") the buffer took 0.87x the sorted row's time at k = 30 and 1.14x at k = 10.
-const KNN_ROW_MAX_K: usize = 16;
-
-/// A kNN search (`k ≤ SORTED_MAX_K`) into a [`SortedRow`] on the call stack — entries `E` the
-/// packed `f32` keys of `src/query/order.rs` or neighbours — copied to `out` at the end: a
-/// candidate costs a short shift of one-integer compares, and the result needs no sort.
-fn search_sorted<T: Scalar, E: RowEntry<T> + Default>(
-    tree: &KdTree<T>,
-    q: &[T],
-    exclude: Option<u32>,
-    k: usize,
-    sq_radius: T,
-    out: &mut Vec<Neighbor<T>>,
-) {
-    let mut buf = [E::default(); SORTED_MAX_K];
-    let mut len = 0;
-    let mut row = SortedRow {
-        row: &mut buf[..k],
-        len: &mut len,
-        sq_radius,
-    };
-    tree.run(q, exclude, &mut row);
-    out.clear();
-    out.extend(buf[..len].iter().map(|&e| {
-        let (sq_dist, index) = e.pair();
-        Neighbor { index, sq_dist }
-    }));
-}

@@ -3,6 +3,8 @@
 
 use crate::cloud::NonFinitePolicy;
 use crate::error::{NbhdError, Result};
+use crate::named_option;
+use crate::names::OptionName;
 
 /// How a node chooses its splitting dimension and pivot.
 ///
@@ -33,16 +35,6 @@ impl PivotPolicy {
         PivotPolicy::ClosestToMiddle,
         PivotPolicy::SlidingMidpoint,
     ];
-
-    /// A short name for reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            PivotPolicy::CyclicMedian => "cyclic-median",
-            PivotPolicy::SpreadMedian => "spread-median",
-            PivotPolicy::ClosestToMiddle => "closest-to-middle",
-            PivotPolicy::SlidingMidpoint => "sliding-midpoint",
-        }
-    }
 
     /// `true` for the policies that split at the median, whose trees are balanced.
     pub fn is_balanced(self) -> bool {
@@ -89,18 +81,32 @@ impl MedianAlgorithm {
         MedianAlgorithm::FloydRivest,
         MedianAlgorithm::MedianOfMedians,
     ];
-
-    /// A short name for reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            MedianAlgorithm::Presorted => "presorted",
-            MedianAlgorithm::Sort => "sort",
-            MedianAlgorithm::Quickselect => "quickselect",
-            MedianAlgorithm::FloydRivest => "floyd-rivest",
-            MedianAlgorithm::MedianOfMedians => "median-of-medians",
-        }
-    }
 }
+
+impl OptionName for PivotPolicy {
+    const OPTION: &'static str = "pivot";
+    const WHAT: &'static str = "pivot";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (PivotPolicy::CyclicMedian, "cyclic-median"),
+        (PivotPolicy::SpreadMedian, "spread-median"),
+        (PivotPolicy::ClosestToMiddle, "closest-to-middle"),
+        (PivotPolicy::SlidingMidpoint, "sliding-midpoint"),
+    ];
+}
+named_option!(PivotPolicy);
+
+impl OptionName for MedianAlgorithm {
+    const OPTION: &'static str = "median";
+    const WHAT: &'static str = "median";
+    const NAMES: &'static [(Self, &'static str)] = &[
+        (MedianAlgorithm::Presorted, "presorted"),
+        (MedianAlgorithm::Sort, "sort"),
+        (MedianAlgorithm::Quickselect, "quickselect"),
+        (MedianAlgorithm::FloydRivest, "floyd-rivest"),
+        (MedianAlgorithm::MedianOfMedians, "median-of-medians"),
+    ];
+}
+named_option!(MedianAlgorithm);
 
 /// Everything that shapes a tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -1,8 +1,10 @@
 //! What a structure made of several trees (the dynamic forest, `src/dynamic/`) reads from one
-//! of them: the nodes (for the forest's grouped batch search), the single-query descent into a result set of its own (so that one result set
-//! collects over every tree of the forest), the leaf a query falls into (to order a batch of
-//! queries for the cache), and the bounding box of the points.
+//! of them: its cells for the grouped search of a batch over the forest, the single-query
+//! descent into a result set of its own (so that one result set collects over every tree of the
+//! forest), the leaf a query falls into (to order a batch of queries for the cache), and the
+//! bounding box of the points.
 
+use super::group_search::{CellView, Cells};
 use super::search;
 use super::KdTree;
 use crate::query::result_set::ResultSet;
@@ -32,15 +34,20 @@ impl<T: Scalar> KdTree<T> {
         }
     }
 
-    /// The nodes in preorder (the left child of an internal node `i` is `i + 1`) as
-    /// `(split dimension, or None for a leaf; split value; right child, or a leaf's first tree
-    /// position; one past the subtree's last tree position)`: what a search of the forest's
-    /// own over this tree reads (the grouped batch search, `src/dynamic/batch.rs`).
-    pub(crate) fn nodes(&self) -> impl ExactSizeIterator<Item = (Option<usize>, T, u32, u32)> + '_ {
-        self.nodes.iter().map(|n| {
-            let dim = (!n.is_leaf()).then_some(n.dim as usize);
-            (dim, n.split, n.a, n.b)
-        })
+    /// The tree prepared for the grouped search of a forest (`group_search.rs`), its caller
+    /// indices shifted by `shift` to the forest's.
+    pub(crate) fn group_cells<const D: usize>(&self, shift: u32) -> Cells<T, D> {
+        Cells::new(&self.view(), shift)
+    }
+
+    /// What the grouped search reads of this tree, with its prepared `cells`; `not_live` marks
+    /// the forest's indices it skips.
+    pub(crate) fn cell_view<'a, const D: usize>(
+        &'a self,
+        cells: &'a Cells<T, D>,
+        not_live: Option<&'a [u64]>,
+    ) -> CellView<'a, T, D> {
+        cells.view(&self.view(), not_live)
     }
 
     /// The smallest and largest coordinate of the points in every dimension.

@@ -19,6 +19,7 @@ use nbhd::shapes::metrics::{evaluate, Quality};
 use nbhd::shapes::{noisy_sample, Cube, CylinderPlane, NoiseKind, NoisySample, Shape, Torus};
 use nbhd::smooth::robust::{smooth_robust_with_progress, RobustOptions};
 use nbhd::smooth::{smooth_with_progress, SmoothOptions, SmoothResult};
+use nbhd::NeighborIndex;
 use nbhd::{
     BuildOptions, KdTree, NeighborTable, Neighborhood, PivotPolicy, PointsView, TableOptions,
 };

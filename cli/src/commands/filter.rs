@@ -12,6 +12,7 @@ use nbhd::filter::{
 };
 use nbhd::io::{PointCloud, Precision, ScalarField};
 use nbhd::smooth::Length;
+use nbhd::NeighborIndex;
 use nbhd::{BuildOptions, KdTree, NonFinitePolicy};
 use serde_json::json;
 use std::path::PathBuf;

@@ -3,13 +3,17 @@
 //! normals and scalar properties that MeshLab and CloudCompare colour by.
 
 use crate::args::{
-    length_text, orientation, parse_length, parse_vec3, InputArgs, OrientArg, PrecisionArgs,
+    length_text, orientation, parse_length, parse_orient, parse_vec3, InputArgs, OrientArg,
+    PrecisionArgs,
 };
 use crate::error::{Context, Result};
 use crate::output::{num, Output};
 use crate::progress::Progress;
 use crate::read::finite_points;
 use crate::write;
+use glam::DVec3;
+use nbhd::geometry::{estimate_normals_from, Neighbors, NormalOptions};
+use nbhd::io::PointCloud;
 use nbhd::smooth::{Length, SmoothOptions, SmoothResult};
 use serde_json::json;
 use std::path::PathBuf;
@@ -33,7 +37,7 @@ pub struct Args {
     pub radius: Length,
 
     /// How to orient the normals
-    #[arg(long, value_enum, default_value = "propagate")]
+    #[arg(long, value_parser = parse_orient, default_value = "propagate")]
     pub orient: OrientArg,
 
     /// Orient the normals toward this viewpoint x,y,z instead (e.g. the scanner position)
@@ -71,11 +75,11 @@ pub fn run(a: Args, what: What, out: &Output) -> Result<()> {
         orientation: orientation(a.orient, a.viewpoint, &points),
         ..SmoothOptions::default()
     };
+    if what == What::Normals {
+        return normals(&a, &points, &index, cloud, &opts.normal_options(), out);
+    }
     let t = std::time::Instant::now();
-    let label = match what {
-        What::Normals => "normals",
-        What::Curvature => "curvatures",
-    };
+    let label = "curvatures";
     let res: SmoothResult = {
         let bar = Progress::bar(out, 1000, label);
         let mut cb = bar.smoothing_callback(label);
@@ -83,7 +87,7 @@ pub fn run(a: Args, what: What, out: &Output) -> Result<()> {
             .context(input.display())?
     };
     let secs = t.elapsed().as_secs_f64();
-    write::add_fields(&mut cloud, &index, &res.outputs, what == What::Curvature)?;
+    write::add_fields(&mut cloud, &index, &res.outputs, true)?;
     let stored = write::cloud(&a.output, &cloud, &a.precision.write_options())?;
     if let Some(png) = &a.png {
         write::surface_variation_png(png, &cloud, [-1.0, -1.0, -1.0], [0.0, 1.0, 0.0])?;
@@ -125,6 +129,68 @@ pub fn run(a: Args, what: What, out: &Output) -> Result<()> {
         length_text(a.radius),
         res.spacing,
         res.min_neighbors,
+        irregular,
+        secs,
+        cloud.field_names().join(" "),
+        a.png
+            .as_ref()
+            .map_or(String::new(), |p| format!("\npicture {}", p.display())),
+    ));
+    Ok(())
+}
+
+/// `nbhd normals`: the library's normals ([`estimate_normals_from`], the function the C ABI and
+/// Python call too) and the surface variation as the `curvature` field.
+fn normals(
+    a: &Args,
+    points: &[DVec3],
+    index: &[usize],
+    mut cloud: PointCloud,
+    opts: &NormalOptions,
+    out: &Output,
+) -> Result<()> {
+    let input = &a.input.input;
+    let t = std::time::Instant::now();
+    let res = {
+        let bar = Progress::bar(out, 1000, "normals");
+        let mut cb = bar.smoothing_callback("normals");
+        estimate_normals_from(points, Neighbors::default(), opts, &mut cb)
+            .context(input.display())?
+    };
+    let secs = t.elapsed().as_secs_f64();
+    write::add_normals(&mut cloud, index, &res.normals)?;
+    let stored = write::cloud(&a.output, &cloud, &a.precision.write_options())?;
+    if let Some(png) = &a.png {
+        write::surface_variation_png(png, &cloud, [-1.0, -1.0, -1.0], [0.0, 1.0, 0.0])?;
+    }
+    let irregular = res.normals.iter().filter(|e| e.flags != 0).count();
+    out.json(&json!({
+        "input": input.display().to_string(),
+        "output": a.output.display().to_string(),
+        "png": a.png.as_ref().map(|p| p.display().to_string()),
+        "points": cloud.len(),
+        "skipped_non_finite": cloud.len() - points.len(),
+        "k": a.k,
+        "radius": num(res.epsilon),
+        "radius_given": length_text(a.radius),
+        "spacing_h": num(res.spacing),
+        "degenerate_normals": irregular,
+        "fields": cloud.field_names(),
+        "precision": stored,
+        "seconds": num(secs),
+    }));
+    out.text(format!(
+        "{} -> {}: {} points ({} skipped as non-finite), normals over the {} nearest within \
+         ε = {:.6} ({}; h = {:.6}), {} degenerate normals, {:.2} s\n\
+         fields {} ({stored}){}",
+        input.display(),
+        a.output.display(),
+        cloud.len(),
+        cloud.len() - points.len(),
+        a.k,
+        res.epsilon,
+        length_text(a.radius),
+        res.spacing,
         irregular,
         secs,
         cloud.field_names().join(" "),

@@ -5,6 +5,7 @@ use crate::error::Result;
 use crate::output::{num, Output};
 use crate::read;
 use nbhd::io;
+use nbhd::NeighborIndex;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -109,7 +110,7 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
 }
 
 /// The nearest-neighbour spacing of the finite points (`None` with fewer than two).
-fn spacing(cloud: &io::PointCloud) -> Option<nbhd::tree::Spacing> {
+fn spacing(cloud: &io::PointCloud) -> Option<nbhd::Spacing> {
     let view = cloud.view().ok()?;
     let opts = nbhd::BuildOptions {
         non_finite: nbhd::NonFinitePolicy::Skip,

@@ -16,6 +16,8 @@ use crate::progress::Progress;
 use crate::read;
 use nbhd::io::PointCloud;
 use nbhd::smooth::Length;
+use nbhd::NeighborIndex;
+use nbhd::Persist;
 use nbhd::{
     BuildOptions, KdTree, NeighborSearch, NeighborTable, Neighborhood, TableOptions, TreeStats,
 };

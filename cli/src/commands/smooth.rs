@@ -3,8 +3,8 @@
 //! flow (Section 2.3) with the thesis' settings (Section 7.3).
 
 use crate::args::{
-    curvature_text, length_text, orientation, parse_curvature, parse_length, parse_vec3, InputArgs,
-    OrientArg, PrecisionArgs,
+    curvature_text, length_text, named, orientation, parse_curvature, parse_length, parse_orient,
+    parse_vec3, InputArgs, OrientArg, PrecisionArgs,
 };
 use crate::error::{Context, Result};
 use crate::output::{num, Output};
@@ -46,15 +46,6 @@ impl MethodArg {
             MethodArg::Isotropic => "isotropic",
         }
     }
-}
-
-/// Weights g_ij of the anisotropic Laplacian.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum WeightingArg {
-    /// g_sharp (eq. 2.31, 'Sharp Cutoff'): 1 below the curvature threshold λ, 0 above
-    Sharp,
-    /// g_cont (eq. 2.32): 1 below λ, falling off continuously above
-    Cont,
 }
 
 /// Which points are smoothed anisotropically (the others isotropically).
@@ -165,9 +156,11 @@ pub struct Args {
     #[arg(long, short, value_parser = parse_curvature, allow_hyphen_values = true)]
     pub lambda: Option<Curvature>,
 
-    /// Anisotropic: weights g_ij [default: sharp]
-    #[arg(long, short, value_enum)]
-    pub weighting: Option<WeightingArg>,
+    /// Anisotropic: weights g_ij: sharp (g_sharp, eq. 2.31, 'Sharp Cutoff': 1 below the
+    /// curvature threshold λ, 0 above), continuous (g_cont, eq. 2.32: 1 below λ, falling off
+    /// continuously above), or isotropic (g = 1) [default: sharp]
+    #[arg(long, short, value_parser = named::<Weighting>())]
+    pub weighting: Option<Weighting>,
 
     /// Anisotropic: feature criterion, which points are smoothed anisotropically [default: all]
     #[arg(long, short, value_enum)]
@@ -193,7 +186,7 @@ pub struct Args {
     pub update_neighbors: bool,
 
     /// How to orient the normals written out
-    #[arg(long, value_enum, default_value = "propagate")]
+    #[arg(long, value_parser = parse_orient, default_value = "propagate")]
     pub orient: OrientArg,
 
     /// Also draw the result into this PNG picture, coloured by the surface variation
@@ -263,10 +256,10 @@ impl Args {
             epsilon: self.radius.unwrap_or(base.epsilon),
             steps: self.steps.unwrap_or(base.steps),
             tau: self.tau.unwrap_or(base.tau),
-            weighting: match (iso, self.weighting.unwrap_or(WeightingArg::Sharp)) {
-                (true, _) => Weighting::Isotropic,
-                (false, WeightingArg::Sharp) => Weighting::Sharp,
-                (false, WeightingArg::Cont) => Weighting::Continuous,
+            weighting: if iso {
+                Weighting::Isotropic
+            } else {
+                self.weighting.unwrap_or(Weighting::Sharp)
             },
             lambda: self.lambda.unwrap_or(base.lambda),
             feature: match self.criterion.unwrap_or(CriterionArg::All) {

@@ -7,6 +7,7 @@ use crate::error::{Context, Result};
 use crate::output::{ms, num, Output};
 use crate::progress::Progress;
 use nbhd::KdTree;
+use nbhd::Persist;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;

@@ -1,5 +1,5 @@
 //! Rows of a group from one gathered block of candidates: the grouped search's fast path for
-//! k-nearest rows up to [`super::SORTED_MAX_K`] and for radius rows.
+//! k-nearest rows up to `rows::SORTED_MAX_K` and for radius rows of a tree's own points.
 //!
 //! The parent's search offers every candidate to a member's row as it is found, nearest cells
 //! first, and a row that is not yet full takes whatever comes: the first leaves fill it with
@@ -24,9 +24,11 @@
 
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
 use super::avx512;
-use super::{below_mask, box_dist, sq_dists_by_dim, Members, PackedKey, Search, BLOCK, GROUP};
+use super::rows::PackedKey;
+use super::{below_mask, box_dist, Members, Search, BLOCK, GROUP};
 use crate::scalar::Scalar;
 use crate::table::RowsChunk;
+use crate::tree::kernel::sq_dists_by_dim;
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
 use std::any::Any;
 use std::ops::Range;
@@ -260,7 +262,8 @@ impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
     /// Copies every point of the leaves within `r2` of the box `glo..ghi` into the block;
     /// `false` when more than the cap would be gathered.
     fn collect(&mut self, search: &Search<'_, T, D>, glo: &[T; D], ghi: &[T; D], r2: T) -> bool {
-        let (tree, boxes, soa) = (search.tree, search.boxes, search.soa);
+        let tree = &search.parts[0];
+        let (boxes, soa) = (tree, tree.soa);
         let cap = self.cap;
         for c in &mut self.coords {
             c.clear();

@@ -23,6 +23,7 @@ use nbhd::ffi::{
 };
 use nbhd::shapes::datasets::Dataset;
 use nbhd::table::neighborhoods_of_all;
+use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, NeighborTable, Neighborhood, NonFinitePolicy, PointsView,
     Query, Scalar, TableOptions,

@@ -7,6 +7,7 @@ use crate::error::Result;
 use crate::output::ms;
 use nbhd::shapes::sample;
 use nbhd::table::neighborhoods_of_all;
+use nbhd::NeighborIndex;
 use nbhd::{
     BuildOptions, KdTree, MedianAlgorithm, NeighborSearch, Neighborhood, PivotPolicy, PointsView,
     TableOptions,

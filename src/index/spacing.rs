@@ -1,10 +1,13 @@
 //! The spacing `h` of a point set: the distance of each point to its nearest other point,
 //! summarised by its mean and median. Every length given "relative" (ε = 6h, the robust
 //! smoothing's lengths, the CLI's `6h`) is a multiple of the mean; this file is its one
-//! definition.
+//! definition, for every index ([`NeighborIndex::spacing`]), with the lengths given in it
+//! ([`Length`]).
 
-use super::KdTree;
+use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
+use crate::named_option;
+use crate::names::OptionName;
 use crate::query::Neighborhood;
 use crate::scalar::Scalar;
 use crate::table::TableOptions;
@@ -68,37 +71,104 @@ pub(crate) fn mean_distance(distances: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
-impl<T: Scalar> KdTree<T> {
-    /// The nearest-neighbour spacing of the tree's points ([`Spacing`]), from an all-point
-    /// 1-nearest table computed on `threads` workers (0: the current pool); the same value for
-    /// any thread count. Needs at least two points ([`NbhdError::InvalidOption`] otherwise).
-    pub fn spacing(&self, threads: usize) -> Result<Spacing> {
-        if self.len() < 2 {
-            return Err(NbhdError::InvalidOption {
-                name: "points",
-                reason: format!(
-                    "the spacing needs at least two (finite) points, the tree holds {}",
-                    self.len()
-                ),
-            });
+/// A length, absolute or in units of the input's mean spacing `h`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Length {
+    /// In the points' own units.
+    Absolute(f64),
+    /// Multiples of `h`.
+    Relative(f64),
+}
+
+/// The units of a length or curvature given in numbers: the points' own, or relative to the
+/// mean spacing `h` ([`Spacing::mean`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Units {
+    /// The points' own units.
+    Absolute,
+    /// Multiples of `h` (lengths) or of `1/h` (curvatures).
+    #[default]
+    Relative,
+}
+
+impl OptionName for Units {
+    const OPTION: &'static str = "units";
+    const WHAT: &'static str = "units";
+    const NAMES: &'static [(Self, &'static str)] =
+        &[(Units::Relative, "relative"), (Units::Absolute, "absolute")];
+}
+named_option!(Units);
+
+impl Length {
+    /// The length `value` in `units`.
+    pub fn new(value: f64, units: Units) -> Self {
+        match units {
+            Units::Absolute => Length::Absolute(value),
+            Units::Relative => Length::Relative(value),
         }
-        let table = self.neighborhoods(
-            Neighborhood::Knn { k: 1 },
-            &TableOptions {
-                exclude_self: true,
-                threads,
-            },
-        )?;
-        Ok(Spacing::from_nearest(
-            (0..table.len()).map(|i| table.sq_dists_of(i).first().map(|d| d.to_f64())),
-        ))
     }
+
+    /// The length's units.
+    pub fn units(self) -> Units {
+        match self {
+            Length::Absolute(_) => Units::Absolute,
+            Length::Relative(_) => Units::Relative,
+        }
+    }
+
+    /// The absolute value for spacing `h`.
+    pub fn resolve(self, h: f64) -> f64 {
+        match self {
+            Length::Absolute(v) => v,
+            Length::Relative(v) => v * h,
+        }
+    }
+}
+
+/// Refuses relative parameters (`relative`) when the mean spacing `h` cannot scale them
+/// (not > 0 or not finite: fewer than two distinct points).
+pub(crate) fn check_spacing(h: f64, relative: bool) -> Result<()> {
+    if relative && !(h > 0.0 && h.is_finite()) {
+        return Err(NbhdError::InvalidOption {
+            name: "epsilon",
+            reason: "relative parameters need a mean spacing > 0 (at least two distinct points)"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
+/// [`NeighborIndex::spacing`].
+pub(super) fn spacing<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    threads: usize,
+) -> Result<Spacing> {
+    if index.len() < 2 {
+        return Err(NbhdError::InvalidOption {
+            name: "points",
+            reason: format!(
+                "the spacing needs at least two (finite) points, the tree holds {}",
+                index.len()
+            ),
+        });
+    }
+    let table = index.neighborhoods(
+        Neighborhood::Knn { k: 1 },
+        &TableOptions {
+            exclude_self: true,
+            threads,
+        },
+    )?;
+    Ok(Spacing::from_nearest(
+        (0..table.len()).map(|i| table.sq_dists_of(i).first().map(|d| d.to_f64())),
+    ))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{BuildOptions, PointsView};
+    use crate::tree::{BuildOptions, KdTree};
+    use crate::PointsView;
 
     #[test]
     fn mean_and_median_of_known_gaps() {

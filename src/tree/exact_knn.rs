@@ -1,6 +1,7 @@
-//! The `k` nearest other points of every point, exact in `f64`, found by a search in `f32`:
-//! the neighbourhoods of the robust smoothing (`robust/rows.rs`) and of the normals
-//! (`normals.rs`).
+//! The `k` nearest other points of every point, exact in `f64`, found by a search in `f32`
+//! ([`exact_knn_table`]): the fast all-point k-nearest table of 3-D `f64` points, what the
+//! normals (`src/geometry/estimate.rs`), the smoothing's own search (`src/geometry/source.rs`)
+//! and the robust smoothing (`src/smooth/robust/rows.rs`) take their neighbourhoods from.
 //!
 //! The grouped all-point search (`tree/group_search.rs`) answers a table faster in `f32` than
 //! in `f64` (half the bytes per coordinate and per row entry, one 64-bit key per candidate),
@@ -21,12 +22,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::OnceLock;
 
 use crate::error::{NbhdError, Result};
+use crate::index::NeighborIndex;
+use crate::points::PointsView;
 use crate::prefetch::prefetch_at;
 use crate::query::{Neighbor, Neighborhood, Query};
 use crate::scatter::{inverse, BlockScatter, Targets};
 use crate::table::{try_zeroed, NeighborTable};
-use crate::tree::Blocks as TreeBlocks;
-use crate::{BuildOptions, KdTree, PointsView};
+
+use super::Blocks as TreeBlocks;
+use super::{BuildOptions, KdTree};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -37,18 +41,18 @@ use rayon::prelude::*;
 const MARGIN: usize = 4;
 
 /// The `k` nearest other points of every point of `points`, each row by `(f64 sq_dist, caller's
-/// index)`, as [`super::robust`]'s rows need them.
-pub(super) struct Nearest {
+/// index)`, as the robust smoothing's rows (`src/smooth/robust/rows.rs`) need them.
+pub(crate) struct Nearest {
     /// The caller's index of the point stored at each position (the `f32` tree's order).
-    pub(super) order: Vec<u32>,
+    pub(crate) order: Vec<u32>,
     /// Row length: `k`, or every other point when there are fewer.
-    pub(super) width: usize,
+    pub(crate) width: usize,
     /// Stored positions of each stored point's `width` nearest others, `width` per row.
-    pub(super) index: Vec<u32>,
+    pub(crate) index: Vec<u32>,
     /// Squared distance of each point (by caller index) to its nearest other point.
-    pub(super) nearest: Vec<Option<f64>>,
+    pub(crate) nearest: Vec<Option<f64>>,
     /// Squared distance of each stored point to the last of its row (0 for empty rows).
-    pub(super) farthest: Vec<f64>,
+    pub(crate) farthest: Vec<f64>,
 }
 
 /// Stored points searched at once by one worker in [`nearest_others`] and [`nearest_table`]:
@@ -58,7 +62,7 @@ pub(super) struct Nearest {
 const SEARCH_BLOCK: usize = 8192;
 
 /// The `k` nearest other points of every point, all rows held (see [`by_blocks`]).
-pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
+pub(crate) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
     let n = points.len();
     let width = k.min(n.saturating_sub(1));
     let mut index = try_zeroed(entries(n, width)?, WHAT)?;
@@ -88,9 +92,38 @@ pub(super) fn nearest_others(points: &[DVec3], k: usize) -> Result<Nearest> {
     })
 }
 
-/// The `k` nearest other points of every point as a table over the caller's indices (row `i`
-/// for point `i`, by `(f64 sq_dist, index)`): exactly the table of an `f64` tree. Also returns
-/// the search tree's order (the caller's index of the point stored at each position).
+/// The `k` nearest other points of every point of `points` (a nonempty set of finite 3-D
+/// points) as a table over the caller's indices, row `i` for point `i` ordered by
+/// `(sq_dist, index)`: exactly the table an `f64` [`KdTree`] gives with `exclude_self`, the same
+/// `f64` distances in the same order, found by a search in `f32` proven exact row by row (see
+/// the module documentation; rows the proof does not settle are searched again in `f64`).
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::tree::exact_knn_table;
+/// use nbhd::{BuildOptions, KdTree, NeighborIndex, Neighborhood, PointsView, TableOptions};
+///
+/// let points: Vec<DVec3> = (0..500)
+///     .map(|i| {
+///         let t = i as f64 * 0.1;
+///         DVec3::new(1e4 + t.cos(), 2e4 + t.sin(), 0.01 * t)
+///     })
+///     .collect();
+/// let table = exact_knn_table(&points, 8)?;
+/// let rows: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
+/// let tree = KdTree::<f64>::build(&PointsView::from_rows(&rows)?, &BuildOptions::default())?;
+/// let want = tree.neighborhoods(Neighborhood::Knn { k: 8 }, &TableOptions::default())?;
+/// assert_eq!(table, want);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+///
+/// Errors: [`NbhdError::OutOfMemory`] for a table that cannot fit, those of the builds.
+pub fn exact_knn_table(points: &[DVec3], k: usize) -> Result<NeighborTable<f64>> {
+    Ok(nearest_table(points, k)?.0)
+}
+
+/// [`exact_knn_table`], and the search tree's order (the caller's index of the point stored
+/// at each position).
 pub(crate) fn nearest_table(points: &[DVec3], k: usize) -> Result<(NeighborTable<f64>, Vec<u32>)> {
     let n = points.len();
     let width = k.min(n.saturating_sub(1));
@@ -113,28 +146,28 @@ pub(crate) fn nearest_table(points: &[DVec3], k: usize) -> Result<(NeighborTable
 }
 
 /// The exact rows of a run of consecutive tree positions.
-pub(super) struct Block<'a> {
+pub(crate) struct Block<'a> {
     /// The block's number among [`Blocks::bounds`].
-    pub(super) index: usize,
+    pub(crate) index: usize,
     /// The caller's index of the point stored at each position (the whole tree's order).
-    pub(super) order: &'a [u32],
+    pub(crate) order: &'a [u32],
     /// The tree positions of the block's points.
-    pub(super) positions: Range<usize>,
+    pub(crate) positions: Range<usize>,
     /// Row length: `k`, or every other point when there are fewer.
-    pub(super) width: usize,
+    pub(crate) width: usize,
     /// Each point's `width` nearest others, caller indices by `(f64 sq_dist, index)`, and
     /// their squared distances.
-    pub(super) rows: &'a [u32],
-    pub(super) dists: &'a [f64],
+    pub(crate) rows: &'a [u32],
+    pub(crate) dists: &'a [f64],
     /// Each point's squared distance to its first and its last neighbour (`None` and 0 for
     /// an empty row).
-    pub(super) nearest: &'a [Option<f64>],
-    pub(super) farthest: &'a [f64],
+    pub(crate) nearest: &'a [Option<f64>],
+    pub(crate) farthest: &'a [f64],
 }
 
 impl Block<'_> {
     /// The row of the block's `r`-th point.
-    pub(super) fn row(&self, r: usize) -> &[u32] {
+    pub(crate) fn row(&self, r: usize) -> &[u32] {
         &self.rows[r * self.width..(r + 1) * self.width]
     }
 }
@@ -145,7 +178,7 @@ impl Block<'_> {
 /// and has them searched ([`Blocks::for_each`], whole blocks in parallel), so that no table of
 /// every row is ever held (at a million points and k = 48, 576 MB) and a block's rows are
 /// consumed while in cache. Returns the search (its tree's order, and rows again on request).
-pub(super) fn by_blocks(
+pub(crate) fn by_blocks(
     points: &[DVec3],
     k: usize,
     block: usize,
@@ -217,7 +250,7 @@ fn f32_tree(points: &[DVec3], centre: DVec3) -> Result<KdTree<f32>> {
 
 /// The blocks of a [`by_blocks`] search: the search tree's order, the block bounds, and the
 /// search of any block.
-pub(super) struct Blocks<'s> {
+pub(crate) struct Blocks<'s> {
     points: &'s [DVec3],
     order: &'s [u32],
     width: usize,
@@ -263,12 +296,12 @@ impl<'s> Blocks<'s> {
     }
 
     /// The caller's index of the point stored at each position of the search tree.
-    pub(super) fn order(&self) -> &'s [u32] {
+    pub(crate) fn order(&self) -> &'s [u32] {
         self.order
     }
 
     /// Block `b` holds the tree positions `bounds[b]..bounds[b + 1]`.
-    pub(super) fn bounds(&self) -> &[usize] {
+    pub(crate) fn bounds(&self) -> &[usize] {
         match self.source {
             Source::F32(blocks, _) => blocks.bounds(),
             Source::F64(blocks) => blocks.bounds(),
@@ -281,7 +314,7 @@ impl<'s> Blocks<'s> {
     /// thread another process holds up delays only its own block. When a row needs the `f64`
     /// tree, which is not built yet, the blocks not yet begun are set aside, the tree is built
     /// once, and they are searched then.
-    pub(super) fn for_each(
+    pub(crate) fn for_each(
         &self,
         consume: &(dyn Fn(&Block<'_>) -> Result<()> + Sync),
     ) -> Result<()> {
@@ -425,9 +458,9 @@ impl<'s> Blocks<'s> {
 /// learns only at the end which rows it needs again (the rows cut by a length known once every
 /// row was seen, `normals.rs`) gets them from the same tree, proven exact the same way, rather
 /// than from a second tree of every point.
-pub(super) struct Searched {
+pub(crate) struct Searched {
     /// The caller's index of the point stored at each position (the search tree's order).
-    pub(super) order: Vec<u32>,
+    pub(crate) order: Vec<u32>,
     /// Row length: `k`, or every other point when there are fewer.
     width: usize,
     tree: SearchTree,
@@ -449,7 +482,7 @@ enum SearchTree {
 impl Searched {
     /// The rows of the points at the tree positions `positions`, exactly as the blocks gave them:
     /// the `width` nearest other points of each by `(f64 sq_dist, index)`.
-    pub(super) fn rows_at(
+    pub(crate) fn rows_at(
         &self,
         points: &[DVec3],
         positions: &[usize],

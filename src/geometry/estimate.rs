@@ -1,31 +1,81 @@
-//! Normals alone (thesis eq. 2.8–2.10), what `nbhd_estimate_normals` and PCL's
-//! `NormalEstimation` compute: per point the unit eigenvector of the smallest eigenvalue of the
-//! covariance of the point and its ε-k-neighbourhood, the surface variation
-//! `λ0/(λ0 + λ1 + λ2)` (PCL's `curvature`) and the degeneracy flags — nothing of the principal
-//! curvatures, the feature criteria or the tangent frame that [`super::analyze`] adds.
+//! Normals of a point set (thesis eq. 2.8–2.10), the one function every front door calls for
+//! them ([`estimate_normals`]: `nbhd_estimate_normals`, Python's `nbhd.normals`, the command
+//! `nbhd normals`), and what PCL's `NormalEstimation` computes: per point the unit eigenvector
+//! of the smallest eigenvalue of the covariance of the point and its ε-k-neighbourhood, the
+//! surface variation `λ0/(λ0 + λ1 + λ2)` (PCL's `curvature`) and the degeneracy flags —
+//! nothing of the principal curvatures, the feature criteria or the tangent frame that the
+//! smoothing's analysis (`src/smooth/`) adds.
 //!
-//! The normal and eigenvalues are those of [`crate::geometry::local_frame`] bit for bit (the
+//! The normal and eigenvalues are those of [`super::normals::local_frame`] bit for bit (the
 //! smallest eigenvector in closed form, the Jacobi iteration where the closed form declines),
-//! so a normal from here equals the one [`super::analyze`] reports. Every point's arithmetic
+//! so a normal from here equals the one the smoothing's analysis reports. Every point's arithmetic
 //! depends on its row only, so the result is identical for any number of threads.
 
+use super::neighbors::{cut_to, mean_spacing_of};
+use super::normals::{quotient_of, NormalCovariance, FLAG_SKIPPED};
+use super::orientation::{orient_normals_with_progress, Orientation};
 use super::source::{knn_rows, Neighbors, SearchMethod};
-use super::{
-    check_spacing, cut_to, finite_subset, progress_in_units, quotient_of, Length, SmoothOptions,
-    Stage,
-};
+use crate::cloud::{finite_subset, NonFinitePolicy};
 use crate::error::{NbhdError, Result};
-use crate::geometry::neighbors::mean_spacing_of;
-use crate::geometry::normals::{NormalCovariance, FLAG_SKIPPED};
-use crate::geometry::orientation::orient_normals_with_progress;
-use crate::geometry::orientation::Orientation;
+use crate::index::{check_spacing, Length};
 use crate::prefetch::prefetch_at;
-use crate::progress::relay;
+use crate::progress::{progress_in_units, relay, Stage};
 use crate::scatter::{BlockScatter, Targets};
 use crate::table::try_filled_par;
+use crate::tree::exact_knn;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Settings of [`estimate_normals`]. `Default` gives the 15 nearest other points within 6 h
+/// (`h` the mean spacing), unoriented, non-finite points rejected, the current thread pool.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalOptions {
+    /// Maximum valence `k` (≥ 1): at most the `k` nearest other points.
+    pub k: usize,
+    /// Influence radius `ε` (> 0, finite), in the points' units or multiples of `h`.
+    pub epsilon: Length,
+    /// Orientation of the normals.
+    pub orientation: Orientation,
+    /// Points with a NaN or infinite coordinate: refused, or skipped (their estimate is NaN
+    /// with [`FLAG_SKIPPED`]).
+    pub non_finite: NonFinitePolicy,
+    /// Worker threads: 0 the current rayon pool, n ≥ 1 a pool of n threads. Results are
+    /// identical for every value.
+    pub threads: usize,
+}
+
+impl Default for NormalOptions {
+    fn default() -> Self {
+        Self {
+            k: 15,
+            epsilon: Length::Relative(6.0),
+            orientation: Orientation::Unoriented,
+            non_finite: NonFinitePolicy::Reject,
+            threads: 0,
+        }
+    }
+}
+
+impl NormalOptions {
+    /// Checks `k ≥ 1` ([`NbhdError::ZeroK`]) and a finite `ε > 0`
+    /// ([`NbhdError::InvalidOption`] naming `epsilon`).
+    pub fn validate(&self) -> Result<()> {
+        if self.k == 0 {
+            return Err(NbhdError::ZeroK);
+        }
+        let eps = match self.epsilon {
+            Length::Absolute(v) | Length::Relative(v) => v,
+        };
+        if !(eps.is_finite() && eps > 0.0) {
+            return Err(NbhdError::InvalidOption {
+                name: "epsilon",
+                reason: format!("{eps} must be finite and > 0"),
+            });
+        }
+        Ok(())
+    }
+}
 
 /// One point's estimate.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,7 +83,7 @@ pub struct NormalEstimate {
     /// Unit normal (eq. 2.10), oriented as the options ask; NaN for a skipped point.
     pub normal: DVec3,
     /// The surface variation `λ0/(λ0 + λ1 + λ2)` of the covariance eigenvalues (0 on a plane,
-    /// at most 1/3): PCL's `curvature`, the `covariance_quotient` of [`super::PointOutput`].
+    /// at most 1/3): PCL's `curvature`, the smoothing's `PointOutput::covariance_quotient`.
     pub surface_variation: f64,
     /// `geometry::normals::FLAG_*` bits, 0 for a well-defined normal.
     pub flags: u8,
@@ -61,19 +111,42 @@ pub struct NormalsResult {
     pub epsilon: f64,
 }
 
-/// The normals of `points` over the ε-k-neighbourhoods of `options` (its `k`, `epsilon`,
-/// `orientation`, `non_finite` and `threads`; the smoothing settings are not read but must be
-/// valid). Errors as [`super::analyze`]'s.
-pub fn estimate_normals(points: &[DVec3], options: &SmoothOptions) -> Result<NormalsResult> {
+/// The normals of `points` over their ε-k-neighbourhoods (`options`), one estimate per point
+/// in input order, identical for any number of threads.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::{estimate_normals, NormalOptions};
+///
+/// // a noiseless patch of the plane z = 0
+/// let points: Vec<DVec3> = (0..400)
+///     .map(|i| DVec3::new((i % 20) as f64, (i / 20) as f64, 0.0))
+///     .collect();
+/// let result = estimate_normals(&points, &NormalOptions::default())?;
+/// assert_eq!(result.spacing, 1.0);
+/// for e in &result.normals {
+///     assert!(e.normal.z.abs() > 1.0 - 1e-12 && e.surface_variation < 1e-12);
+/// }
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+///
+/// Errors: those of [`NormalOptions::validate`], [`NbhdError::EmptyInput`],
+/// [`NbhdError::NonFinite`] (unless `options.non_finite` skips such points),
+/// [`NbhdError::InvalidOption`] for a relative `ε` without a spacing (fewer than two distinct
+/// points), [`NbhdError::Degenerate`] when no neighbourhood reaches 3 points,
+/// [`NbhdError::ThreadPool`].
+pub fn estimate_normals(points: &[DVec3], options: &NormalOptions) -> Result<NormalsResult> {
     estimate_normals_from(points, Neighbors::default(), options, &mut |_, _| true)
 }
 
-/// [`estimate_normals`] from the neighbourhoods `neighbors` (see [`super::smooth_from`]) with a
-/// progress callback (as [`super::smooth_with_progress`]'s).
+/// [`estimate_normals`] from the neighbourhoods `neighbors` (the call's own search by default,
+/// or a caller's table: see [`Neighbors`]) with a progress callback, called with the fraction
+/// done (0 to 1) and the stage on the thread that runs the computation; returning `false`
+/// stops the run with [`NbhdError::Cancelled`].
 pub fn estimate_normals_from(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
-    options: &SmoothOptions,
+    options: &NormalOptions,
     progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
 ) -> Result<NormalsResult> {
     crate::parallel::with_threads(options.threads, || {
@@ -97,11 +170,11 @@ pub fn estimate_normals_from(
 }
 
 /// [`estimate_normals_from`] on finite points (nonempty, every coordinate finite:
-/// [`super::finite_subset`] checked or chose them, so they are not scanned again).
+/// `finite_subset` checked or chose them, so they are not scanned again).
 fn normals_finite(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
-    options: &SmoothOptions,
+    options: &NormalOptions,
     progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
 ) -> Result<NormalsResult> {
     let mut report = progress_in_units(1.0, progress);
@@ -184,7 +257,7 @@ fn normals_finite(
 /// measured the same.
 const BLOCK: usize = 8192;
 
-/// What `super::check_not_degenerate` refuses, with the same message: no neighbourhood reaches
+/// What the smoothing's `check_not_degenerate` refuses, with the same message: no neighbourhood reaches
 /// 3 points, or every estimate is flagged.
 struct Refusal {
     points: usize,
@@ -308,7 +381,7 @@ fn estimate((normal, values, flags): (DVec3, DVec3, u8)) -> NormalEstimate {
 /// another process on one core made two threads slower than one (`docs/speed-log.md`, round 10).
 fn normals_in_tree_order(
     points: &[DVec3],
-    options: &SmoothOptions,
+    options: &NormalOptions,
     report: &mut (dyn FnMut(f64, Stage) -> Result<()> + Send),
 ) -> Result<NormalsResult> {
     let n = points.len();
@@ -320,7 +393,7 @@ fn normals_in_tree_order(
     let mut nearest = try_filled_par(n, None, "the nearest-neighbour distances")?;
     let mut farthest_in_tree = try_filled_par(n, 0.0, "the farthest-neighbour distances")?;
     let mut blocks_done = |f: f64| report(0.9 * f, Stage::Neighbors);
-    let searched = super::nearest::by_blocks(points, k, BLOCK, |blocks| {
+    let searched = exact_knn::by_blocks(points, k, BLOCK, |blocks| {
         let targets = Targets::check(blocks.order(), n)?;
         let bounds = blocks.bounds();
         let est = BlockScatter::to_targets(&mut estimates, &targets, bounds, 1)?;
@@ -344,7 +417,7 @@ fn normals_in_tree_order(
     })?;
     let order = &searched.order;
     // the mean nearest-neighbour spacing, summed in caller order as on the table path
-    let h = crate::tree::mean_distance(nearest.into_iter().flatten());
+    let h = crate::index::mean_distance(nearest.into_iter().flatten());
     let relative = matches!(options.epsilon, Length::Relative(_));
     check_spacing(h, relative)?;
     let eps = options.epsilon.resolve(h);
@@ -397,7 +470,7 @@ fn normals_in_tree_order(
 mod tests {
     use super::*;
     use crate::shapes::{sample, Shape, Torus};
-    use crate::smooth::analyze;
+    use crate::smooth::{analyze, SmoothOptions};
 
     #[test]
     fn blocks_of_the_fused_path_equal_the_table_path() {
@@ -406,7 +479,11 @@ mod tests {
         let opts = SmoothOptions::default();
         let full = analyze(&s.points, &opts).unwrap();
         for threads in [1, 2] {
-            let got = estimate_normals(&s.points, &SmoothOptions { threads, ..opts }).unwrap();
+            let got = estimate_normals(
+                &s.points,
+                &SmoothOptions { threads, ..opts }.normal_options(),
+            )
+            .unwrap();
             assert_same_as_analysis(&got, &full);
         }
     }
@@ -435,7 +512,7 @@ mod tests {
                 ..SmoothOptions::default()
             };
             let full = analyze(&far, &opts).unwrap();
-            let got = estimate_normals(&far, &opts).unwrap();
+            let got = estimate_normals(&far, &opts.normal_options()).unwrap();
             assert_same_as_analysis(&got, &full);
         }
     }
@@ -459,7 +536,11 @@ mod tests {
             };
             let full = analyze(&s.points, &opts).unwrap();
             for threads in [1, 2, 3] {
-                let got = estimate_normals(&s.points, &SmoothOptions { threads, ..opts }).unwrap();
+                let got = estimate_normals(
+                    &s.points,
+                    &SmoothOptions { threads, ..opts }.normal_options(),
+                )
+                .unwrap();
                 assert_same_as_analysis(&got, &full);
             }
             if orientation == Orientation::Propagate {

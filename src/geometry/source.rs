@@ -7,6 +7,7 @@
 //! `(sq_dist, index)`), so the smoothing's result does not depend on the source.
 
 use crate::error::{NbhdError, Result};
+use crate::index::NeighborIndex;
 use crate::query::Neighborhood;
 use crate::table::{neighborhoods_of_all, NeighborTable};
 use crate::{BruteForce, KdTree, NeighborSearch, NonFinitePolicy, PcaSweep, PointsView};
@@ -59,7 +60,7 @@ pub(crate) fn knn_rows(
             if points.is_empty() {
                 return Err(NbhdError::EmptyInput);
             }
-            super::nearest::nearest_table(points, k)
+            crate::tree::exact_knn::nearest_table(points, k)
         }
         Neighbors::Search(method) => {
             let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();

@@ -1,0 +1,376 @@
+//! The neighbour index: one trait, [`NeighborIndex`], that holds every query of thesis
+//! Chapter 5 once — the k nearest, all within a radius, the ε-k-neighbourhood, the points in
+//! a box, the tables of every point, of a list of stored points and of a batch of query points,
+//! and the spacing `h` — for every flavour of index: the static k-d tree (`src/tree/`) and the
+//! growing tree, a forest of static trees with tombstones (`src/dynamic/`).
+//!
+//! A flavour provides only what it is: how its points are reached (the traversal that offers
+//! candidates to a result set, the traversal of a box, the order its own points are visited
+//! in) and, where it has one, a faster path for a table (the grouped searches of
+//! `src/tree/group_search.rs`). Everything else — which result set a query fills, how rows are
+//! sorted and written, how errors name their query, how boxes are checked and rows assembled —
+//! is written here, once, as nanoflann's one `findNeighbors` serves every result set and its
+//! forest adaptor answers through the same search. So both flavours answer every query, and
+//! answer it identically: a growing tree gives the bytes of a static tree over its live points.
+//!
+//! Where each query is:
+//! - `search.rs`: the single search ([`NeighborIndex::knn`], [`NeighborIndex::radius`],
+//!   [`NeighborIndex::knn_radius`], and `NeighborSearch::search` of both flavours);
+//! - `in_box.rs`: box queries ([`NeighborIndex::in_box`], [`NeighborIndex::in_boxes`]);
+//! - `tables.rs`: tables ([`NeighborIndex::neighborhoods`], [`NeighborIndex::neighborhoods_at`],
+//!   [`NeighborIndex::neighborhoods_of`]);
+//! - `spacing.rs`: the nearest-neighbour spacing ([`NeighborIndex::spacing`]).
+//!
+//! The seams for what comes next: a metric or a topology (a Minkowski norm, a periodic box)
+//! is a parameter of the one traversal [`NeighborIndex::visit`] and of the box bounds it prunes
+//! by, so each query picks it up here rather than in each flavour; a new kind of result (pairs,
+//! counts) is a new result set (`src/query/result_set.rs`) filled by the same traversal.
+
+mod in_box;
+mod search;
+mod spacing;
+mod tables;
+
+pub use in_box::IndexRows;
+pub(crate) use search::{answer, search};
+pub(crate) use spacing::{check_spacing, mean_distance};
+pub use spacing::{Length, Spacing, Units};
+
+use crate::error::Result;
+use crate::points::PointsView;
+use crate::query::result_set::ResultSet;
+use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
+use crate::scalar::Scalar;
+use crate::table::{NeighborTable, TableOptions};
+
+/// The stored points an index visits for a table of its own points, in the order that keeps
+/// the cache warm (the tree order of its leaves): `at(w)` is the caller index and the
+/// coordinates of the `w`-th, for `w < len`. (Plumbing of [`NeighborIndex`]'s hidden methods.)
+#[doc(hidden)]
+pub struct StoredPoints<'a, T> {
+    /// Number of points.
+    pub len: usize,
+    /// The `w`-th point's caller index and coordinates.
+    pub at: &'a (dyn Fn(usize) -> (u32, &'a [T]) + Sync),
+}
+
+/// An exact neighbour index over d-dimensional points with `T` coordinates: the static
+/// `KdTree` (`src/tree/`) and the growing `DynamicKdTree` (`src/dynamic/`).
+///
+/// Every query is written once, in this trait, over the few facts each flavour provides (the
+/// hidden methods below). So every query exists for both flavours and gives the same answer for
+/// the same live points, under the conventions of the crate: caller indices, inclusive radii,
+/// squared distances, rows ordered by `(sq_dist, index)` and identical for any thread count.
+///
+/// ```
+/// use nbhd::{BuildOptions, DynamicKdTree, KdTree, NeighborIndex, PointsView, Query};
+///
+/// let pts = [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+/// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+/// let mut growing = DynamicKdTree::<f32>::new(2, &BuildOptions::default())?;
+/// growing.insert_flat(&pts[..4])?;
+/// growing.insert_flat(&pts[4..])?;
+///
+/// // one function serves both flavours
+/// fn two_nearest<I: NeighborIndex<f32>>(index: &I) -> Vec<u32> {
+///     let mut out = Vec::new();
+///     index.knn(Query::point(&[0.1, 0.1]), 2, &mut out).unwrap();
+///     out.iter().map(|n| n.index).collect()
+/// }
+/// assert_eq!(two_nearest(&tree), [0, 1]);
+/// assert_eq!(two_nearest(&growing), two_nearest(&tree));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+pub trait NeighborIndex<T: Scalar>: NeighborSearch<T> + Sized {
+    /// Number of points held (live points; skipped and removed ones not counted).
+    fn len(&self) -> usize;
+
+    /// `true` if no point is held.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    // ---- What each flavour provides (plumbing, not part of the documented API) ----
+
+    /// The coordinates of `query` and the caller index its answer leaves out: the query's
+    /// checks (dimension, finite coordinates; a stored point that exists and is live).
+    #[doc(hidden)]
+    fn resolve<'q>(&'q self, query: Query<'q, T>) -> Result<(&'q [T], Option<u32>)>;
+
+    /// The one traversal: offers to `set` every held point (except the caller index
+    /// `exclude`) that may enter it, for the finite point `q` of the index's dimension.
+    #[doc(hidden)]
+    fn visit<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, set: &mut C);
+
+    /// Appends to `out`, in no particular order, the caller indices of the held points in the
+    /// closed box `min ≤ x ≤ max` (checked); `scratch` is the traversal's to reuse.
+    #[doc(hidden)]
+    fn visit_box(&self, min: &[T], max: &[T], scratch: &mut Vec<T>, out: &mut Vec<u32>);
+
+    /// Runs `f` with the held points in the order a table of them visits them.
+    #[doc(hidden)]
+    fn with_stored<R>(&self, f: impl FnOnce(&StoredPoints<'_, T>) -> R) -> R;
+
+    /// A key of the region of space `q` falls into (the first tree position of its leaf), below
+    /// [`NeighborIndex::region_keys`]: a batch of queries is answered in the order of these keys,
+    /// so that consecutive queries touch the same cells.
+    #[doc(hidden)]
+    fn region_key(&self, q: &[T]) -> u32;
+
+    /// One more than the largest [`NeighborIndex::region_key`].
+    #[doc(hidden)]
+    fn region_keys(&self) -> usize;
+
+    /// The table of every held point by a faster path than one search per point, if the
+    /// flavour has one for this dimension (on the current thread pool).
+    #[doc(hidden)]
+    fn grouped_table(
+        &self,
+        _nbhd: Neighborhood<T>,
+        _exclude_self: bool,
+    ) -> Option<Result<NeighborTable<T>>> {
+        None
+    }
+
+    /// The table of the packed, finite `queries` by a faster path than one search per query,
+    /// if the flavour has one for this batch (on the current thread pool): row `i` for query
+    /// `i`; `order` lists the queries by [`NeighborIndex::region_key`], `keys` those keys.
+    #[doc(hidden)]
+    fn grouped_batch(
+        &self,
+        _queries: &[T],
+        _order: &[u32],
+        _keys: &[u32],
+        _nbhd: Neighborhood<T>,
+    ) -> Option<Result<NeighborTable<T>>> {
+        None
+    }
+
+    // ---- The queries, written once ----
+
+    /// The `k` nearest held points of `query`, by `(sq_dist, index)`, into `out` (cleared
+    /// first).
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView, Query};
+    ///
+    /// let pts = [0.0f64, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+    /// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let mut out = Vec::new();
+    /// tree.knn(Query::stored_excluding_self(0), 2, &mut out)?;
+    /// assert_eq!(out.iter().map(|n| (n.index, n.sq_dist)).collect::<Vec<_>>(), [(1, 1.0), (2, 1.0)]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: [`NbhdError::ZeroK`](crate::NbhdError::ZeroK), and those of the query
+    /// (dimension, non-finite coordinates, an index out of range, skipped or removed).
+    fn knn(&self, query: Query<'_, T>, k: usize, out: &mut Vec<Neighbor<T>>) -> Result<()> {
+        search(self, query, Neighborhood::Knn { k }, out)
+    }
+
+    /// All held points within `radius` (inclusive, `‖x − q‖ ≤ radius`) of `query`, by
+    /// `(sq_dist, index)`, into `out` (cleared first).
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView, Query};
+    ///
+    /// let pts = [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+    /// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let mut out = Vec::new();
+    /// tree.radius(Query::point(&[0.0, 0.0]), 1.0, &mut out)?; // the radius is inclusive
+    /// assert_eq!(out.iter().map(|n| n.index).collect::<Vec<_>>(), [0, 1, 2]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: [`NbhdError::InvalidRadius`](crate::NbhdError::InvalidRadius) (negative, NaN,
+    /// infinite), [`NbhdError::RadiusOutOfRange`](crate::NbhdError::RadiusOutOfRange), and
+    /// those of the query.
+    fn radius(&self, query: Query<'_, T>, radius: T, out: &mut Vec<Neighbor<T>>) -> Result<()> {
+        let nbhd = Neighborhood::Radius {
+            radius,
+            sorted: true,
+        };
+        search(self, query, nbhd, out)
+    }
+
+    /// The ε-k-neighbourhood (thesis Section 2.1.1): the `k` nearest among the held points
+    /// within `radius` of `query`, by `(sq_dist, index)`, into `out` (cleared first).
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView, Query};
+    ///
+    /// let pts = [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+    /// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let mut out = Vec::new();
+    /// tree.knn_radius(Query::point(&[0.0, 0.0]), 10, 1.5, &mut out)?;
+    /// assert_eq!(out.len(), 3); // the point at (3, 3) lies beyond the radius
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of [`NeighborIndex::knn`] and [`NeighborIndex::radius`].
+    fn knn_radius(
+        &self,
+        query: Query<'_, T>,
+        k: usize,
+        radius: T,
+        out: &mut Vec<Neighbor<T>>,
+    ) -> Result<()> {
+        search(self, query, Neighborhood::KnnRadius { k, radius }, out)
+    }
+
+    /// The caller indices of the held points in the closed box `min ≤ x ≤ max` (every
+    /// coordinate; thesis Section 3.2.3), ascending, in `out` (cleared first). Bounds may be
+    /// infinite; a zero-extent box holds the points on its plane.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView};
+    ///
+    /// let pts = [0.0f64, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+    /// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let mut out = Vec::new();
+    /// tree.in_box(&[0.0, 0.0], &[1.0, f64::INFINITY], &mut out)?;
+    /// assert_eq!(out, [0, 1, 2]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: a bound slice of the wrong length
+    /// ([`NbhdError::DimensionMismatch`](crate::NbhdError::DimensionMismatch)), a NaN bound or
+    /// `min[j] > max[j]` ([`NbhdError::InvalidBox`](crate::NbhdError::InvalidBox)).
+    fn in_box(&self, min: &[T], max: &[T], out: &mut Vec<u32>) -> Result<()> {
+        in_box::in_box(self, min, max, out)
+    }
+
+    /// The points in each box of a batch, computed in parallel on `threads` workers (0: the
+    /// current pool), rows in the boxes' order, identical for any thread count. `boxes` holds
+    /// `2 · dim` values per box: its `min` corner, then its `max` corner.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView};
+    ///
+    /// let pts = [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+    /// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let rows = tree.in_boxes(&[0.0, 0.0, 1.0, 0.5, /* second box */ 2.0, 2.0, 4.0, 4.0], 0)?;
+    /// assert_eq!((rows.row(0), rows.row(1)), (&[0u32, 1][..], &[3u32][..]));
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: as [`NeighborIndex::in_box`], naming the box; a length not a multiple of
+    /// `2 · dim` is [`NbhdError::BufferTooSmall`](crate::NbhdError::BufferTooSmall).
+    fn in_boxes(&self, boxes: &[T], threads: usize) -> Result<IndexRows> {
+        in_box::in_boxes(self, boxes, threads)
+    }
+
+    /// The neighbourhood of every held point as compressed rows in the caller's index order
+    /// (row `i` for index `i`, [`NeighborSearch::source_len`] rows; points not held — skipped at
+    /// build time, removed — get empty rows), computed in parallel; identical bytes for any
+    /// thread count and for both flavours over the same live points.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, Neighborhood, PointsView, TableOptions};
+    ///
+    /// let pts = [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+    /// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let table = tree.neighborhoods(Neighborhood::Knn { k: 1 }, &TableOptions::default())?;
+    /// assert_eq!(table.indices_of(3), [1]); // (1, 0) and (0, 1) tie at 13: the lower index
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of the neighbourhood, [`NbhdError::OutOfMemory`](crate::NbhdError::OutOfMemory)
+    /// for a table that cannot fit, [`NbhdError::ThreadPool`](crate::NbhdError::ThreadPool).
+    fn neighborhoods(
+        &self,
+        nbhd: Neighborhood<T>,
+        options: &TableOptions,
+    ) -> Result<NeighborTable<T>> {
+        tables::neighborhoods(self, nbhd, options)
+    }
+
+    /// The neighbourhoods of the held points `indices` (a subset of the index's own points, in
+    /// any order, repeats allowed): row `r` for `indices[r]`, the row
+    /// [`NeighborIndex::neighborhoods`] gives that point, computed in parallel.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, Neighborhood, PointsView, TableOptions};
+    ///
+    /// let pts = [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+    /// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let nbhd = Neighborhood::Knn { k: 2 };
+    /// let some = tree.neighborhoods_at(&[3, 0], nbhd, &TableOptions::default())?;
+    /// let all = tree.neighborhoods(nbhd, &TableOptions::default())?;
+    /// assert_eq!((some.indices_of(0), some.indices_of(1)), (all.indices_of(3), all.indices_of(0)));
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of [`NeighborIndex::neighborhoods`] and of a stored-point query (an index
+    /// out of range, skipped or removed), naming the first such index by position.
+    fn neighborhoods_at(
+        &self,
+        indices: &[u32],
+        nbhd: Neighborhood<T>,
+        options: &TableOptions,
+    ) -> Result<NeighborTable<T>> {
+        tables::neighborhoods_at(self, indices, nbhd, options)
+    }
+
+    /// The neighbourhoods of a batch of query points (row `i` for query `i`), computed in
+    /// parallel, in the order of the regions the queries fall into so that consecutive queries
+    /// touch the same cells; identical for any thread count and to the single queries' rows.
+    /// `options.exclude_self` does not apply (the queries are not stored points).
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, Neighborhood, PointsView, TableOptions};
+    ///
+    /// let pts = [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 3.0, 3.0];
+    /// let tree = KdTree::<f32>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let queries = [2.9f32, 3.0, 0.9, 0.1];
+    /// let table = tree.neighborhoods_of(
+    ///     &PointsView::from_flat(&queries, 2)?,
+    ///     Neighborhood::Knn { k: 1 },
+    ///     &TableOptions::default(),
+    /// )?;
+    /// assert_eq!(table.indices(), [3, 1]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of the neighbourhood, [`NbhdError::DimensionMismatch`](crate::NbhdError::DimensionMismatch),
+    /// [`NbhdError::NonFiniteQuery`](crate::NbhdError::NonFiniteQuery) naming the first query
+    /// (by position) with a non-finite coordinate, [`NbhdError::OutOfMemory`](crate::NbhdError::OutOfMemory),
+    /// [`NbhdError::ThreadPool`](crate::NbhdError::ThreadPool).
+    fn neighborhoods_of(
+        &self,
+        queries: &PointsView<'_>,
+        nbhd: Neighborhood<T>,
+        options: &TableOptions,
+    ) -> Result<NeighborTable<T>> {
+        tables::neighborhoods_of(self, queries, nbhd, options)
+    }
+
+    /// The nearest-neighbour spacing of the held points ([`Spacing`]): each point's distance
+    /// to its nearest other point, summarised, from an all-point 1-nearest table computed on
+    /// `threads` workers (0: the current pool); the same value for any thread count.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView};
+    ///
+    /// // points on a line at 0, 1, 3, 7, 8: nearest distances 1, 1, 2, 1, 1
+    /// let pts = [0.0f64, 1.0, 3.0, 7.0, 8.0];
+    /// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 1)?, &BuildOptions::default())?;
+    /// let s = tree.spacing(0)?;
+    /// assert_eq!((s.mean, s.median, s.points), (1.2, 1.0, 5));
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: fewer than two points held
+    /// ([`NbhdError::InvalidOption`](crate::NbhdError::InvalidOption)), and those of
+    /// [`NeighborIndex::neighborhoods`].
+    fn spacing(&self, threads: usize) -> Result<Spacing> {
+        spacing::spacing(self, threads)
+    }
+
+    /// The caller indices of the held points, ascending.
+    fn indices(&self) -> Vec<u32> {
+        let mut all = self.with_stored(|s| (0..s.len).map(|w| (s.at)(w).0).collect::<Vec<_>>());
+        all.sort_unstable();
+        all
+    }
+}

@@ -1,0 +1,109 @@
+//! The single search of every index (thesis Algorithm 9): the query's checks, then the result
+//! set the neighbourhood asks for, filled by the flavour's one traversal
+//! ([`NeighborIndex::visit`]). Which set serves which query, and how its contents become the
+//! caller's vector, is decided here for both flavours.
+
+use super::NeighborIndex;
+use crate::error::Result;
+use crate::query::order;
+use crate::query::result_set::{Key32, KnnBuf, KnnRow, RowEntry, SortedRow, WithinRadius};
+use crate::query::{Neighbor, NeighborHeap, Neighborhood, Query};
+use crate::scalar::{Scalar, ScalarType};
+
+/// Writes the neighbourhood of `query` into `out` (cleared first), ordered by
+/// `(sq_dist, index)` unless an unsorted radius query was asked for: the body of
+/// `NeighborSearch::search` for every flavour.
+pub(crate) fn search<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    query: Query<'_, T>,
+    nbhd: Neighborhood<T>,
+    out: &mut Vec<Neighbor<T>>,
+) -> Result<()> {
+    nbhd.validate()?;
+    let (q, exclude) = index.resolve(query)?;
+    answer(index, q, exclude, nbhd, out);
+    Ok(())
+}
+
+/// The search proper, on a validated neighbourhood and a resolved query: `q` of the index's
+/// dimension, finite.
+#[inline]
+pub(crate) fn answer<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    q: &[T],
+    exclude: Option<u32>,
+    nbhd: Neighborhood<T>,
+    out: &mut Vec<Neighbor<T>>,
+) {
+    let (k, sq_radius) = nbhd.limits();
+    if k == usize::MAX {
+        out.clear();
+        index.visit(q, exclude, &mut WithinRadius { out, sq_radius });
+        if nbhd.is_sorted() {
+            out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
+        }
+    } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
+        if k <= KNN_ROW_MAX_K {
+            let mut buf = [Key32::default(); KNN_ROW_MAX_K];
+            let mut row = KnnRow::new(&mut buf[..k], sq_radius);
+            index.visit(q, exclude, &mut row);
+            out.clear();
+            out.extend(row.held().map(|e| {
+                let (sq_dist, index) = e.pair();
+                Neighbor { index, sq_dist }
+            }));
+        } else {
+            let mut buf = [0u64; 2 * SORTED_MAX_K];
+            let mut set = KnnBuf::new(&mut buf[..2 * k], k, sq_radius);
+            index.visit(q, exclude, &mut set);
+            out.clear();
+            out.extend(set.finish().iter().map(|&e| {
+                let (sq_dist, index) = order::unkey32(e);
+                Neighbor { index, sq_dist }
+            }));
+        }
+    } else if k <= SORTED_MAX_K {
+        search_sorted::<T, Neighbor<T>, I>(index, q, exclude, k, sq_radius, out);
+    } else {
+        let mut heap = NeighborHeap::new(out, k, sq_radius);
+        index.visit(q, exclude, &mut heap);
+        heap.finish();
+    }
+}
+
+/// Single kNN queries up to this `k` keep their candidates on the call stack (`f32`: sorted in a
+/// [`KnnRow`] up to [`KNN_ROW_MAX_K`], unsorted in a [`KnnBuf`] above; `f64`: sorted by
+/// insertion); larger ones in a heap in the result vector.
+const SORTED_MAX_K: usize = 32;
+
+/// `f32` single kNN queries up to this `k` insert into a sorted row, larger ones append to a
+/// buffer selected when full: on the 77k torus (docs/speed-log.md, "Single queries, the floor,
+/// and copies of a point") the buffer took 0.87x the sorted row's time at k = 30 and 1.14x at
+/// k = 10.
+const KNN_ROW_MAX_K: usize = 16;
+
+/// A kNN search (`k ≤ SORTED_MAX_K`) into a [`SortedRow`] on the call stack — entries `E` the
+/// packed `f32` keys of `src/query/order.rs` or neighbours — copied to `out` at the end: a
+/// candidate costs a short shift of one-integer compares, and the result needs no sort.
+fn search_sorted<T: Scalar, E: RowEntry<T> + Default, I: NeighborIndex<T>>(
+    index: &I,
+    q: &[T],
+    exclude: Option<u32>,
+    k: usize,
+    sq_radius: T,
+    out: &mut Vec<Neighbor<T>>,
+) {
+    let mut buf = [E::default(); SORTED_MAX_K];
+    let mut len = 0;
+    let mut row = SortedRow {
+        row: &mut buf[..k],
+        len: &mut len,
+        sq_radius,
+    };
+    index.visit(q, exclude, &mut row);
+    out.clear();
+    out.extend(buf[..len].iter().map(|&e| {
+        let (sq_dist, index) = e.pair();
+        Neighbor { index, sq_dist }
+    }));
+}

@@ -1,0 +1,166 @@
+//! Tables: the neighbourhoods of every held point, of a list of held points, or of a batch of
+//! query points, as a [`NeighborTable`], computed in parallel in an order that keeps the cache
+//! warm and written back in the caller's order (`src/table.rs`). A flavour's grouped search
+//! answers where it has one ([`NeighborIndex::grouped_table`],
+//! [`NeighborIndex::grouped_batch`]); otherwise each row is one single search, the rows the
+//! grouped searches give too.
+
+use rayon::prelude::*;
+
+use super::search::answer;
+use super::NeighborIndex;
+use crate::error::{NbhdError, Result};
+use crate::parallel::with_threads;
+use crate::points::PointsView;
+use crate::query::{Neighborhood, Query};
+use crate::scalar::Scalar;
+use crate::table::{check_knn_total, rows_in_work_order, NeighborTable, TableOptions};
+
+/// [`NeighborIndex::neighborhoods`].
+pub(super) fn neighborhoods<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    nbhd: Neighborhood<T>,
+    options: &TableOptions,
+) -> Result<NeighborTable<T>> {
+    nbhd.validate()?;
+    check_knn_total(index.len(), index.len(), nbhd, options.exclude_self)?;
+    with_threads(options.threads, || {
+        if let Some(table) = index.grouped_table(nbhd, options.exclude_self) {
+            return table;
+        }
+        // One search per point, in the index's order (neighbouring points touch the same
+        // nodes and leaves, so they hit the cache), written back in the caller's order.
+        index.with_stored(|stored| {
+            rows_in_work_order(
+                index.source_len(),
+                stored.len,
+                |w| (stored.at)(w).0 as usize,
+                |w, row, _| {
+                    let (id, q) = (stored.at)(w);
+                    answer(index, q, options.exclude_self.then_some(id), nbhd, row);
+                    Ok(())
+                },
+            )
+        })
+    })?
+}
+
+/// [`NeighborIndex::neighborhoods_at`].
+pub(super) fn neighborhoods_at<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    indices: &[u32],
+    nbhd: Neighborhood<T>,
+    options: &TableOptions,
+) -> Result<NeighborTable<T>> {
+    nbhd.validate()?;
+    let query = |i: u32| Query::Stored {
+        index: i,
+        exclude_self: options.exclude_self,
+    };
+    for &i in indices {
+        index.resolve(query(i))?;
+    }
+    check_knn_total(indices.len(), index.len(), nbhd, options.exclude_self)?;
+    with_threads(options.threads, || {
+        rows_in_work_order(
+            indices.len(),
+            indices.len(),
+            |w| w,
+            |w, row, _| {
+                let (q, exclude) = index.resolve(query(indices[w]))?;
+                answer(index, q, exclude, nbhd, row);
+                Ok(())
+            },
+        )
+    })?
+}
+
+/// [`NeighborIndex::neighborhoods_of`].
+pub(super) fn neighborhoods_of<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    queries: &PointsView<'_>,
+    nbhd: Neighborhood<T>,
+    options: &TableOptions,
+) -> Result<NeighborTable<T>> {
+    nbhd.validate()?;
+    let d = index.dim();
+    if queries.dim() != d {
+        return Err(NbhdError::DimensionMismatch {
+            expected: d,
+            got: queries.dim(),
+        });
+    }
+    check_knn_total(queries.len(), index.len(), nbhd, false)?;
+    let packed = packed_queries(queries)?;
+    let n = queries.len();
+    with_threads(options.threads, || {
+        let (order, keys) = region_order(index, &packed);
+        if let Some(table) = index.grouped_batch(&packed, &order, &keys, nbhd) {
+            return table;
+        }
+        rows_in_work_order(
+            n,
+            n,
+            |w| order[w] as usize,
+            |w, row, _| {
+                let at = order[w] as usize * d;
+                answer(index, &packed[at..at + d], None, nbhd, row);
+                Ok(())
+            },
+        )
+    })?
+}
+
+/// The queries as packed coordinates of the index's type, every one finite: the first
+/// non-finite one (by position) is [`NbhdError::NonFiniteQuery`].
+fn packed_queries<T: Scalar>(queries: &PointsView<'_>) -> Result<Vec<T>> {
+    let (n, d) = (queries.len(), queries.dim());
+    let mut packed: Vec<T> = Vec::new();
+    packed
+        .try_reserve_exact(n * d)
+        .map_err(|_| NbhdError::OutOfMemory {
+            what: "a copy of the query points",
+            bytes: (n * d * std::mem::size_of::<T>()) as u128,
+        })?;
+    packed.resize(n * d, T::ZERO);
+    for (i, q) in packed.chunks_exact_mut(d.max(1)).enumerate() {
+        queries.read_point(i, q);
+        if let Some(coordinate) = q.iter().position(|c| !c.is_finite()) {
+            return Err(NbhdError::NonFiniteQuery {
+                query: Some(i),
+                coordinate,
+            });
+        }
+    }
+    Ok(packed)
+}
+
+/// The positions of the packed `queries` ordered by the region each falls into
+/// ([`NeighborIndex::region_key`]), ties by position (a counting sort: two passes over the
+/// queries), and those keys in that order.
+fn region_order<T: Scalar, I: NeighborIndex<T>>(index: &I, queries: &[T]) -> (Vec<u32>, Vec<u32>) {
+    let d = index.dim();
+    let n = queries.len() / d;
+    if index.is_empty() {
+        return ((0..n as u32).collect(), vec![0; n]);
+    }
+    let key_of: Vec<u32> = queries
+        .par_chunks_exact(d)
+        .map(|q| index.region_key(q))
+        .collect();
+    let keys = index.region_keys();
+    let mut starts = vec![0u32; keys + 1];
+    for &l in &key_of {
+        starts[l as usize + 1] += 1;
+    }
+    for p in 0..keys {
+        starts[p + 1] += starts[p];
+    }
+    let mut order = vec![0u32; n];
+    for (i, &l) in key_of.iter().enumerate() {
+        order[starts[l as usize] as usize] = i as u32;
+        starts[l as usize] += 1;
+    }
+    let sorted = order.iter().map(|&i| key_of[i as usize]).collect();
+    (order, sorted)
+}
