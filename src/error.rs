@@ -404,15 +404,13 @@ impl fmt::Display for NbhdError {
                 if *relative {
                     write!(
                         f,
-                        "; epsilon was taken relative to h (units \"relative\", C: \
-                         NBHD_UNITS_RELATIVE): for a length in the points' units set its units \
-                         to \"absolute\" (C: NBHD_UNITS_ABSOLUTE)"
+                        "; epsilon was taken relative to h (units \"relative\"): for a length \
+                         in the points' units give its units as \"absolute\""
                     )
                 } else {
                     write!(
                         f,
-                        "; epsilon was taken in the points' units (units \"absolute\", C: \
-                         NBHD_UNITS_ABSOLUTE)"
+                        "; epsilon was taken in the points' units (units \"absolute\")"
                     )
                 }
             }
