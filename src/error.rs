@@ -313,21 +313,10 @@ impl fmt::Display for NbhdError {
                 f,
                 "point {index} has a NaN or infinite coordinate (coordinate {coordinate})"
             ),
-            NonFiniteQuery {
-                query: None,
-                coordinate,
-            } => {
-                write!(
-                    f,
-                    "query point has a NaN or infinite coordinate (coordinate {coordinate})"
-                )
-            }
-            NonFiniteQuery {
-                query: Some(q),
-                coordinate,
-            } => write!(
+            NonFiniteQuery { query, coordinate } => write!(
                 f,
-                "query point {q} has a NaN or infinite coordinate (coordinate {coordinate})"
+                "query point{} has a NaN or infinite coordinate (coordinate {coordinate})",
+                query.map_or(String::new(), |q| format!(" {q}"))
             ),
             TooManyPoints { count, max } => {
                 write!(f, "{count} points exceed the supported maximum of {max}")
@@ -381,39 +370,9 @@ impl fmt::Display for NbhdError {
                 epsilon,
                 spacing,
                 relative,
-            } => {
-                if *largest < 3 {
-                    write!(
-                        f,
-                        "no neighbourhood reached 3 points (the largest has {largest} with the \
-                         point itself), so no normal is defined"
-                    )?;
-                } else {
-                    write!(
-                        f,
-                        "all {flagged} of {points} normals are degenerate (too few, collinear \
-                         or coincident neighbours)"
-                    )?;
-                }
-                write!(
-                    f,
-                    ": epsilon resolved to {epsilon:e} in the points' units (mean spacing h = \
-                     {spacing:e})"
-                )?;
-                // the units as the command line and Python spell them (`src/names.rs`)
-                if *relative {
-                    write!(
-                        f,
-                        "; epsilon was taken relative to h (units \"relative\"): for a length \
-                         in the points' units give its units as \"absolute\""
-                    )
-                } else {
-                    write!(
-                        f,
-                        "; epsilon was taken in the points' units (units \"absolute\")"
-                    )
-                }
-            }
+            } => write_degenerate(
+                f, *points, *largest, *flagged, *epsilon, *spacing, *relative,
+            ),
             SavedTree(e) => e.fmt(f),
             Io {
                 context, message, ..
@@ -423,25 +382,77 @@ impl fmt::Display for NbhdError {
                 coordinate,
                 min,
                 max,
-            } => {
-                match query {
-                    Some(q) => write!(f, "box {q}")?,
-                    None => write!(f, "the box")?,
-                }
-                write!(
-                    f,
-                    " has min {min} and max {max} in coordinate {coordinate}: "
-                )?;
-                if min.is_nan() || max.is_nan() {
-                    write!(f, "a bound is NaN")
-                } else {
-                    write!(
-                        f,
-                        "min > max (swapped corners?); a box is closed, min <= x <= max"
-                    )
-                }
-            }
+            } => write_invalid_box(f, *query, *coordinate, *min, *max),
         }
+    }
+}
+
+/// Why no normal is defined ([`NbhdError::Degenerate`]): the neighbourhood sizes, then ε as it
+/// was resolved and the units it was given in, as the command line and Python spell them
+/// (`src/names.rs`).
+fn write_degenerate(
+    f: &mut fmt::Formatter<'_>,
+    points: usize,
+    largest: usize,
+    flagged: usize,
+    epsilon: f64,
+    spacing: f64,
+    relative: bool,
+) -> fmt::Result {
+    if largest < 3 {
+        write!(
+            f,
+            "no neighbourhood reached 3 points (the largest has {largest} with the point \
+             itself), so no normal is defined"
+        )?;
+    } else {
+        write!(
+            f,
+            "all {flagged} of {points} normals are degenerate (too few, collinear or \
+             coincident neighbours)"
+        )?;
+    }
+    write!(
+        f,
+        ": epsilon resolved to {epsilon:e} in the points' units (mean spacing h = {spacing:e})"
+    )?;
+    if relative {
+        write!(
+            f,
+            "; epsilon was taken relative to h (units \"relative\"): for a length in the \
+             points' units give its units as \"absolute\""
+        )
+    } else {
+        write!(
+            f,
+            "; epsilon was taken in the points' units (units \"absolute\")"
+        )
+    }
+}
+
+/// Which bound of a box ([`NbhdError::InvalidBox`]) is wrong, and how: NaN or swapped corners.
+fn write_invalid_box(
+    f: &mut fmt::Formatter<'_>,
+    query: Option<usize>,
+    coordinate: usize,
+    min: f64,
+    max: f64,
+) -> fmt::Result {
+    match query {
+        Some(q) => write!(f, "box {q}")?,
+        None => write!(f, "the box")?,
+    }
+    write!(
+        f,
+        " has min {min} and max {max} in coordinate {coordinate}: "
+    )?;
+    if min.is_nan() || max.is_nan() {
+        write!(f, "a bound is NaN")
+    } else {
+        write!(
+            f,
+            "min > max (swapped corners?); a box is closed, min <= x <= max"
+        )
     }
 }
 

@@ -556,8 +556,24 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
             return Ok(table);
         }
     }
+    let chunks = fill_chunks(bounds, &fill)?;
+    let (offsets, source) = row_sources(rows, bounds, &row_of, &chunks)?;
+    let (indices, sq_dists) = gather_rows(&offsets, &source, &chunks)?;
+    Ok(NeighborTable {
+        offsets,
+        indices,
+        sq_dists,
+    })
+}
+
+/// The buffered rows of each chunk of [`rows_in_chunks`], filled in parallel; once one chunk's
+/// rows did not fit, the chunks not yet started skip their work and the table is refused.
+fn fill_chunks<'a, T: Scalar>(
+    bounds: &[usize],
+    fill: &(dyn Fn(usize, &mut RowsChunk<'a, T>) -> Result<()> + Sync),
+) -> Result<Vec<RowsChunk<'a, T>>> {
     let out_of_memory = AtomicBool::new(false);
-    let chunks: Vec<Result<RowsChunk<'_, T>>> = (0..bounds.len().saturating_sub(1))
+    let chunks: Vec<Result<RowsChunk<'a, T>>> = (0..bounds.len().saturating_sub(1))
         .into_par_iter()
         .map(|c| {
             let mut chunk = RowsChunk::default();
@@ -573,7 +589,7 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
             Ok(chunk)
         })
         .collect();
-    let chunks: Vec<RowsChunk<'_, T>> = chunks.into_iter().collect::<Result<_>>()?;
+    let chunks: Vec<RowsChunk<'a, T>> = chunks.into_iter().collect::<Result<_>>()?;
     if let Some(failed) = chunks.iter().filter_map(|c| c.failed).max() {
         // The rows of one chunk did not fit; the whole table needs about that much for every
         // chunk (an estimate from the failing chunk's share of the rows).
@@ -584,7 +600,20 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
             bytes: failed.saturating_mul(n_chunks),
         });
     }
-    // Where each row is: its length and its chunk and row in that chunk.
+    Ok(chunks)
+}
+
+/// Where a row of [`rows_in_chunks`] waits: its chunk and its row in that chunk.
+type ChunkRow = (u32, usize);
+
+/// The table's row offsets and, per row, its chunk and row in that chunk (the default for rows
+/// no work item maps to); refused when the table would exceed the memory limit.
+fn row_sources<T: Scalar>(
+    rows: usize,
+    bounds: &[usize],
+    row_of: &(dyn Fn(usize) -> usize + Sync),
+    chunks: &[RowsChunk<'_, T>],
+) -> Result<(Vec<usize>, Vec<ChunkRow>)> {
     let mut offsets = try_zeroed::<usize>(rows + 1, "the table's row offsets")?;
     let mut source = try_filled(rows, (0u32, 0usize), "the table's row sources")?;
     for (c, chunk) in chunks.iter().enumerate() {
@@ -605,6 +634,18 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
             bytes: table_bytes,
         });
     }
+    Ok((offsets, source))
+}
+
+/// The indices and squared distances of the table with row `offsets`, gathered in parallel from
+/// the chunks' buffers (each row's entry `skip` dropped).
+fn gather_rows<T: Scalar>(
+    offsets: &[usize],
+    source: &[ChunkRow],
+    chunks: &[RowsChunk<'_, T>],
+) -> Result<(Vec<u32>, Vec<T>)> {
+    let rows = offsets.len() - 1;
+    let total = offsets[rows];
     // Filled in parallel, by blocks of consecutive rows: each block is one contiguous piece of
     // the output, gathered from the chunks. (The buffers are reserved fallibly and filled by
     // the workers, so their pages are first touched in parallel, too.)
@@ -665,11 +706,7 @@ pub(crate) fn rows_in_chunks<T: Scalar>(
             dists[mid..to].copy_from_slice(&src_dists[after..]);
         }
     });
-    Ok(NeighborTable {
-        offsets,
-        indices,
-        sq_dists,
-    })
+    Ok((indices, sq_dists))
 }
 
 /// Rows ahead whose source entries [`rows_in_chunks`] requests while it gathers a row.

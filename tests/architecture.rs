@@ -429,3 +429,83 @@ fn the_structural_checks_see_a_second_copy() {
     assert!(!defines("impl<T> RowSets<T> for Rows {", "trait RowSets"));
     assert!(!defines("pub trait RowSetsMore {", "trait RowSets"));
 }
+
+/// The longest a production function may be, in lines from its `fn` line to its closing brace
+/// (docs/ARCHITECTURE.md: functions under ~100 lines with names that explain themselves).
+const MAX_FN_LINES: usize = 100;
+
+/// The functions with a body in `text` (formatted by rustfmt) as (name, first line, lines):
+/// each runs from its `fn` line to the first line after it that is its indentation and `}`.
+fn fn_lengths(text: &str) -> Vec<(String, usize, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut found = Vec::new();
+    for (at, line) in lines.iter().enumerate() {
+        let body = line.trim_start();
+        let indent = &line[..line.len() - body.len()];
+        let Some(name_at) = body.find("fn ").filter(|&i| {
+            let head = &body[..i];
+            head.split_whitespace().all(|w| {
+                ["pub", "const", "unsafe", "async", "extern", "\"C\""].contains(&w)
+                    || w.starts_with("pub(")
+            })
+        }) else {
+            continue;
+        };
+        let name: String = body[name_at + 3..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        // the signature ends at the first line ending in `{` (a body), `;` (a declaration) or
+        // `}` (a body on that line)
+        let Some(open) = lines[at..]
+            .iter()
+            .position(|l| l.trim_end().ends_with(['{', ';', '}']))
+        else {
+            continue;
+        };
+        if !lines[at + open].trim_end().ends_with('{') {
+            continue;
+        }
+        let close = format!("{indent}}}");
+        if let Some(end) = lines[at + open..].iter().position(|l| *l == close) {
+            found.push((name, at + 1, open + end + 1));
+        }
+    }
+    found
+}
+
+#[test]
+fn no_production_function_is_longer_than_the_limit() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut long = Vec::new();
+    for dir in ["src", "cli/src", "python/src"] {
+        for (rel, text) in production_files(&root.join(dir)) {
+            for (name, line, len) in fn_lengths(&text) {
+                if len > MAX_FN_LINES {
+                    long.push(format!("{dir}/{rel}:{line} {name} ({len} lines)"));
+                }
+            }
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "functions over {MAX_FN_LINES} lines (split them into steps with names that explain \
+         themselves): {long:#?}"
+    );
+}
+
+#[test]
+fn the_length_check_measures_bodies_and_skips_declarations() {
+    let text = "pub(crate) fn a<T>(\n    x: T,\n) -> T {\n    x\n}\n\
+                trait S {\n    fn decl(&self);\n    fn one(&self) {}\n    fn two(&self) {\n        \
+                let _ = 1;\n    }\n}\n\
+                pub unsafe extern \"C\" fn c() {\n    if true {\n    }\n}\n";
+    assert_eq!(
+        fn_lengths(text),
+        [
+            ("a".to_string(), 1, 5),
+            ("two".to_string(), 9, 3),
+            ("c".to_string(), 13, 4)
+        ]
+    );
+}

@@ -292,6 +292,7 @@ pub fn voxel_grid<T: Scalar>(
     crate::parallel::with_threads(options.threads, || run(view, options, inv))?
 }
 
+/// The voxel grid of the finite points of `view` with the inverse leaf `inv` (inside the pool).
 fn run<T: Scalar>(
     view: &PointsView<'_>,
     options: &VoxelGridOptions,
@@ -311,95 +312,15 @@ fn run<T: Scalar>(
         return Ok(empty());
     };
     let g = grid(&lo, &hi, inv)?;
-    // (voxel, index) pairs of the finite points; index order within a piece
-    let key = |p: &[T]| -> u64 {
-        let mut k = 0u64;
-        for (a, &x) in p.iter().enumerate() {
-            let i = cell(x, g.inv[a]) as i64 - g.low[a];
-            k += i as u64 * g.mul[a];
-        }
-        k
-    };
-    let mut pairs: Vec<(u64, u32)> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .flat_map_iter(|c| {
-            let mut p = vec![T::ZERO; d];
-            let mut out = Vec::with_capacity(CHUNK.min(n - c * CHUNK));
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                view.read_point(i, &mut p);
-                if p.iter().all(|x| x.is_finite()) {
-                    out.push((key(&p), i as u32));
-                }
-            }
-            out
-        })
-        .collect();
-    debug_assert!(pairs.iter().all(|&(k, _)| k < g.cells));
-    // distinct pairs: the unstable sort has one result. With at most 2^32 voxels a pair packs
-    // into one u64 (voxel above index), whose order is the pairs' order and sorts faster.
-    if g.cells <= 1 << 32 {
-        let mut packed: Vec<u64> = pairs.par_iter().map(|&(k, i)| k << 32 | i as u64).collect();
-        packed.par_sort_unstable();
-        pairs
-            .par_iter_mut()
-            .zip(packed.par_iter())
-            .for_each(|(p, &k)| *p = (k >> 32, k as u32));
-    } else {
-        pairs.par_sort_unstable();
-    }
-    // runs of one voxel
-    let mut starts: Vec<usize> = Vec::new();
-    let mut s = 0;
-    while s < pairs.len() {
-        let mut e = s + 1;
-        while e < pairs.len() && pairs[e].0 == pairs[s].0 {
-            e += 1;
-        }
-        if e - s >= options.min_points_per_voxel {
-            starts.push(s);
-            starts.push(e);
-        }
-        s = e;
-    }
+    let pairs = sorted_voxel_pairs(view, &g);
+    let starts = voxel_runs(&pairs, options.min_points_per_voxel);
     let voxels = starts.len() / 2;
     if voxels == 0 {
         return Ok(empty());
     }
     let per_voxel: Vec<(Vec<T>, u32)> = (0..voxels)
         .into_par_iter()
-        .map(|v| {
-            let run = &pairs[starts[2 * v]..starts[2 * v + 1]];
-            let mut p = vec![T::ZERO; d];
-            let mut sum = vec![T::ZERO; d];
-            for &(_, i) in run {
-                view.read_point(i as usize, &mut p);
-                for a in 0..d {
-                    sum[a] = sum[a] + p[a];
-                }
-            }
-            // PCL divides by the count as a float; a quotient in f64 rounded to f32 is the
-            // f32 quotient (53 >= 2·24 + 2).
-            let count = T::from_f64(run.len() as f64).to_f64();
-            let c: Vec<T> = sum
-                .iter()
-                .map(|s| T::from_f64(s.to_f64() / count))
-                .collect();
-            let mut best = (f64::INFINITY, u32::MAX);
-            for &(_, i) in run {
-                view.read_point(i as usize, &mut p);
-                let mut d2 = 0.0;
-                for a in 0..d {
-                    let t = p[a].to_f64() - c[a].to_f64();
-                    d2 += t * t;
-                }
-                // ascending indices: the first of equal distances stays
-                // (a centroid overflowed to infinity gives NaN distances: the first member)
-                if d2 < best.0 || best.1 == u32::MAX {
-                    best = (d2, i);
-                }
-            }
-            (c, best.1)
-        })
+        .map(|v| centroid_and_nearest(view, &pairs[starts[2 * v]..starts[2 * v + 1]]))
         .collect();
     let mut out = VoxelGrid {
         dim: d,
@@ -421,4 +342,106 @@ fn run<T: Scalar>(
         out.offsets.push(out.members.len());
     }
     Ok(out)
+}
+
+impl<T: Scalar> Grid<T> {
+    /// The linear number of the voxel holding the finite point `p`.
+    fn key(&self, p: &[T]) -> u64 {
+        let mut k = 0u64;
+        for (a, &x) in p.iter().enumerate() {
+            let i = cell(x, self.inv[a]) as i64 - self.low[a];
+            k += i as u64 * self.mul[a];
+        }
+        k
+    }
+}
+
+/// The (voxel, index) pairs of the finite points of `view`, sorted: by voxel, then by index.
+fn sorted_voxel_pairs<T: Scalar>(view: &PointsView<'_>, g: &Grid<T>) -> Vec<(u64, u32)> {
+    let d = view.dim();
+    let n = view.len();
+    // index order within a piece
+    let mut pairs: Vec<(u64, u32)> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .flat_map_iter(|c| {
+            let mut p = vec![T::ZERO; d];
+            let mut out = Vec::with_capacity(CHUNK.min(n - c * CHUNK));
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                view.read_point(i, &mut p);
+                if p.iter().all(|x| x.is_finite()) {
+                    out.push((g.key(&p), i as u32));
+                }
+            }
+            out
+        })
+        .collect();
+    debug_assert!(pairs.iter().all(|&(k, _)| k < g.cells));
+    // distinct pairs: the unstable sort has one result. With at most 2^32 voxels a pair packs
+    // into one u64 (voxel above index), whose order is the pairs' order and sorts faster.
+    if g.cells <= 1 << 32 {
+        let mut packed: Vec<u64> = pairs.par_iter().map(|&(k, i)| k << 32 | i as u64).collect();
+        packed.par_sort_unstable();
+        pairs
+            .par_iter_mut()
+            .zip(packed.par_iter())
+            .for_each(|(p, &k)| *p = (k >> 32, k as u32));
+    } else {
+        pairs.par_sort_unstable();
+    }
+    pairs
+}
+
+/// The runs of one voxel in the sorted `pairs` that hold at least `min_points` points, as
+/// `[start, end)` bounds one after the other.
+fn voxel_runs(pairs: &[(u64, u32)], min_points: usize) -> Vec<usize> {
+    let mut starts: Vec<usize> = Vec::new();
+    let mut s = 0;
+    while s < pairs.len() {
+        let mut e = s + 1;
+        while e < pairs.len() && pairs[e].0 == pairs[s].0 {
+            e += 1;
+        }
+        if e - s >= min_points {
+            starts.push(s);
+            starts.push(e);
+        }
+        s = e;
+    }
+    starts
+}
+
+/// The centroid of the points of one voxel's `run` and the member nearest to it (the lowest
+/// index of equal distances).
+fn centroid_and_nearest<T: Scalar>(view: &PointsView<'_>, run: &[(u64, u32)]) -> (Vec<T>, u32) {
+    let d = view.dim();
+    let mut p = vec![T::ZERO; d];
+    let mut sum = vec![T::ZERO; d];
+    for &(_, i) in run {
+        view.read_point(i as usize, &mut p);
+        for a in 0..d {
+            sum[a] = sum[a] + p[a];
+        }
+    }
+    // PCL divides by the count as a float; a quotient in f64 rounded to f32 is the
+    // f32 quotient (53 >= 2·24 + 2).
+    let count = T::from_f64(run.len() as f64).to_f64();
+    let c: Vec<T> = sum
+        .iter()
+        .map(|s| T::from_f64(s.to_f64() / count))
+        .collect();
+    let mut best = (f64::INFINITY, u32::MAX);
+    for &(_, i) in run {
+        view.read_point(i as usize, &mut p);
+        let mut d2 = 0.0;
+        for a in 0..d {
+            let t = p[a].to_f64() - c[a].to_f64();
+            d2 += t * t;
+        }
+        // ascending indices: the first of equal distances stays
+        // (a centroid overflowed to infinity gives NaN distances: the first member)
+        if d2 < best.0 || best.1 == u32::MAX {
+            best = (d2, i);
+        }
+    }
+    (c, best.1)
 }

@@ -389,8 +389,18 @@ impl<T: Scalar> KdTree<T> {
     /// the split's dimension — what the search's pruning (search.rs) relies on for exact
     /// answers.
     fn check_nodes(&self) -> Result<()> {
+        self.check_node_shape()?;
+        if self.is_empty() {
+            return Ok(()); // one empty leaf, checked by the shape: no split
+        }
+        self.check_node_splits()
+    }
+
+    /// Pass 1 of [`Self::check_nodes`], the shape: a preorder walk in which the nodes must come
+    /// in index order, each leaf holding the points due to it and each split well-formed, to
+    /// the depth stated.
+    fn check_node_shape(&self) -> Result<()> {
         let (nodes, n, d) = (&self.nodes, self.len(), self.dim);
-        // Pass 1, the shape: a preorder walk in which the nodes must come in index order.
         // Frames: (node, first point, one past the last point, depth).
         let mut stack = vec![(0usize, 0usize, n, 0usize)];
         let mut next = 0usize;
@@ -458,12 +468,15 @@ impl<T: Scalar> KdTree<T> {
                 self.depth
             )));
         }
-        if n == 0 {
-            return Ok(()); // one empty leaf, checked above: no split
-        }
-        // Pass 2, the splits: tight boxes bottom-up. In reverse preorder a subtree leaves
-        // exactly its box on the stack, so at an internal node the top box is its left child's
-        // and the one below its right child's.
+        Ok(())
+    }
+
+    /// Pass 2 of [`Self::check_nodes`], the splits of a non-empty tree of a valid shape: every
+    /// point of a left subtree ≤ its split ≤ every point of the right one. Tight boxes are built
+    /// bottom-up: in reverse preorder a subtree leaves exactly its box on the stack, so at an
+    /// internal node the top box is its left child's and the one below its right child's.
+    fn check_node_splits(&self) -> Result<()> {
+        let (nodes, d) = (&self.nodes, self.dim);
         let mut boxes: Vec<T> = Vec::new();
         for (i, nd) in nodes.iter().enumerate().rev() {
             if nd.is_leaf() {

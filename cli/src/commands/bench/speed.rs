@@ -618,6 +618,18 @@ fn neighborhood<T: Scalar>(op: Op, radius: T) -> Neighborhood<T> {
     }
 }
 
+/// What one set is timed on: its points in one scalar type, nbhd's tree, kiddo's tree, brute
+/// force (on small sets) and the radius of the radius tables.
+struct Subjects<'a, T: Float> {
+    set: &'a str,
+    pts: &'a [[T; 3]],
+    tree: &'a KdTree<T>,
+    peer: &'a T::Peer,
+    brute: Option<&'a BruteForce<T>>,
+    radius: T,
+    reps: usize,
+}
+
 /// Every operation and thread count on one set in one scalar type; returns the tree memory.
 fn bench_set<T: Float>(
     set: &BenchSet,
@@ -640,7 +652,15 @@ fn bench_set<T: Float>(
     let brute = (set.points.len() <= plan.brute_max_points && plan.ops.contains(&Op::Knn10))
         .then(|| BruteForce::<T>::new(&view, NonFinitePolicy::Reject))
         .transpose()?;
-    let r = T::from_f64(radius);
+    let subjects = Subjects {
+        set: &set.name,
+        pts: &pts,
+        tree: &tree,
+        peer: &peer,
+        brute: brute.as_ref(),
+        radius: T::from_f64(radius),
+        reps: plan.reps,
+    };
     for &op in &plan.ops {
         for &threads in &plan.threads {
             let p = pool(threads)?;
@@ -671,58 +691,9 @@ fn bench_set<T: Float>(
                     ],
                 );
             } else if op.is_single() {
-                let k = op.k().expect("single ops are kNN");
-                let (mut ours, mut theirs, mut via_c) = (0, 0, 0);
-                let c_tree = CTree::build(&pts)?;
-                let [nbhd_s, c_abi_s, kiddo_s] = interleaved_medians(
-                    plan.reps,
-                    [
-                        &mut || ours = p.install(|| single_table(&tree, &pts, k)),
-                        &mut || via_c = p.install(|| c_tree.table(&pts, k)),
-                        &mut || theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r)),
-                    ],
-                );
-                (row.nbhd_s, row.c_abi_s, row.kiddo_s) = (nbhd_s, Some(c_abi_s), kiddo_s);
-                if via_c != ours {
-                    return Err(format!(
-                        "{}: the C ABI found {via_c} neighbours, KdTree::knn {ours}",
-                        set.name
-                    )
-                    .into());
-                }
-                row.totals = Some((ours, theirs));
+                time_single_knn(&subjects, &p, &mut row)?;
             } else {
-                let nbhd = neighborhood(op, r);
-                let opts = TableOptions {
-                    exclude_self: false,
-                    threads,
-                };
-                let (mut ours, mut theirs) = (0, 0);
-                [row.nbhd_s, row.kiddo_s] = interleaved_medians(
-                    plan.reps,
-                    [
-                        &mut || {
-                            ours = tree
-                                .neighborhoods(nbhd, &opts)
-                                .expect("valid options")
-                                .total();
-                        },
-                        &mut || theirs = p.install(|| T::peer_table(&peer, &pts, op, r * r)),
-                    ],
-                );
-                row.totals = Some((ours, theirs));
-                {
-                    let exact = tree.neighborhoods(nbhd, &opts).expect("valid options");
-                    row.floor_s = Some(median_secs(plan.reps, || {
-                        p.install(|| floor_kernel(&pts, &exact));
-                    }));
-                }
-                if let (Some(b), Op::Knn10) = (&brute, op) {
-                    row.brute_s = Some(median_secs(1, || {
-                        p.install(|| neighborhoods_of_all(b, nbhd, false))
-                            .expect("valid options");
-                    }));
-                }
+                time_table(&subjects, &p, &mut row);
             }
             rows.push(row);
         }
@@ -735,6 +706,76 @@ fn bench_set<T: Float>(
         bytes_per_point: s.bytes as f64 / s.points as f64,
         radius,
     })
+}
+
+/// Times the single-query kNN operation `row.op` in the pool `p`: nbhd in Rust, nbhd through
+/// the C ABI and kiddo, alternating; the Rust and C answers must agree.
+fn time_single_knn<T: Float>(
+    s: &Subjects<'_, T>,
+    p: &rayon::ThreadPool,
+    row: &mut Row,
+) -> Result<()> {
+    let (op, r) = (row.op, s.radius);
+    let k = op.k().expect("single ops are kNN");
+    let (mut ours, mut theirs, mut via_c) = (0, 0, 0);
+    let c_tree = CTree::build(s.pts)?;
+    let [nbhd_s, c_abi_s, kiddo_s] = interleaved_medians(
+        s.reps,
+        [
+            &mut || ours = p.install(|| single_table(s.tree, s.pts, k)),
+            &mut || via_c = p.install(|| c_tree.table(s.pts, k)),
+            &mut || theirs = p.install(|| T::peer_table(s.peer, s.pts, op, r * r)),
+        ],
+    );
+    (row.nbhd_s, row.c_abi_s, row.kiddo_s) = (nbhd_s, Some(c_abi_s), kiddo_s);
+    if via_c != ours {
+        return Err(format!(
+            "{}: the C ABI found {via_c} neighbours, KdTree::knn {ours}",
+            s.set
+        )
+        .into());
+    }
+    row.totals = Some((ours, theirs));
+    Ok(())
+}
+
+/// Times the all-point table `row.op` with `row.threads` threads (pool `p`): nbhd and kiddo
+/// alternating, then the floor kernel over nbhd's exact table and, for kNN-10 on small sets,
+/// brute force.
+fn time_table<T: Float>(s: &Subjects<'_, T>, p: &rayon::ThreadPool, row: &mut Row) {
+    let (op, r) = (row.op, s.radius);
+    let nbhd = neighborhood(op, r);
+    let opts = TableOptions {
+        exclude_self: false,
+        threads: row.threads,
+    };
+    let (mut ours, mut theirs) = (0, 0);
+    [row.nbhd_s, row.kiddo_s] = interleaved_medians(
+        s.reps,
+        [
+            &mut || {
+                ours = s
+                    .tree
+                    .neighborhoods(nbhd, &opts)
+                    .expect("valid options")
+                    .total();
+            },
+            &mut || theirs = p.install(|| T::peer_table(s.peer, s.pts, op, r * r)),
+        ],
+    );
+    row.totals = Some((ours, theirs));
+    {
+        let exact = s.tree.neighborhoods(nbhd, &opts).expect("valid options");
+        row.floor_s = Some(median_secs(s.reps, || {
+            p.install(|| floor_kernel(s.pts, &exact));
+        }));
+    }
+    if let (Some(b), Op::Knn10) = (s.brute, op) {
+        row.brute_s = Some(median_secs(1, || {
+            p.install(|| neighborhoods_of_all(b, nbhd, false))
+                .expect("valid options");
+        }));
+    }
 }
 
 /// Mean row length of the radius table (self included), if it was run: about 20 unless the
