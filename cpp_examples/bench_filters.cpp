@@ -9,7 +9,7 @@
 // - SOR: pcl::StatisticalOutlierRemoval (k = 20, alpha = 1) vs nbhd_remove_statistical_outliers
 // - ROR: pcl::RadiusOutlierRemoval (radius r, m = 4) vs nbhd_remove_radius_outliers
 // - voxel: pcl::VoxelGrid vs nbhd_voxel_grid
-// - boxes: 1000 boxes of 1 % of the bounding volume: nbhd_tree_boxes on a built tree vs a scan
+// - boxes: 1000 boxes of 1 % of the bounding volume: nbhd_tree_in_boxes on a built tree vs a scan
 //   over all points per box vs pcl::CropBox per box (nanoflann 1.4.2, Debian's, has no box
 //   search). Tree build time listed separately.
 // Kept/voxel counts are printed next to the times, PCL's and nbhd's (they must agree).
@@ -218,17 +218,17 @@ static void run(const char *name, pcl::PointCloud<pcl::PointXYZ>::Ptr cloud, dou
                 tree = build(*cloud, th);
             });
             size_t cap = 0;
-            nbhd_tree_boxes(tree, boxes.data(), B, th, offsets.data(), nullptr, 0, &cap);
+            nbhd_tree_in_boxes(tree, boxes.data(), B, th, offsets.data(), nullptr, 0, &cap);
             std::vector<uint32_t> idx(cap);
             t[th - 1] = best([&] {
-                if (nbhd_tree_boxes(tree, boxes.data(), B, th, offsets.data(), idx.data(), cap, &total) != NBHD_STATUS_OK)
+                if (nbhd_tree_in_boxes(tree, boxes.data(), B, th, offsets.data(), idx.data(), cap, &total) != NBHD_STATUS_OK)
                     std::abort();
             });
             nbhd_tree_free(tree);
         }
         std::printf("\n| 1000 boxes, 1 %% volume | ms | / nbhd-1 | points found |\n|---|---:|---:|---:|\n");
-        std::printf("| nbhd_tree_boxes, 1 thread (tree built: %.1f ms) | %.1f | 1.00 | %zu |\n", bt[0], t[0], total);
-        std::printf("| nbhd_tree_boxes, 2 threads (tree built: %.1f ms) | %.1f | %.2f | %zu |\n", bt[1], t[1], t[1] / t[0], total);
+        std::printf("| nbhd_tree_in_boxes, 1 thread (tree built: %.1f ms) | %.1f | 1.00 | %zu |\n", bt[0], t[0], total);
+        std::printf("| nbhd_tree_in_boxes, 2 threads (tree built: %.1f ms) | %.1f | %.2f | %zu |\n", bt[1], t[1], t[1] / t[0], total);
         std::printf("| scan over all points | %.1f | %.1f | %zu |\n", scan, scan / t[0], scan_total);
         std::printf("| pcl::CropBox per box | %.1f | %.1f | %zu |\n", crop, crop / t[0], crop_total);
     }

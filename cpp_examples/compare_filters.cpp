@@ -1,5 +1,5 @@
 // Box queries and outlier removal, nbhd against PCL on a scan loaded with PCL's own reader:
-// pcl::CropBox vs nbhd_tree_box, pcl::StatisticalOutlierRemoval vs
+// pcl::CropBox vs nbhd_tree_in_box, pcl::StatisticalOutlierRemoval vs
 // nbhd_remove_statistical_outliers, pcl::RadiusOutlierRemoval vs nbhd_remove_radius_outliers.
 // The kept sets must be identical, with PCL's conventions bridged explicitly:
 //
@@ -122,7 +122,7 @@ int main(int argc, char **argv) {
         pcl::Indices pcl_in;
         crop.filter(pcl_in);
         std::sort(pcl_in.begin(), pcl_in.end());
-        nbhd_status st = nbhd_tree_box(tree, bmin, bmax, kept.data(), n, &count);
+        nbhd_status st = nbhd_tree_in_box(tree, bmin, bmax, kept.data(), n, &count);
         CHECK(st == NBHD_STATUS_OK, "%s", nbhd_last_error_message());
         std::vector<uint32_t> ours(kept.begin(), kept.begin() + count);
         std::size_t d = differences(ours, pcl_in);

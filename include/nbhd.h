@@ -1552,19 +1552,19 @@ nbhd_status nbhd_tree_knn_radius_index(const nbhd_tree *tree,
  * tree's scalar type; `indices` NULL or writable for `capacity` values; `count` NULL or
  * writable.
  */
-nbhd_status nbhd_tree_box(const nbhd_tree *tree,
-                          const void *min,
-                          const void *max,
-                          uint32_t *indices,
-                          size_t capacity,
-                          size_t *count);
+nbhd_status nbhd_tree_in_box(const nbhd_tree *tree,
+                             const void *min,
+                             const void *max,
+                             uint32_t *indices,
+                             size_t capacity,
+                             size_t *count);
 
 /**
  * The points inside each box of a batch, computed in parallel; rows in the boxes' order,
  * identical for any thread count.
  *
  * - `boxes`: `n_boxes * 2 * dim` values in the tree's scalar type: box i is its `min`
- *   corner (`dim` values) then its `max` corner. Closed boxes, as nbhd_tree_box.
+ *   corner (`dim` values) then its `max` corner. Closed boxes, as nbhd_tree_in_box.
  * - `threads`: 0 for a thread per core, else 1 ..= NBHD_MAX_THREADS.
  * - `offsets`: `n_boxes + 1` values (size_t); row i is `indices[offsets[i] .. offsets[i + 1]]`,
  *   the caller indices inside box i, ascending.
@@ -1582,14 +1582,14 @@ nbhd_status nbhd_tree_box(const nbhd_tree *tree,
  * of the tree's scalar type; `offsets` NULL or writable for `n_boxes + 1` values; `indices`
  * NULL or writable for `capacity` values; `total` NULL or writable.
  */
-nbhd_status nbhd_tree_boxes(const nbhd_tree *tree,
-                            const void *boxes,
-                            size_t n_boxes,
-                            size_t threads,
-                            size_t *offsets,
-                            uint32_t *indices,
-                            size_t capacity,
-                            size_t *total);
+nbhd_status nbhd_tree_in_boxes(const nbhd_tree *tree,
+                               const void *boxes,
+                               size_t n_boxes,
+                               size_t threads,
+                               size_t *offsets,
+                               uint32_t *indices,
+                               size_t capacity,
+                               size_t *total);
 
 /**
  * The nearest-neighbour spacing of the tree's points, computed on `threads` workers (0: a

@@ -40,7 +40,7 @@ pub mod persist;
 
 pub mod query;
 
-pub mod region;
+pub mod in_box;
 
 pub mod filter;
 
@@ -65,11 +65,11 @@ mod fields;
 pub use dynamic::*;
 pub use enums::*;
 pub use filter::*;
+pub use in_box::*;
 pub use normals::*;
 pub use persist::*;
 pub use prepared::*;
 pub use query::*;
-pub use region::*;
 pub use robust::*;
 pub use smooth::*;
 pub use smoothing_io::*;

@@ -2,7 +2,7 @@
 //! closed axis-aligned box, one box or a batch, over the flavour's box traversal
 //! ([`NeighborIndex::visit_box`]).
 //!
-//! Convention (`src/query/region.rs`): the box is **closed**, a point `x` is inside when
+//! Convention (`src/query/in_box.rs`): the box is **closed**, a point `x` is inside when
 //! `min[j] ≤ x[j] ≤ max[j]` for every coordinate `j`, compared in the index's scalar type.
 //! Bounds may be infinite (a slab or a half-space); a NaN bound or `min[j] > max[j]` is refused
 //! with [`NbhdError::InvalidBox`] (an inverted box is nearly always swapped corners, so it is
@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
 use crate::parallel::with_threads;
-use crate::query::region::check_box;
+use crate::query::in_box::check_box;
 use crate::scalar::Scalar;
 
 /// Index rows, one per box of a batch: row `i` is `indices[offsets[i]..offsets[i + 1]]`,

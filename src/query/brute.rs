@@ -70,13 +70,13 @@ impl<T: Scalar> NeighborSearch<T> for BruteForce<T> {
 
 impl<T: Scalar> BruteForce<T> {
     /// The caller's indices of all points in the closed box `min ≤ x ≤ max`, ascending (the
-    /// convention of `src/query/region.rs`), by testing every point: the reference of the
+    /// convention of `src/query/in_box.rs`), by testing every point: the reference of the
     /// tree's box query.
     pub fn in_box(&self, min: &[T], max: &[T], out: &mut Vec<u32>) -> Result<()> {
-        super::region::check_box(min, max, self.cloud.dim, None)?;
+        super::in_box::check_box(min, max, self.cloud.dim, None)?;
         out.clear();
         for slot in 0..self.cloud.len() {
-            if super::region::in_closed_box(self.cloud.point(slot), min, max) {
+            if super::in_box::in_closed_box(self.cloud.point(slot), min, max) {
                 out.push(self.cloud.ids[slot]);
             }
         }

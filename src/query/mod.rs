@@ -12,9 +12,9 @@
 
 pub mod brute;
 mod heap;
+pub(crate) mod in_box;
 pub(crate) mod order;
 pub mod pca_sweep;
-pub(crate) mod region;
 #[doc(hidden)]
 pub mod result_set;
 

@@ -6,7 +6,7 @@
 //! and their rows are the index's (`src/index/in_box.rs`).
 
 use super::KdTree;
-use crate::query::region::in_closed_box;
+use crate::query::in_box::in_closed_box;
 use crate::scalar::Scalar;
 
 impl<T: Scalar> KdTree<T> {

@@ -76,16 +76,16 @@ static void test_boxes(int f32) {
         const void *hi = f32 ? (const void *)(boxesf + b * 2 * DIM + DIM)
                              : (const void *)(boxes[b] + DIM);
         expect_total += n;
-        CHECK_STATUS(nbhd_tree_box(tree, lo, hi, got, N, &count), NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_tree_in_box(tree, lo, hi, got, N, &count), NBHD_STATUS_OK);
         CHECK(count == n);
         CHECK(n == 0 || memcmp(got, want, n * sizeof(uint32_t)) == 0);
         if (n > 1) {
             /* too small: the size needed, nothing written */
             got[0] = 777;
-            CHECK_STATUS(nbhd_tree_box(tree, lo, hi, got, 1, &count),
+            CHECK_STATUS(nbhd_tree_in_box(tree, lo, hi, got, 1, &count),
                          NBHD_STATUS_BUFFER_TOO_SMALL);
             CHECK(count == n && got[0] == 777);
-            CHECK_STATUS(nbhd_tree_box(tree, lo, hi, NULL, 0, &count),
+            CHECK_STATUS(nbhd_tree_in_box(tree, lo, hi, NULL, 0, &count),
                          NBHD_STATUS_BUFFER_TOO_SMALL);
             CHECK(count == n);
         }
@@ -94,7 +94,7 @@ static void test_boxes(int f32) {
     /* the batch: same rows, any thread count */
     for (i = 1; i <= 3; i += 2) {
         const void *all = f32 ? (const void *)boxesf : (const void *)allf;
-        CHECK_STATUS(nbhd_tree_boxes(tree, all, 3, i, offsets, batch, 3 * N, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, all, 3, i, offsets, batch, 3 * N, &total),
                      NBHD_STATUS_OK);
         CHECK(total == expect_total && offsets[0] == 0 && offsets[3] == total);
         for (b = 0; b < 3; b++) {
@@ -102,11 +102,11 @@ static void test_boxes(int f32) {
             CHECK(offsets[b + 1] - offsets[b] == n);
             CHECK(n == 0 || memcmp(batch + offsets[b], want, n * sizeof(uint32_t)) == 0);
         }
-        CHECK_STATUS(nbhd_tree_boxes(tree, all, 3, i, offsets, NULL, 0, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, all, 3, i, offsets, NULL, 0, &total),
                      NBHD_STATUS_BUFFER_TOO_SMALL);
         CHECK(total == expect_total);
     }
-    CHECK_STATUS(nbhd_tree_boxes(tree, NULL, 0, 0, offsets, NULL, 0, &total), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_tree_in_boxes(tree, NULL, 0, 0, offsets, NULL, 0, &total), NBHD_STATUS_OK);
     CHECK(total == 0 && offsets[0] == 0);
     /* bad boxes */
     {
@@ -114,38 +114,38 @@ static void test_boxes(int f32) {
         float lof[DIM] = {1.0f, 0.0f, 0.0f}, hif[DIM] = {0.0f, 1.0f, 1.0f};
         const void *l = f32 ? (const void *)lof : (const void *)lo;
         const void *h = f32 ? (const void *)hif : (const void *)hi;
-        CHECK_STATUS(nbhd_tree_box(tree, l, h, got, N, &count), NBHD_STATUS_INVALID_BOX);
+        CHECK_STATUS(nbhd_tree_in_box(tree, l, h, got, N, &count), NBHD_STATUS_INVALID_BOX);
         CHECK(count == 0);
         CHECK_MESSAGE("min > max");
         lo[0] = NAN;
         lof[0] = NAN;
         hi[0] = 1.0;
         hif[0] = 1.0f;
-        CHECK_STATUS(nbhd_tree_box(tree, l, h, got, N, &count), NBHD_STATUS_INVALID_BOX);
+        CHECK_STATUS(nbhd_tree_in_box(tree, l, h, got, N, &count), NBHD_STATUS_INVALID_BOX);
         CHECK_MESSAGE("NaN");
-        CHECK_STATUS(nbhd_tree_box(tree, NULL, h, got, N, &count), NBHD_STATUS_NULL_POINTER);
-        CHECK_STATUS(nbhd_tree_box(NULL, l, h, got, N, &count), NBHD_STATUS_NULL_POINTER);
-        CHECK_STATUS(nbhd_tree_box(tree, l, h, got, N, NULL), NBHD_STATUS_NULL_POINTER);
-        CHECK_STATUS(nbhd_tree_box(tree, (const char *)l + 1, h, got, N, &count),
+        CHECK_STATUS(nbhd_tree_in_box(tree, NULL, h, got, N, &count), NBHD_STATUS_NULL_POINTER);
+        CHECK_STATUS(nbhd_tree_in_box(NULL, l, h, got, N, &count), NBHD_STATUS_NULL_POINTER);
+        CHECK_STATUS(nbhd_tree_in_box(tree, l, h, got, N, NULL), NBHD_STATUS_NULL_POINTER);
+        CHECK_STATUS(nbhd_tree_in_box(tree, (const char *)l + 1, h, got, N, &count),
                      NBHD_STATUS_MISALIGNED_POINTER);
         {
             /* two boxes, the second inverted in y */
             double inv[4 * DIM] = {0, 0, 0, 1, 1, 1, 0, 1, 0, 1, 0, 1};
             float invf[4 * DIM] = {0, 0, 0, 1, 1, 1, 0, 1, 0, 1, 0, 1};
-            CHECK_STATUS(nbhd_tree_boxes(tree, f32 ? (const void *)invf : (const void *)inv, 2,
+            CHECK_STATUS(nbhd_tree_in_boxes(tree, f32 ? (const void *)invf : (const void *)inv, 2,
                                          0, offsets, batch, N, &total),
                          NBHD_STATUS_INVALID_BOX);
             CHECK_MESSAGE("box 1");
             CHECK(total == 0);
         }
-        CHECK_STATUS(nbhd_tree_boxes(tree, l, 0, 0, offsets, batch, N, &total), NBHD_STATUS_OK);
-        CHECK_STATUS(nbhd_tree_boxes(tree, NULL, 1, 0, offsets, batch, N, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, l, 0, 0, offsets, batch, N, &total), NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, NULL, 1, 0, offsets, batch, N, &total),
                      NBHD_STATUS_NULL_POINTER);
-        CHECK_STATUS(nbhd_tree_boxes(tree, f32 ? (const void *)boxesf : (const void *)allf, 1, 0, NULL, batch, N, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, f32 ? (const void *)boxesf : (const void *)allf, 1, 0, NULL, batch, N, &total),
                      NBHD_STATUS_NULL_POINTER);
-        CHECK_STATUS(nbhd_tree_boxes(tree, f32 ? (const void *)boxesf : (const void *)allf, 1, 5000, offsets, batch, N, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, f32 ? (const void *)boxesf : (const void *)allf, 1, 5000, offsets, batch, N, &total),
                      NBHD_STATUS_INVALID_OPTION);
-        CHECK_STATUS(nbhd_tree_boxes(tree, allf, SIZE_MAX / 2, 0, offsets, batch, N, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, allf, SIZE_MAX / 2, 0, offsets, batch, N, &total),
                      NBHD_STATUS_INVALID_ARGUMENT);
     }
     nbhd_tree_free(tree);

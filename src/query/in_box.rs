@@ -1,7 +1,8 @@
-//! The box (orthogonal range) query's convention, shared by the tree (`tree/range.rs`) and
-//! the brute-force reference: a **closed** axis-aligned box, `min[j] ≤ x[j] ≤ max[j]` for every
-//! coordinate, compared in the searcher's scalar type. Infinite bounds are allowed; a NaN bound
-//! or `min[j] > max[j]` is refused ([`NbhdError::InvalidBox`]).
+//! The box query's convention, shared by the index (`src/index/in_box.rs`, over the tree's
+//! `src/tree/boxes.rs`) and the brute-force reference: a **closed** axis-aligned box,
+//! `min[j] ≤ x[j] ≤ max[j]` for every coordinate, compared in the searcher's scalar type.
+//! Infinite bounds are allowed; a NaN bound or `min[j] > max[j]` is refused
+//! ([`NbhdError::InvalidBox`]).
 
 use crate::error::{NbhdError, Result};
 use crate::scalar::Scalar;

@@ -1,6 +1,6 @@
-//! Box (orthogonal range) queries into the caller's buffers: one box, or a batch of boxes
-//! answered in parallel. The convention (closed boxes, refusals) is the core's
-//! (`src/query/region.rs`).
+//! Box queries ([`NeighborIndex::in_box`], [`NeighborIndex::in_boxes`]) into the caller's
+//! buffers: one box, or a batch of boxes answered in parallel. The convention (closed boxes,
+//! refusals) is the core's (`src/query/in_box.rs`).
 
 use std::ffi::c_void;
 
@@ -81,7 +81,7 @@ unsafe fn copy_out<V: Copy>(
 /// tree's scalar type; `indices` NULL or writable for `capacity` values; `count` NULL or
 /// writable.
 #[no_mangle]
-pub unsafe extern "C" fn nbhd_tree_box(
+pub unsafe extern "C" fn nbhd_tree_in_box(
     tree: *const nbhd_tree,
     min: *const c_void,
     max: *const c_void,
@@ -89,7 +89,7 @@ pub unsafe extern "C" fn nbhd_tree_box(
     capacity: usize,
     count: *mut usize,
 ) -> nbhd_status {
-    guard("nbhd_tree_box", || {
+    guard("nbhd_tree_in_box", || {
         // SAFETY: `count` is NULL or writable (caller).
         let count = unsafe { init_out(count, "count", 0) }?;
         // SAFETY: `tree` is NULL or a live handle (caller).
@@ -100,10 +100,10 @@ pub unsafe extern "C" fn nbhd_tree_box(
     })
 }
 
-/// [`nbhd_tree_box`] on a typed tree.
+/// [`nbhd_tree_in_box`] on a typed tree.
 ///
 /// # Safety
-/// As nbhd_tree_box; `count` checked and writable.
+/// As nbhd_tree_in_box; `count` checked and writable.
 unsafe fn one_box<T: Scalar, I: NeighborIndex<T>>(
     tree: &I,
     min: *const c_void,
@@ -139,7 +139,7 @@ unsafe fn one_box<T: Scalar, I: NeighborIndex<T>>(
 /// identical for any thread count.
 ///
 /// - `boxes`: `n_boxes * 2 * dim` values in the tree's scalar type: box i is its `min`
-///   corner (`dim` values) then its `max` corner. Closed boxes, as nbhd_tree_box.
+///   corner (`dim` values) then its `max` corner. Closed boxes, as nbhd_tree_in_box.
 /// - `threads`: 0 for a thread per core, else 1 ..= NBHD_MAX_THREADS.
 /// - `offsets`: `n_boxes + 1` values (size_t); row i is `indices[offsets[i] .. offsets[i + 1]]`,
 ///   the caller indices inside box i, ascending.
@@ -158,7 +158,7 @@ unsafe fn one_box<T: Scalar, I: NeighborIndex<T>>(
 /// NULL or writable for `capacity` values; `total` NULL or writable.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
-pub unsafe extern "C" fn nbhd_tree_boxes(
+pub unsafe extern "C" fn nbhd_tree_in_boxes(
     tree: *const nbhd_tree,
     boxes: *const c_void,
     n_boxes: usize,
@@ -168,7 +168,7 @@ pub unsafe extern "C" fn nbhd_tree_boxes(
     capacity: usize,
     total: *mut usize,
 ) -> nbhd_status {
-    guard("nbhd_tree_boxes", || {
+    guard("nbhd_tree_in_boxes", || {
         // SAFETY: `total` is NULL or writable (caller).
         let total = unsafe { init_out(total, "total", 0) }?;
         // SAFETY: `tree` is NULL or a live handle (caller).
@@ -186,7 +186,7 @@ pub unsafe extern "C" fn nbhd_tree_boxes(
     })
 }
 
-/// The caller's output buffers of nbhd_tree_boxes.
+/// The caller's output buffers of nbhd_tree_in_boxes.
 struct BatchOut {
     offsets: *mut usize,
     indices: *mut u32,
@@ -194,10 +194,10 @@ struct BatchOut {
     total: *mut usize,
 }
 
-/// [`nbhd_tree_boxes`] on a typed tree.
+/// [`nbhd_tree_in_boxes`] on a typed tree.
 ///
 /// # Safety
-/// As nbhd_tree_boxes; `out.total` and `out.offsets` checked.
+/// As nbhd_tree_in_boxes; `out.total` and `out.offsets` checked.
 unsafe fn many_boxes<T: Scalar, I: NeighborIndex<T>>(
     tree: &I,
     boxes: *const c_void,
