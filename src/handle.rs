@@ -307,7 +307,7 @@ impl AnyIndex {
         spec: NeighborhoodSpec,
         options: &TableOptions,
     ) -> Result<AnyTable> {
-        with_index!(self, t, T => Ok(t.neighborhoods(spec.to::<T>()?, options)?.into()))
+        with_index!(self, t, T => Ok(t.neighborhoods(spec.to_with::<T>(&options.query)?, options)?.into()))
     }
 
     /// [`NeighborIndex::neighborhoods_at`], the radius converted to the index's type.
@@ -317,7 +317,7 @@ impl AnyIndex {
         spec: NeighborhoodSpec,
         options: &TableOptions,
     ) -> Result<AnyTable> {
-        with_index!(self, t, T => Ok(t.neighborhoods_at(indices, spec.to::<T>()?, options)?.into()))
+        with_index!(self, t, T => Ok(t.neighborhoods_at(indices, spec.to_with::<T>(&options.query)?, options)?.into()))
     }
 
     /// [`NeighborIndex::neighborhoods_of`], the queries converted to the index's type.
@@ -327,7 +327,7 @@ impl AnyIndex {
         spec: NeighborhoodSpec,
         options: &TableOptions,
     ) -> Result<AnyTable> {
-        with_index!(self, t, T => Ok(t.neighborhoods_of(queries, spec.to::<T>()?, options)?.into()))
+        with_index!(self, t, T => Ok(t.neighborhoods_of(queries, spec.to_with::<T>(&options.query)?, options)?.into()))
     }
 
     /// The points in each box of a batch ([`NeighborIndex::in_boxes`]): `boxes` holds one box

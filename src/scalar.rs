@@ -63,6 +63,18 @@ pub trait Scalar:
     /// The index stored by [`Scalar::from_index_bits`].
     #[doc(hidden)]
     fn index_bits(self) -> u32;
+    /// Absolute value.
+    fn abs(self) -> Self;
+    /// `self` to the power `p` (the platform's `pow`).
+    fn powf(self, p: Self) -> Self;
+    /// Square root.
+    fn sqrt(self) -> Self;
+    /// The largest value below `self` (`x < self` ⇔ `x ≤ self.next_down()` for every `x`).
+    fn next_down(self) -> Self;
+    /// Machine epsilon (the distance from 1 to the next value).
+    const EPSILON: Self;
+    /// The largest finite value.
+    const MAX: Self;
     /// Larger of two non-NaN values.
     #[inline]
     fn max_of(self, other: Self) -> Self {
@@ -93,6 +105,24 @@ impl Scalar for f32 {
     const TYPE: ScalarType = ScalarType::F32;
     const ZERO: Self = 0.0;
     const INFINITY: Self = f32::INFINITY;
+    const EPSILON: Self = f32::EPSILON;
+    const MAX: Self = f32::MAX;
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    #[inline]
+    fn powf(self, p: Self) -> Self {
+        f32::powf(self, p)
+    }
+    #[inline]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[inline]
+    fn next_down(self) -> Self {
+        f32::next_down(self)
+    }
     #[inline]
     fn from_f64(v: f64) -> Self {
         v as f32
@@ -125,6 +155,24 @@ impl Scalar for f64 {
     const TYPE: ScalarType = ScalarType::F64;
     const ZERO: Self = 0.0;
     const INFINITY: Self = f64::INFINITY;
+    const EPSILON: Self = f64::EPSILON;
+    const MAX: Self = f64::MAX;
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    #[inline]
+    fn powf(self, p: Self) -> Self {
+        f64::powf(self, p)
+    }
+    #[inline]
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[inline]
+    fn next_down(self) -> Self {
+        f64::next_down(self)
+    }
     #[inline]
     fn from_f64(v: f64) -> Self {
         v

@@ -4,7 +4,7 @@
 
 use crate::error::{NbhdError, Result};
 use crate::prefetch::{prefetch_bytes, prefetch_range};
-use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
+use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query, QueryOptions};
 use crate::scalar::Scalar;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -416,12 +416,16 @@ pub(crate) fn check_knn_total<T: Scalar>(
 }
 
 /// Options of the all-point neighbourhood table.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TableOptions {
     /// Leave each point out of its own row (the default, as smoothing and normals need).
     pub exclude_self: bool,
     /// Worker threads: 0 uses the current rayon pool. The table is identical for any value.
     pub threads: usize,
+    /// How each row's query measures (metric, eps, strict radius; default exact Euclidean):
+    /// the rows are then those of [`NeighborIndex::search_with`](crate::NeighborIndex::search_with),
+    /// and `sq_dists` hold the metric's keys.
+    pub query: QueryOptions,
 }
 
 impl Default for TableOptions {
@@ -429,6 +433,7 @@ impl Default for TableOptions {
         Self {
             exclude_self: true,
             threads: 0,
+            query: QueryOptions::default(),
         }
     }
 }

@@ -6,6 +6,7 @@
 use super::{bit, DynamicKdTree};
 use crate::error::Result;
 use crate::index::{self, NeighborIndex, StoredPoints};
+use crate::metric::{Measure, Norm, NormUser, L2};
 use crate::query::result_set::ResultSet;
 use crate::query::{order, resolve_query, Neighbor, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
@@ -80,12 +81,12 @@ impl<T: Scalar, C: ResultSet<T>> ResultSet<T> for ShiftLive<'_, C> {
     }
 }
 
-/// Squared distance from `q` to the box `[lo, hi]`, a lower bound of the squared distance the
-/// search computes to any point in it: per dimension the gap is a difference of the query and
-/// a box face, which rounds to at most the point's difference (rounding is monotone), and the
-/// squares are summed in the same order as the point distance.
+/// The key (under `norm`; squared distance for [`L2`]) from `q` to the box `[lo, hi]`, a lower
+/// bound of the key the search computes to any point in it: per dimension the gap is a
+/// difference of the query and a box face, which rounds to at most the point's difference
+/// (rounding is monotone), and the terms are folded in the same order as the point's key.
 #[inline]
-fn box_sq_dist<T: Scalar>(q: &[T], lo: &[T], hi: &[T]) -> T {
+fn box_key<T: Scalar, N: Norm<T>>(norm: N, q: &[T], lo: &[T], hi: &[T]) -> T {
     let mut s = T::ZERO;
     for j in 0..q.len() {
         let t = if q[j] < lo[j] {
@@ -95,9 +96,9 @@ fn box_sq_dist<T: Scalar>(q: &[T], lo: &[T], hi: &[T]) -> T {
         } else {
             continue;
         };
-        s = s + t * t;
+        s = norm.fold(s, norm.term(t));
     }
-    s
+    norm.lower(s)
 }
 
 /// A batch is answered in groups when it holds at least 1/`DENSE` as many queries as there
@@ -109,8 +110,19 @@ impl<T: Scalar> DynamicKdTree<T> {
     /// Offers every live point that may enter `set` (except the index `exclude`): the trees in
     /// turn, oldest (largest) first, each skipped if its bounding box lies beyond the bound.
     fn collect<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, set: &mut C) {
+        self.collect_norm(q, exclude, L2, set);
+    }
+
+    /// [`DynamicKdTree::collect`] under the norm `norm` (`src/metric.rs`).
+    fn collect_norm<C: ResultSet<T>, N: Norm<T>>(
+        &self,
+        q: &[T],
+        exclude: Option<u32>,
+        norm: N,
+        set: &mut C,
+    ) {
         for part in &self.parts {
-            if box_sq_dist(q, &part.bbox_lo, &part.bbox_hi) > set.bound() {
+            if box_key(norm, q, &part.bbox_lo, &part.bbox_hi) > set.bound() {
                 continue;
             }
             let local = exclude
@@ -118,14 +130,14 @@ impl<T: Scalar> DynamicKdTree<T> {
                 .map(|e| e - part.lo);
             if part.dead == 0 {
                 let mut s = Shift { set, lo: part.lo };
-                part.tree.search_into(q, local, &mut s);
+                part.tree.search_into_norm(q, local, norm, &mut s);
             } else {
                 let mut s = ShiftLive {
                     set,
                     lo: part.lo,
                     not_live: &self.not_live,
                 };
-                part.tree.search_into(q, local, &mut s);
+                part.tree.search_into_norm(q, local, norm, &mut s);
             }
         }
     }
@@ -181,6 +193,33 @@ impl<T: Scalar> NeighborIndex<T> for DynamicKdTree<T> {
     #[inline]
     fn visit<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, set: &mut C) {
         self.collect(q, exclude, set);
+    }
+
+    fn visit_with<C: ResultSet<T>>(
+        &self,
+        q: &[T],
+        exclude: Option<u32>,
+        measure: &Measure,
+        set: &mut C,
+    ) {
+        struct Collect<'a, T, C> {
+            forest: &'a DynamicKdTree<T>,
+            q: &'a [T],
+            exclude: Option<u32>,
+            set: &'a mut C,
+        }
+        impl<T: Scalar, C: ResultSet<T>> NormUser<T> for Collect<'_, T, C> {
+            type Out = ();
+            fn with<N: Norm<T>>(self, norm: N) {
+                self.forest.collect_norm(self.q, self.exclude, norm, self.set);
+            }
+        }
+        measure.apply(Collect {
+            forest: self,
+            q,
+            exclude,
+            set,
+        });
     }
 
     fn visit_box(&self, min: &[T], max: &[T], scratch: &mut Vec<T>, out: &mut Vec<u32>) {

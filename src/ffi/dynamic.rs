@@ -5,12 +5,12 @@ use std::ffi::{c_int, c_void};
 
 use super::args::{check_optional, deref, init_out};
 use super::enums::{nbhd_scalar_type, CEnum};
-use super::query::{query as single_query, At, Results};
+use super::query::{query as single_query, search, At, Results};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::table::{nbhd_neighborhoods, neighborhoods, neighborhoods_of};
 use super::tree::{hand_out_index, IndexHandle};
 use super::types::{
-    nbhd_build_options, nbhd_neighborhood_spec, nbhd_points, nbhd_table_options,
+    nbhd_build_options, nbhd_neighborhood_spec, nbhd_points, nbhd_query_options, nbhd_table_options,
     read_build_options, PointsArg,
 };
 use crate::handle::AnyIndex;
@@ -298,6 +298,32 @@ pub unsafe extern "C" fn nbhd_dynamic_knn(
             out,
         )
     }
+}
+
+/// The neighbourhood `*spec` of the point `query` among the live points under `*options`
+/// (NULL: the defaults); as nbhd_tree_search.
+///
+/// # Safety
+/// As nbhd_tree_search, with `tree` a live dynamic tree not being changed by another thread.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_search(
+    tree: *const nbhd_dynamic_tree,
+    query: *const c_void,
+    spec: *const nbhd_neighborhood_spec,
+    options: *const nbhd_query_options,
+    indices: *mut u32,
+    sq_dists: *mut c_void,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    let out = Results {
+        indices,
+        sq_dists,
+        capacity,
+        count,
+    };
+    // SAFETY: the caller's contract is the one `search` requires.
+    unsafe { search("nbhd_dynamic_search", tree, query, spec, options, out) }
 }
 
 /// All live points within `radius` of the point `query`; as nbhd_tree_radius.

@@ -14,6 +14,7 @@ use glam::DVec3;
 use super::status::FfiError;
 use crate::error::NbhdError;
 use crate::geometry::Orientation;
+use crate::metric::Metric;
 use crate::scalar::ScalarType;
 use crate::smooth::{Curvature, FeatureCriterion, Length, Stage, Weighting};
 use crate::tree::{MedianAlgorithm, PivotPolicy};
@@ -148,6 +149,46 @@ pub enum nbhd_neighborhood_kind {
     KnnRadius = 2,
 }
 c_enum!(nbhd_neighborhood_kind, [Knn, Radius, KnnRadius]);
+
+/// The distance a query measures by (nbhd_query_options.metric): a Minkowski p-norm.
+/// Distances come back as the metric's key ("sq_dists"): squared for EUCLIDEAN, the distance
+/// itself for MANHATTAN and CHEBYSHEV, sum |x_j - q_j|^p for MINKOWSKI.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum nbhd_metric {
+    /// p = 2, the default.
+    Euclidean = 0,
+    /// p = 1: the sum of absolute coordinate differences.
+    Manhattan = 1,
+    /// p = infinity: the largest absolute coordinate difference.
+    Chebyshev = 2,
+    /// Any p >= 1, given in nbhd_query_options.p (1, 2 and infinity take the variants above).
+    Minkowski = 3,
+}
+c_enum!(nbhd_metric, [Euclidean, Manhattan, Chebyshev, Minkowski]);
+
+impl nbhd_metric {
+    /// The core's metric of this variant, `p` read for MINKOWSKI only.
+    pub(crate) fn metric(self, p: f64) -> Result<Metric, NbhdError> {
+        match self {
+            nbhd_metric::Euclidean => Ok(Metric::Euclidean),
+            nbhd_metric::Manhattan => Ok(Metric::Manhattan),
+            nbhd_metric::Chebyshev => Ok(Metric::Chebyshev),
+            nbhd_metric::Minkowski => Metric::from_p(p),
+        }
+    }
+}
+
+impl From<Metric> for nbhd_metric {
+    fn from(m: Metric) -> Self {
+        match m {
+            Metric::Euclidean => nbhd_metric::Euclidean,
+            Metric::Manhattan => nbhd_metric::Manhattan,
+            Metric::Chebyshev => nbhd_metric::Chebyshev,
+            Metric::Minkowski(_) => nbhd_metric::Minkowski,
+        }
+    }
+}
 
 /// Whether a length or curvature option is absolute or relative to the mean spacing `h` of
 /// the input (the mean distance of a point to its nearest other point, estimated by nbhd).

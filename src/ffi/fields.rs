@@ -57,6 +57,19 @@ impl<'a, T> CStruct<'a, T> {
         })
     }
 
+    /// The struct held in the member at `member` of this struct (an options struct inside an
+    /// options struct), read the same way.
+    ///
+    /// # Safety
+    /// `member` must point to a member of type `U` of the struct this `CStruct` points to.
+    pub(crate) unsafe fn member<U>(&self, member: *const U) -> CStruct<'a, U> {
+        CStruct {
+            ptr: member,
+            arg: self.arg,
+            _borrow: PhantomData,
+        }
+    }
+
     /// The pointer, non-NULL, aligned and readable for `'a` (the constructors' contract).
     pub(crate) fn ptr(&self) -> *const T {
         self.ptr

@@ -8,7 +8,9 @@ use super::args::{check_aligned, check_optional, check_ptr, deref, init_out};
 use super::status::{guard, nbhd_status, FfiError};
 use super::tree::{nbhd_tree, IndexHandle};
 use crate::error::NbhdError;
-use crate::query::{Neighbor, NeighborSearch, NeighborhoodSpec, Query};
+use super::types::{nbhd_neighborhood_spec, nbhd_query_options, read_query_options, read_spec};
+use crate::index::NeighborIndex;
+use crate::query::{Neighbor, NeighborhoodSpec, Query, QueryOptions};
 use crate::with_index;
 use crate::Scalar;
 
@@ -81,12 +83,50 @@ pub(crate) unsafe fn query<H: IndexHandle>(
     out: Results,
 ) -> nbhd_status {
     guard(func, || {
-        // SAFETY: `count` is NULL or writable (caller).
-        let count = unsafe { init_out(out.count, "count", 0) }?;
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
-        // SAFETY: the buffers are as the caller describes (contract above).
-        with_index!(tree.index(), t, _T => unsafe { run(t, at, nbhd, out, count) })
+        // SAFETY: forwarded from the caller.
+        unsafe { query_with(tree, at, nbhd, &QueryOptions::default(), out) }
+    })
+}
+
+/// [`query`] under query options, inside the caller's guard.
+///
+/// # Safety
+/// As for [`query`].
+unsafe fn query_with<H: IndexHandle>(
+    tree: *const H,
+    at: At,
+    nbhd: NeighborhoodSpec,
+    options: &QueryOptions,
+    out: Results,
+) -> Result<(), FfiError> {
+    // SAFETY: `count` is NULL or writable (caller).
+    let count = unsafe { init_out(out.count, "count", 0) }?;
+    // SAFETY: `tree` is NULL or a live handle (caller).
+    let tree = unsafe { deref(tree, "tree") }?;
+    // SAFETY: the buffers are as the caller describes (contract above).
+    with_index!(tree.index(), t, _T => unsafe { run(t, at, nbhd, options, out, count) })
+}
+
+/// The body of nbhd_tree_search and nbhd_dynamic_search: the spec and options read, then
+/// [`query_with`] around the point `query`.
+///
+/// # Safety
+/// As nbhd_tree_search.
+pub(crate) unsafe fn search<H: IndexHandle>(
+    func: &str,
+    tree: *const H,
+    query: *const c_void,
+    spec: *const nbhd_neighborhood_spec,
+    options: *const nbhd_query_options,
+    out: Results,
+) -> nbhd_status {
+    guard(func, || {
+        // SAFETY: `count` is NULL or writable (caller); set to 0 before any other check.
+        unsafe { init_out(out.count, "count", 0) }?;
+        // SAFETY: `spec` and `options` are NULL or readable (caller).
+        let (nbhd, options) = unsafe { (read_spec(spec)?, read_query_options(options)?) };
+        // SAFETY: forwarded from the caller.
+        unsafe { query_with(tree, At::Point(query), nbhd, &options, out) }
     })
 }
 
@@ -94,10 +134,11 @@ pub(crate) unsafe fn query<H: IndexHandle>(
 ///
 /// # Safety
 /// As for [`query`]; `count` is checked and writable.
-unsafe fn run<T: FfiScalar, S: NeighborSearch<T>>(
+unsafe fn run<T: FfiScalar, S: NeighborIndex<T>>(
     tree: &S,
     at: At,
     nbhd: NeighborhoodSpec,
+    options: &QueryOptions,
     out: Results,
     count: *mut usize,
 ) -> Result<(), FfiError> {
@@ -128,7 +169,7 @@ unsafe fn run<T: FfiScalar, S: NeighborSearch<T>>(
         },
     };
     T::with_scratch(|found| {
-        tree.search(query, nbhd.to::<T>()?, found)?;
+        tree.search_with(query, nbhd.to_with::<T>(options)?, options, found)?;
         // SAFETY: `count` is non-NULL, aligned and writable (checked by the caller of `run`).
         unsafe { count.write(found.len()) };
         if found.len() > out.capacity {
@@ -368,4 +409,49 @@ pub unsafe extern "C" fn nbhd_tree_knn_radius_index(
     let nbhd = NeighborhoodSpec::knn_radius(k, radius);
     // SAFETY: the caller's contract is the one `query` requires.
     unsafe { self::query("nbhd_tree_knn_radius_index", tree, at, nbhd, out) }
+}
+
+/// The default query options: the exact Euclidean metric, an inclusive radius.
+#[no_mangle]
+pub extern "C" fn nbhd_query_options_default() -> nbhd_query_options {
+    let defaults = QueryOptions::default().into();
+    super::status::guard_value("nbhd_query_options_default", defaults, || defaults)
+}
+
+/// The neighbourhood `*spec` (k nearest, within a radius, or the k nearest within a radius)
+/// of the point `query` under `*options` (NULL: the defaults, which answer as nbhd_tree_knn,
+/// nbhd_tree_radius and nbhd_tree_knn_radius): any Minkowski metric, an approximate search, a
+/// strict radius. The radius is a distance in the metric; `sq_dists` receives each
+/// neighbour's key in the metric (squared for Euclidean, the distance for Manhattan and
+/// Chebyshev, sum |x_j - q_j|^p for Minkowski p; see nbhd_metric), in the tree's scalar type;
+/// results are ordered by (key, index). Arguments, buffers and results otherwise as
+/// nbhd_tree_knn.
+///
+/// Errors: those of nbhd_tree_knn and nbhd_tree_radius; NULL_POINTER for `spec`;
+/// INVALID_OPTION for a metric out of range, a Minkowski p below 1 or NaN, a negative or
+/// non-finite eps; RADIUS_OUT_OF_RANGE for a radius whose key overflows the tree's scalar type
+/// (not under `strict`).
+///
+/// # Safety
+/// As nbhd_tree_knn; `spec` NULL or a readable nbhd_neighborhood_spec; `options` NULL or a
+/// readable nbhd_query_options.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_tree_search(
+    tree: *const nbhd_tree,
+    query: *const c_void,
+    spec: *const nbhd_neighborhood_spec,
+    options: *const nbhd_query_options,
+    indices: *mut u32,
+    sq_dists: *mut c_void,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    let out = Results {
+        indices,
+        sq_dists,
+        capacity,
+        count,
+    };
+    // SAFETY: the caller's contract is the one `search` requires.
+    unsafe { search("nbhd_tree_search", tree, query, spec, options, out) }
 }

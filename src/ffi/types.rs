@@ -6,12 +6,12 @@
 use std::ffi::c_void;
 
 use super::enums::{nbhd_median_algorithm, nbhd_non_finite_policy, nbhd_pivot_policy};
-use super::enums::{nbhd_neighborhood_kind, nbhd_scalar_type};
+use super::enums::{nbhd_metric, nbhd_neighborhood_kind, nbhd_scalar_type};
 use super::fields::{c_field, CStruct};
 use super::status::FfiError;
 use crate::error::NbhdError;
 use crate::points::PointsView;
-use crate::query::NeighborhoodSpec;
+use crate::query::{NeighborhoodSpec, QueryOptions};
 use crate::scalar::ScalarType;
 use crate::table::TableOptions;
 use crate::tree::{BuildOptions, TreeStats};
@@ -258,6 +258,9 @@ pub struct nbhd_table_options {
     /// threads made for this call; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION.
     /// The table is identical for every value. Default: 0.
     pub threads: usize,
+    /// How every row's query measures (metric, eps, strict radius). Default:
+    /// nbhd_query_options_default(); all zero (as `{true, 2}` leaves it) is the same.
+    pub query: nbhd_query_options,
 }
 
 impl From<TableOptions> for nbhd_table_options {
@@ -265,8 +268,65 @@ impl From<TableOptions> for nbhd_table_options {
         Self {
             exclude_self: o.exclude_self,
             threads: o.threads,
+            query: o.query.into(),
         }
     }
+}
+
+/// How a query measures (nbhd_tree_search, nbhd_dynamic_search, nbhd_table_options.query).
+/// Start from nbhd_query_options_default(); all fields zero are the defaults too.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct nbhd_query_options {
+    /// The distance: a Minkowski p-norm. Results carry its key (see nbhd_metric) and a radius
+    /// is a distance in it. Default: NBHD_METRIC_EUCLIDEAN.
+    pub metric: nbhd_metric,
+    /// The p of NBHD_METRIC_MINKOWSKI, in [1, infinity] (read for that metric only; NaN or
+    /// below 1 is NBHD_STATUS_INVALID_OPTION). Default: 2.
+    pub p: f64,
+    /// Approximation, finite and >= 0 (else NBHD_STATUS_INVALID_OPTION): 0 is exact; eps > 0
+    /// returns k nearest whose i-th distance is at most (1 + eps) times the true i-th, and
+    /// for a radius r every point within r / (1 + eps) and none beyond r * (1 + eps), pruning
+    /// harder (scipy's cKDTree rule). Default: 0.
+    pub eps: f64,
+    /// A radius is exclusive (|x - q| < r, scipy's distance_upper_bound) instead of inclusive;
+    /// a radius too large for the tree's scalar type is then no bound. Default: false.
+    pub strict: bool,
+}
+
+impl From<QueryOptions> for nbhd_query_options {
+    fn from(o: QueryOptions) -> Self {
+        Self {
+            metric: o.metric.into(),
+            p: o.metric.p(),
+            eps: o.eps,
+            strict: o.strict,
+        }
+    }
+}
+
+/// Reads a query options struct field by field into the core's options, checked.
+fn query_options_of(s: &CStruct<'_, nbhd_query_options>) -> Result<QueryOptions, FfiError> {
+    let options = QueryOptions {
+        metric: c_field!(s.metric as enum)?.metric(c_field!(s.p))?,
+        eps: c_field!(s.eps),
+        strict: c_field!(s.strict as bool),
+    };
+    options.validate()?;
+    Ok(options)
+}
+
+/// Reads `*options` into the core's query options; NULL gives the defaults.
+///
+/// # Safety
+/// `options` must be NULL or point to a readable `nbhd_query_options`.
+pub(crate) unsafe fn read_query_options(
+    options: *const nbhd_query_options,
+) -> Result<QueryOptions, FfiError> {
+    let defaults = nbhd_query_options::from(QueryOptions::default());
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    query_options_of(&o)
 }
 
 /// Reads `*options` field by field into the core's table options; NULL gives the defaults.
@@ -279,8 +339,11 @@ pub(crate) unsafe fn read_table_options(
     let defaults = nbhd_table_options::from(TableOptions::default());
     // SAFETY: forwarded from the caller.
     let o = unsafe { CStruct::options(options, &defaults) }?;
+    // SAFETY: `query` is a member of the struct `o` points to.
+    let query = unsafe { o.member(std::ptr::addr_of!((*o.ptr()).query)) };
     Ok(TableOptions {
         exclude_self: c_field!(o.exclude_self as bool),
         threads: c_field!(o.threads),
+        query: query_options_of(&query)?,
     })
 }

@@ -101,6 +101,7 @@ pub fn statistical_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
         &TableOptions {
             exclude_self: true,
             threads: options.threads,
+            ..Default::default()
         },
     )?;
     // d_i for the points the tree holds, in the caller's order
@@ -192,6 +193,7 @@ pub fn radius_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
         &TableOptions {
             exclude_self: true,
             threads: options.threads,
+            ..Default::default()
         },
     )?;
     Ok(Kept {

@@ -49,6 +49,7 @@ pub(crate) fn neighbor_table_and_order(
         &TableOptions {
             exclude_self,
             threads: 0,
+            ..Default::default()
         },
     )?;
     let order = if tree.tree_order().len() == points.len() {

@@ -218,6 +218,7 @@ pub fn tree_neighbors<T: Scalar>(
         &crate::TableOptions {
             exclude_self: true,
             threads: 0,
+            ..Default::default()
         },
     )?;
     let table = table_in_f64(&points, &rows)?;

@@ -15,16 +15,20 @@
 //!
 //! Where each query is:
 //! - `search.rs`: the single search ([`NeighborIndex::knn`], [`NeighborIndex::radius`],
-//!   [`NeighborIndex::knn_radius`], and `NeighborSearch::search` of both flavours);
+//!   [`NeighborIndex::knn_radius`], [`NeighborIndex::search_with`], and `NeighborSearch::search`
+//!   of both flavours);
 //! - `in_box.rs`: box queries ([`NeighborIndex::in_box`], [`NeighborIndex::in_boxes`]);
 //! - `tables.rs`: tables ([`NeighborIndex::neighborhoods`], [`NeighborIndex::neighborhoods_at`],
 //!   [`NeighborIndex::neighborhoods_of`]);
 //! - `spacing.rs`: the nearest-neighbour spacing ([`NeighborIndex::spacing`]).
 //!
-//! The seams for what comes next: a metric or a topology (a Minkowski norm, a periodic box)
-//! is a parameter of the one traversal [`NeighborIndex::visit`] and of the box bounds it prunes
-//! by, so each query picks it up here rather than in each flavour; a new kind of result (pairs,
-//! counts) is a new result set (`src/query/result_set.rs`) filled by the same traversal.
+//! A metric (a Minkowski p-norm, `src/metric.rs`) and approximation are a parameter of the
+//! traversal ([`NeighborIndex::visit_with`], the default Euclidean queries keeping
+//! [`NeighborIndex::visit`] and its fast paths), so each query picks them up here rather than in
+//! each flavour ([`NeighborIndex::search_with`], and tables through
+//! [`TableOptions::query`](crate::TableOptions::query)). The seams for what comes next: a
+//! topology (a periodic box) joins the measure; a new kind of result (pairs, counts) is a new
+//! result set (`src/query/result_set.rs`) filled by the same traversal.
 
 mod in_box;
 mod search;
@@ -37,9 +41,10 @@ pub(crate) use spacing::{check_spacing, mean_distance};
 pub use spacing::{Length, Spacing, Units};
 
 use crate::error::Result;
+use crate::metric::Measure;
 use crate::points::PointsView;
 use crate::query::result_set::ResultSet;
-use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query};
+use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query, QueryOptions};
 use crate::scalar::Scalar;
 use crate::table::{NeighborTable, TableOptions};
 
@@ -101,6 +106,17 @@ pub trait NeighborIndex<T: Scalar>: NeighborSearch<T> + Sized {
     /// `exclude`) that may enter it, for the finite point `q` of the index's dimension.
     #[doc(hidden)]
     fn visit<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, set: &mut C);
+
+    /// [`NeighborIndex::visit`] under a measure other than the exact Euclidean one: the
+    /// metric's keys, its cells' bounds scaled by `measure.scale` (`src/metric.rs`).
+    #[doc(hidden)]
+    fn visit_with<C: ResultSet<T>>(
+        &self,
+        q: &[T],
+        exclude: Option<u32>,
+        measure: &Measure,
+        set: &mut C,
+    );
 
     /// Appends to `out`, in no particular order, the caller indices of the held points in the
     /// closed box `min ≤ x ≤ max` (checked); `scratch` is the traversal's to reuse.
@@ -216,6 +232,44 @@ pub trait NeighborIndex<T: Scalar>: NeighborSearch<T> + Sized {
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()> {
         search(self, query, Neighborhood::KnnRadius { k, radius }, out)
+    }
+
+    /// The neighbourhood `nbhd` of `query` under `options` — any Minkowski metric, an
+    /// approximate search, a strict radius ([`QueryOptions`]) — by `(sq_dist, index)` unless
+    /// an unsorted radius query was asked for, into `out` (cleared first). `sq_dist` holds the
+    /// metric's key (squared for Euclidean, the distance for p = 1 and ∞, `Σ |x_j|^p` for any
+    /// other p; [`Metric::distance_of`](crate::Metric::distance_of) converts), and the radius
+    /// is a distance in the metric. With the default options this is [`NeighborSearch::search`].
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, Neighborhood, PointsView, Query, QueryOptions};
+    ///
+    /// let pts = [0.0f64, 0.0, 1.0, 1.0, 1.5, 0.0, 3.0, 3.0];
+    /// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 2)?, &BuildOptions::default())?;
+    /// let mut out = Vec::new();
+    /// let near = |p: f64, out: &mut Vec<_>| {
+    ///     let opts = QueryOptions::with_p(p).unwrap();
+    ///     tree.search_with(Query::point(&[0.0, 0.0]), Neighborhood::Knn { k: 2 }, &opts, out)
+    /// };
+    /// near(1.0, &mut out)?; // Manhattan: (1.5, 0) at 1.5 is nearer than (1, 1) at 2
+    /// assert_eq!(out.iter().map(|n| (n.index, n.sq_dist)).collect::<Vec<_>>(), [(0, 0.0), (2, 1.5)]);
+    /// near(f64::INFINITY, &mut out)?; // Chebyshev: (1, 1) at 1 is nearer than (1.5, 0)
+    /// assert_eq!(out.iter().map(|n| (n.index, n.sq_dist)).collect::<Vec<_>>(), [(0, 0.0), (1, 1.0)]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of [`NeighborSearch::search`]; a Minkowski `p < 1` or NaN, a negative or
+    /// non-finite `eps` ([`NbhdError::InvalidOption`](crate::NbhdError::InvalidOption)); a radius
+    /// whose key overflows the scalar type
+    /// ([`NbhdError::RadiusOutOfRange`](crate::NbhdError::RadiusOutOfRange), unless `strict`).
+    fn search_with(
+        &self,
+        query: Query<'_, T>,
+        nbhd: Neighborhood<T>,
+        options: &QueryOptions,
+        out: &mut Vec<Neighbor<T>>,
+    ) -> Result<()> {
+        search::search_with(self, query, nbhd, options, out)
     }
 
     /// The caller indices of the held points in the closed box `min ≤ x ≤ max` (every

@@ -7,8 +7,53 @@ use super::NeighborIndex;
 use crate::error::Result;
 use crate::query::order;
 use crate::query::result_set::{Key32, KnnBuf, KnnRow, RowEntry, SortedRow, WithinRadius};
-use crate::query::{Neighbor, NeighborHeap, Neighborhood, Query};
+use crate::query::{Neighbor, NeighborHeap, Neighborhood, Plan, Query, QueryOptions};
 use crate::scalar::{Scalar, ScalarType};
+
+/// [`NeighborIndex::search_with`]: the neighbourhood of `query` under `options`.
+pub(crate) fn search_with<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    query: Query<'_, T>,
+    nbhd: Neighborhood<T>,
+    options: &QueryOptions,
+    out: &mut Vec<Neighbor<T>>,
+) -> Result<()> {
+    let plan = options.plan(nbhd)?;
+    let (q, exclude) = index.resolve(query)?;
+    answer_with(index, q, exclude, &plan, out);
+    Ok(())
+}
+
+/// The search proper under a plan ([`QueryOptions`] resolved): the plain queries' paths for the
+/// default options, else a heap (k nearest) or a list (radius) filled by the flavour's
+/// traversal under the plan's measure ([`NeighborIndex::visit_with`]).
+#[inline]
+pub(crate) fn answer_with<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    q: &[T],
+    exclude: Option<u32>,
+    plan: &Plan<T>,
+    out: &mut Vec<Neighbor<T>>,
+) {
+    if plan.plain {
+        return answer(index, q, exclude, plan.nbhd, out);
+    }
+    if plan.k == usize::MAX {
+        out.clear();
+        let mut within = WithinRadius {
+            out,
+            sq_radius: plan.bound,
+        };
+        index.visit_with(q, exclude, &plan.measure, &mut within);
+        if plan.nbhd.is_sorted() {
+            out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
+        }
+    } else {
+        let mut heap = NeighborHeap::new(out, plan.k, plan.bound);
+        index.visit_with(q, exclude, &plan.measure, &mut heap);
+        heap.finish();
+    }
+}
 
 /// Writes the neighbourhood of `query` into `out` (cleared first), ordered by
 /// `(sq_dist, index)` unless an unsorted radius query was asked for: the body of

@@ -157,6 +157,7 @@ pub(super) fn spacing<T: Scalar, I: NeighborIndex<T>>(
         &TableOptions {
             exclude_self: true,
             threads,
+            ..Default::default()
         },
     )?;
     Ok(Spacing::from_nearest(

@@ -3,11 +3,12 @@
 //! warm and written back in the caller's order (`src/table.rs`). A flavour's grouped search
 //! answers where it has one ([`NeighborIndex::grouped_table`],
 //! [`NeighborIndex::grouped_batch`]); otherwise each row is one single search, the rows the
-//! grouped searches give too.
+//! grouped searches give too. Under non-default [`QueryOptions`](crate::QueryOptions)
+//! (another metric, eps, a strict radius) every row is a single search under them.
 
 use rayon::prelude::*;
 
-use super::search::answer;
+use super::search::answer_with;
 use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
 use crate::parallel::with_threads;
@@ -22,11 +23,13 @@ pub(super) fn neighborhoods<T: Scalar, I: NeighborIndex<T>>(
     nbhd: Neighborhood<T>,
     options: &TableOptions,
 ) -> Result<NeighborTable<T>> {
-    nbhd.validate()?;
+    let plan = options.query.plan(nbhd)?;
     check_knn_total(index.len(), index.len(), nbhd, options.exclude_self)?;
     with_threads(options.threads, || {
-        if let Some(table) = index.grouped_table(nbhd, options.exclude_self) {
-            return table;
+        if plan.plain {
+            if let Some(table) = index.grouped_table(nbhd, options.exclude_self) {
+                return table;
+            }
         }
         // One search per point, in the index's order (neighbouring points touch the same
         // nodes and leaves, so they hit the cache), written back in the caller's order.
@@ -37,7 +40,7 @@ pub(super) fn neighborhoods<T: Scalar, I: NeighborIndex<T>>(
                 |w| (stored.at)(w).0 as usize,
                 |w, row, _| {
                     let (id, q) = (stored.at)(w);
-                    answer(index, q, options.exclude_self.then_some(id), nbhd, row);
+                    answer_with(index, q, options.exclude_self.then_some(id), &plan, row);
                     Ok(())
                 },
             )
@@ -52,7 +55,7 @@ pub(super) fn neighborhoods_at<T: Scalar, I: NeighborIndex<T>>(
     nbhd: Neighborhood<T>,
     options: &TableOptions,
 ) -> Result<NeighborTable<T>> {
-    nbhd.validate()?;
+    let plan = options.query.plan(nbhd)?;
     let query = |i: u32| Query::Stored {
         index: i,
         exclude_self: options.exclude_self,
@@ -68,7 +71,7 @@ pub(super) fn neighborhoods_at<T: Scalar, I: NeighborIndex<T>>(
             |w| w,
             |w, row, _| {
                 let (q, exclude) = index.resolve(query(indices[w]))?;
-                answer(index, q, exclude, nbhd, row);
+                answer_with(index, q, exclude, &plan, row);
                 Ok(())
             },
         )
@@ -82,7 +85,7 @@ pub(super) fn neighborhoods_of<T: Scalar, I: NeighborIndex<T>>(
     nbhd: Neighborhood<T>,
     options: &TableOptions,
 ) -> Result<NeighborTable<T>> {
-    nbhd.validate()?;
+    let plan = options.query.plan(nbhd)?;
     let d = index.dim();
     if queries.dim() != d {
         return Err(NbhdError::DimensionMismatch {
@@ -95,8 +98,10 @@ pub(super) fn neighborhoods_of<T: Scalar, I: NeighborIndex<T>>(
     let n = queries.len();
     with_threads(options.threads, || {
         let (order, keys) = region_order(index, &packed);
-        if let Some(table) = index.grouped_batch(&packed, &order, &keys, nbhd) {
-            return table;
+        if plan.plain {
+            if let Some(table) = index.grouped_batch(&packed, &order, &keys, nbhd) {
+                return table;
+            }
         }
         rows_in_work_order(
             n,
@@ -104,7 +109,7 @@ pub(super) fn neighborhoods_of<T: Scalar, I: NeighborIndex<T>>(
             |w| order[w] as usize,
             |w, row, _| {
                 let at = order[w] as usize * d;
-                answer(index, &packed[at..at + d], None, nbhd, row);
+                answer_with(index, &packed[at..at + d], None, &plan, row);
                 Ok(())
             },
         )

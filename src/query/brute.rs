@@ -1,9 +1,10 @@
 //! The brute-force baseline (thesis Algorithm 7): every point is a candidate. O(n) per query;
 //! the oracle of the tests.
 
-use super::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
+use super::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query, QueryOptions};
 use crate::cloud::{Cloud, NonFinitePolicy};
 use crate::error::Result;
+use crate::metric::{Norm, NormUser};
 use crate::points::PointsView;
 use crate::query::resolve_query;
 use crate::scalar::Scalar;
@@ -69,6 +70,55 @@ impl<T: Scalar> NeighborSearch<T> for BruteForce<T> {
 }
 
 impl<T: Scalar> BruteForce<T> {
+    /// The exact neighbourhood of `query` under `options`' metric and strictness, ordered by
+    /// `(sq_dist, index)` unless an unsorted radius query was asked for: the reference of
+    /// [`NeighborIndex::search_with`](crate::NeighborIndex::search_with). Every key is folded
+    /// over the axes in order, as the tree folds it, so keys are bit-identical. `eps` is
+    /// checked but not used (the exact answer is within every approximation), except that a
+    /// radius admits keys up to that of `r · (1 + eps)`, as an approximate tree search does.
+    pub fn search_with(
+        &self,
+        query: Query<'_, T>,
+        nbhd: Neighborhood<T>,
+        options: &QueryOptions,
+        out: &mut Vec<Neighbor<T>>,
+    ) -> Result<()> {
+        let plan = options.plan(nbhd)?;
+        let cloud = &self.cloud;
+        let (q, exclude) = resolve_query(query, cloud.dim, cloud.source_len, &self.slot_of, |s| {
+            cloud.point(s)
+        })?;
+        struct Scan<'a, T> {
+            cloud: &'a Cloud<T>,
+            q: &'a [T],
+            exclude: Option<u32>,
+            heap: NeighborHeap<'a, T>,
+        }
+        impl<T: Scalar> NormUser<T> for Scan<'_, T> {
+            type Out = ();
+            fn with<N: Norm<T>>(mut self, norm: N) {
+                let d = self.cloud.dim;
+                for slot in 0..self.cloud.len() {
+                    let id = self.cloud.ids[slot];
+                    if Some(id) != self.exclude {
+                        let key = norm.key(self.q, self.cloud.point(slot), d);
+                        self.heap.push(id, key);
+                    }
+                }
+            }
+        }
+        plan.measure.apply(Scan {
+            cloud,
+            q,
+            exclude,
+            heap: NeighborHeap::new(out, plan.k, plan.bound),
+        });
+        if plan.nbhd.is_sorted() {
+            out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
+        }
+        Ok(())
+    }
+
     /// The caller's indices of all points in the closed box `min ≤ x ≤ max`, ascending (the
     /// convention of `src/query/in_box.rs`), by testing every point: the reference of the
     /// tree's box query.

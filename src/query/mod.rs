@@ -7,12 +7,16 @@
 //! - a radius is a plain Euclidean radius and inclusive: `‖x − q‖ ≤ ε`, evaluated as
 //!   `sq_dist ≤ ε²` in the tree's scalar type;
 //! - distances come back squared (`sq_dist`);
+//! - [`QueryOptions`] (`options.rs`) change the metric to any Minkowski p-norm (then `sq_dist`
+//!   holds that metric's key, `src/metric.rs`), make a search approximate (`eps`) or a radius
+//!   strict;
 //! - results are ordered by `(sq_dist, index)`, so ties are deterministic (the unsorted radius
 //!   variant returns the same set in an unspecified order).
 
 pub mod brute;
 mod heap;
 pub(crate) mod in_box;
+mod options;
 pub(crate) mod order;
 pub mod pca_sweep;
 #[doc(hidden)]
@@ -22,6 +26,8 @@ use crate::error::{NbhdError, Result};
 use crate::scalar::Scalar;
 
 pub(crate) use heap::NeighborHeap;
+pub(crate) use options::Plan;
+pub use options::QueryOptions;
 
 /// One neighbour: the caller's index of the point and its squared distance to the query.
 #[repr(C)]
@@ -29,7 +35,8 @@ pub(crate) use heap::NeighborHeap;
 pub struct Neighbor<T> {
     /// The caller's index of the point.
     pub index: u32,
-    /// Squared Euclidean distance to the query point.
+    /// Squared Euclidean distance to the query point (under a [`QueryOptions::metric`], that
+    /// metric's key: [`Metric::key_of`](crate::Metric::key_of)).
     pub sq_dist: T,
 }
 
@@ -187,18 +194,39 @@ impl NeighborhoodSpec {
     /// square `T` cannot hold [`NbhdError::RadiusOutOfRange`], both naming the value given;
     /// neither `k` nor a radius is [`NbhdError::InvalidOption`].
     pub fn to<T: Scalar>(&self) -> Result<Neighborhood<T>> {
+        let nbhd = self.to_with(&QueryOptions::default())?;
+        nbhd.validate()?;
+        Ok(nbhd)
+    }
+
+    /// The neighbourhood in the scalar type `T` for a query under `options`
+    /// ([`NeighborIndex::search_with`](crate::NeighborIndex::search_with), which checks the
+    /// radius's key in the metric): a radius whose key `T` cannot hold is
+    /// [`NbhdError::RadiusOutOfRange`] naming the value given — under `options.strict` no bound
+    /// (beyond `T`'s range, the largest finite `T`). Other errors as [`NeighborhoodSpec::to`].
+    pub fn to_with<T: Scalar>(&self, options: &QueryOptions) -> Result<Neighborhood<T>> {
+        let metric = options.metric.canonical()?;
         let radius = |r: f64| {
             if !(r.is_finite() && r >= 0.0) {
                 return Err(NbhdError::InvalidRadius(r));
             }
             let t = T::from_f64(r);
-            if (t * t).is_finite() {
+            if t.is_finite() && (options.strict || metric.key_of(t).is_finite()) {
                 Ok(t)
+            } else if options.strict {
+                Ok(T::INFINITY.next_down())
             } else {
-                Err(radius_out_of_range::<T>(r))
+                Err(NbhdError::RadiusOutOfRange {
+                    radius: r,
+                    scalar: match T::TYPE {
+                        crate::ScalarType::F32 => "f32",
+                        crate::ScalarType::F64 => "f64",
+                    },
+                    max: metric.max_radius::<T>(),
+                })
             }
         };
-        let nbhd = match (self.k, self.radius) {
+        Ok(match (self.k, self.radius) {
             (Some(k), None) => Neighborhood::Knn { k },
             (None, Some(r)) => Neighborhood::Radius {
                 radius: radius(r)?,
@@ -214,9 +242,7 @@ impl NeighborhoodSpec {
                     reason: "give k, a radius, or both".into(),
                 })
             }
-        };
-        nbhd.validate()?;
-        Ok(nbhd)
+        })
     }
 }
 

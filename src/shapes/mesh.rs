@@ -256,6 +256,7 @@ fn eliminate(points: &[DVec3], n: usize, radius: f64) -> Result<Vec<usize>> {
         &TableOptions {
             exclude_self: true,
             threads: 0,
+            ..Default::default()
         },
     )?;
     let weight_of = |d2: f64| (1.0 - d2.sqrt() / radius).max(0.0).powi(8);

@@ -142,6 +142,7 @@ mod tests {
                     let opts = TableOptions {
                         exclude_self,
                         threads: 2,
+                        ..Default::default()
                     };
                     let whole = tree.neighborhoods(nbhd, &opts).unwrap();
                     let covered = tree

@@ -42,6 +42,7 @@ use std::sync::OnceLock;
 
 use crate::error::Result;
 use crate::index::{self, NeighborIndex, StoredPoints};
+use crate::metric::Measure;
 use crate::parallel::with_threads;
 use crate::query::resolve_query;
 use crate::query::result_set::ResultSet;
@@ -270,6 +271,18 @@ impl<T: Scalar> NeighborIndex<T> for KdTree<T> {
         // a tree of no point is one empty leaf: nothing to find
         if !self.ids.is_empty() {
             self.run(q, exclude, set);
+        }
+    }
+
+    fn visit_with<C: ResultSet<T>>(
+        &self,
+        q: &[T],
+        exclude: Option<u32>,
+        measure: &Measure,
+        set: &mut C,
+    ) {
+        if !self.ids.is_empty() {
+            self.search_measured(q, exclude, measure, set);
         }
     }
 

@@ -7,15 +7,52 @@
 use super::group_search::{CellView, Cells};
 use super::search;
 use super::KdTree;
+use crate::metric::{Measure, Norm, NormUser};
 use crate::query::result_set::ResultSet;
 use crate::scalar::Scalar;
 
 impl<T: Scalar> KdTree<T> {
-    /// Runs the exact search of `src/tree/search.rs` for the point `q` (of the tree's
-    /// dimension, finite), offering every point of every visited leaf except the caller index
-    /// `exclude` to `out`; the cells visited depend only on `out`'s distance bound.
-    pub(crate) fn search_into<C: ResultSet<T>>(&self, q: &[T], exclude: Option<u32>, out: &mut C) {
-        search::search(&self.view(), q, exclude, out);
+    /// Runs the exact search of `src/tree/search.rs` under the norm `norm` (`src/metric.rs`;
+    /// [`L2`](crate::metric::L2) for the plain Euclidean search) for the point `q` (of the
+    /// tree's dimension, finite), offering every point of every visited leaf except the caller
+    /// index `exclude` to `out`; the cells visited depend only on `out`'s bound.
+    pub(crate) fn search_into_norm<C: ResultSet<T>, N: Norm<T>>(
+        &self,
+        q: &[T],
+        exclude: Option<u32>,
+        norm: N,
+        out: &mut C,
+    ) {
+        search::search_norm(&self.view(), q, exclude, norm, out);
+    }
+
+    /// The single search under `measure` (the preorder descent, the compact one being
+    /// Euclidean): the norm chosen once, then [`KdTree::search_into_norm`].
+    pub(crate) fn search_measured<C: ResultSet<T>>(
+        &self,
+        q: &[T],
+        exclude: Option<u32>,
+        measure: &Measure,
+        out: &mut C,
+    ) {
+        struct Descend<'a, T: Scalar, C> {
+            tree: &'a KdTree<T>,
+            q: &'a [T],
+            exclude: Option<u32>,
+            out: &'a mut C,
+        }
+        impl<T: Scalar, C: ResultSet<T>> NormUser<T> for Descend<'_, T, C> {
+            type Out = ();
+            fn with<N: Norm<T>>(self, norm: N) {
+                self.tree.search_into_norm(self.q, self.exclude, norm, self.out);
+            }
+        }
+        measure.apply(Descend {
+            tree: self,
+            q,
+            exclude,
+            out,
+        });
     }
 
     /// The first tree position of the leaf `q` descends to.

@@ -9,7 +9,11 @@
 //! nanoflann keeps it), evaluated in the order of the point distance, `((0 + g0²) + g1²) + …`:
 //! rounding is monotone, so the bound never exceeds the computed squared distance of a point of
 //! the cell, and pruning is exact in floating point. (Any dimension above 3 keeps the largest
-//! single gap, a weaker bound with the same guarantee.)
+//! single gap, a weaker bound with the same guarantee.) Under another norm (`src/metric.rs`,
+//! [`search_norm`]) the keys and bounds are that norm's fold of its terms, in the same order and
+//! with the same guarantee: the terms (`|t|`, `t²`) and folds (`+`, `max`) are monotone in
+//! floating point; a general p's `pow` may not be, so its bounds are shrunk by a few ulps
+//! (`Measure::apply`), and an approximate search's are scaled up by its factor.
 //!
 //! Cells are pruned in `(sq_dist, index)` order (`src/query/order.rs`): a cell whose bound is
 //! `b` and whose smallest caller index is `m` can only hold candidates at or after `(b, m)`, so
@@ -23,6 +27,7 @@
 
 use super::kernel::{below_mask, sq_dists_packed};
 use super::node::{Descent, Node, DESCENT_LEAF};
+use crate::metric::{Norm, L2};
 use crate::prefetch::prefetch_range;
 use crate::query::result_set::ResultSet;
 use crate::scalar::Scalar;
@@ -124,18 +129,19 @@ impl<T: Scalar, const G: usize> CellStack<T, G> {
     }
 }
 
-/// Squared distance from `q` to the point at tree position `i`; `D > 0` fixes the dimension at
-/// compile time (the 3-D hot path), `D == 0` reads it from `dim`.
+/// The key (under `norm`; the squared distance for [`L2`]) from `q` to the point at tree
+/// position `i`; `D > 0` fixes the dimension at compile time (the 3-D hot path), `D == 0`
+/// reads it from `dim`.
 #[inline(always)]
-fn sq_dist_at<T: Scalar, const D: usize>(q: &[T], coords: &[T], i: usize, dim: usize) -> T {
+fn key_at<T: Scalar, N: Norm<T>, const D: usize>(
+    norm: N,
+    q: &[T],
+    coords: &[T],
+    i: usize,
+    dim: usize,
+) -> T {
     let d = if D > 0 { D } else { dim };
-    let p = &coords[i * d..i * d + d];
-    let mut s = T::ZERO;
-    for j in 0..d {
-        let t = q[j] - p[j];
-        s = s + t * t;
-    }
-    s
+    norm.key(q, &coords[i * d..i * d + d], d)
 }
 
 /// Whether a cell with lower bound `dist` and smallest caller index `min_id` may still hold a
@@ -155,20 +161,33 @@ pub(crate) fn search<T: Scalar, C: ResultSet<T>>(
     exclude: Option<u32>,
     out: &mut C,
 ) {
+    search_norm(tree, q, exclude, L2, out);
+}
+
+/// [`search`] under any norm (`src/metric.rs`): keys and cell bounds in the norm's form, the
+/// bounds passed through its `lower` before every comparison.
+pub(crate) fn search_norm<T: Scalar, C: ResultSet<T>, N: Norm<T>>(
+    tree: &TreeView<'_, T>,
+    q: &[T],
+    exclude: Option<u32>,
+    norm: N,
+    out: &mut C,
+) {
     match tree.dim {
-        3 => search_d::<T, C, 3, 3>(tree, q, exclude, out),
-        2 => search_d::<T, C, 2, 2>(tree, q, exclude, out),
-        1 => search_d::<T, C, 1, 1>(tree, q, exclude, out),
-        _ => search_d::<T, C, 0, 0>(tree, q, exclude, out),
+        3 => search_d::<T, C, N, 3, 3>(tree, q, exclude, norm, out),
+        2 => search_d::<T, C, N, 2, 2>(tree, q, exclude, norm, out),
+        1 => search_d::<T, C, N, 1, 1>(tree, q, exclude, norm, out),
+        _ => search_d::<T, C, N, 0, 0>(tree, q, exclude, norm, out),
     }
 }
 
 /// `D` the dimension (0: read from the tree), `G` the gaps kept per cell (`D`, or 0 for the
 /// largest-gap bound of any dimension).
-fn search_d<T: Scalar, C: ResultSet<T>, const D: usize, const G: usize>(
+fn search_d<T: Scalar, C: ResultSet<T>, N: Norm<T>, const D: usize, const G: usize>(
     tree: &TreeView<'_, T>,
     q: &[T],
     exclude: Option<u32>,
+    norm: N,
     out: &mut C,
 ) {
     let excluded = exclude.unwrap_or(u32::MAX);
@@ -192,7 +211,7 @@ fn search_d<T: Scalar, C: ResultSet<T>, const D: usize, const G: usize>(
             if n.is_leaf() {
                 let bound = out.bound();
                 for i in n.a as usize..n.b as usize {
-                    let d2 = sq_dist_at::<T, D>(q, tree.coords, i, tree.dim);
+                    let d2 = key_at::<T, N, D>(norm, q, tree.coords, i, tree.dim);
                     // The index (another cache line) is read only for a candidate within the
                     // bound; caller indices are below u32::MAX, so MAX excludes nothing.
                     if d2 <= bound {
@@ -227,17 +246,18 @@ fn search_d<T: Scalar, C: ResultSet<T>, const D: usize, const G: usize>(
                 g[sd] = diff;
                 let mut s = T::ZERO;
                 for x in g {
-                    s = s + x * x;
+                    s = norm.fold(s, norm.term(x));
                 }
                 Cell {
                     node: far,
-                    dist: s,
+                    dist: norm.lower(s),
                     gaps: g,
                 }
             } else {
+                // One term bounds every norm's key from below (a sum or a maximum of terms).
                 Cell {
                     node: far,
-                    dist: dist.max_of(diff * diff),
+                    dist: dist.max_of(norm.lower(norm.term(diff))),
                     gaps,
                 }
             };
