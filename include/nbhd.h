@@ -40,6 +40,10 @@
  *   - A radius is a plain Euclidean radius (not squared), passed as a double, inclusive:
  *     |x - q| <= radius, evaluated as squared distance <= radius * radius in the tree's type.
  *   - Distances come back squared.
+ *   - Other metrics: nbhd_tree_search, nbhd_dynamic_search and nbhd_table_options.query take
+ *     nbhd_query_options (a Minkowski p-norm, eps for approximate searches, strict radii); the
+ *     radius is then a distance in that metric and "squared distances" hold its key (see
+ *     nbhd_metric). The defaults are the conventions above.
  *   - Range: squared distances must be finite in the tree's type. A radius whose square is not
  *     (float: above about 1.8e19) is refused with NBHD_STATUS_INVALID_RADIUS; keep a float
  *     tree's coordinates below about 5e18 in magnitude (double: 3e153), or distances between
@@ -368,6 +372,30 @@ typedef enum {
 } nbhd_scalar_type;
 
 /**
+ * The distance a query measures by (nbhd_query_options.metric): a Minkowski p-norm.
+ * Distances come back as the metric's key ("sq_dists"): squared for EUCLIDEAN, the distance
+ * itself for MANHATTAN and CHEBYSHEV, sum |x_j - q_j|^p for MINKOWSKI.
+ */
+typedef enum {
+    /**
+     * p = 2, the default.
+     */
+    NBHD_METRIC_EUCLIDEAN = 0,
+    /**
+     * p = 1: the sum of absolute coordinate differences.
+     */
+    NBHD_METRIC_MANHATTAN = 1,
+    /**
+     * p = infinity: the largest absolute coordinate difference.
+     */
+    NBHD_METRIC_CHEBYSHEV = 2,
+    /**
+     * Any p >= 1, given in nbhd_query_options.p (1, 2 and infinity take the variants above).
+     */
+    NBHD_METRIC_MINKOWSKI = 3,
+} nbhd_metric;
+
+/**
  * Which neighbourhood a table holds for every row.
  */
 typedef enum {
@@ -631,6 +659,56 @@ typedef struct {
 } nbhd_stats;
 
 /**
+ * How a query measures (nbhd_tree_search, nbhd_dynamic_search, nbhd_table_options.query).
+ * Start from nbhd_query_options_default(); all fields zero are the defaults too.
+ */
+typedef struct {
+    /**
+     * The distance: a Minkowski p-norm. Results carry its key (see nbhd_metric) and a radius
+     * is a distance in it. Default: NBHD_METRIC_EUCLIDEAN.
+     */
+    nbhd_metric metric;
+    /**
+     * The p of NBHD_METRIC_MINKOWSKI, in [1, infinity] (read for that metric only; NaN or
+     * below 1 is NBHD_STATUS_INVALID_OPTION). Default: 2.
+     */
+    double p;
+    /**
+     * Approximation, finite and >= 0 (else NBHD_STATUS_INVALID_OPTION): 0 is exact; eps > 0
+     * returns k nearest whose i-th distance is at most (1 + eps) times the true i-th, and
+     * for a radius r every point within r / (1 + eps) and none beyond r * (1 + eps), pruning
+     * harder (scipy's cKDTree rule). Default: 0.
+     */
+    double eps;
+    /**
+     * A radius is exclusive (|x - q| < r, scipy's distance_upper_bound) instead of inclusive;
+     * a radius too large for the tree's scalar type is then no bound. Default: false.
+     */
+    bool strict;
+} nbhd_query_options;
+
+/**
+ * Which neighbourhood nbhd_tree_neighborhoods computes for every row.
+ */
+typedef struct {
+    /**
+     * k nearest, all within a radius, or k nearest within a radius.
+     */
+    nbhd_neighborhood_kind kind;
+    /**
+     * Number of neighbours (>= 1) for NBHD_NEIGHBORHOOD_KIND_KNN and _KNN_RADIUS; ignored
+     * for _RADIUS. A k larger than the number of points gives all of them.
+     */
+    size_t k;
+    /**
+     * Plain (not squared) radius, finite and >= 0, inclusive (Euclidean unless query options
+     * name another metric, and exclusive under their `strict`), for _RADIUS and
+     * _KNN_RADIUS; ignored for _KNN. Converted to the tree's scalar type.
+     */
+    double radius;
+} nbhd_neighborhood_spec;
+
+/**
  * The nearest-neighbour spacing of a point set: the distance of each point to its nearest
  * other point, summarised. `mean` is the h of every relative length (epsilon = 6 h).
  */
@@ -664,27 +742,12 @@ typedef struct {
      * The table is identical for every value. Default: 0.
      */
     size_t threads;
+    /**
+     * How every row's query measures (metric, eps, strict radius). Default:
+     * nbhd_query_options_default(); all zero (as `{true, 2}` leaves it) is the same.
+     */
+    nbhd_query_options query;
 } nbhd_table_options;
-
-/**
- * Which neighbourhood nbhd_tree_neighborhoods computes for every row.
- */
-typedef struct {
-    /**
-     * k nearest, all within a radius, or k nearest within a radius.
-     */
-    nbhd_neighborhood_kind kind;
-    /**
-     * Number of neighbours (>= 1) for NBHD_NEIGHBORHOOD_KIND_KNN and _KNN_RADIUS; ignored
-     * for _RADIUS. A k larger than the number of points gives all of them.
-     */
-    size_t k;
-    /**
-     * Plain (not squared) Euclidean radius, finite and >= 0, inclusive, for _RADIUS and
-     * _KNN_RADIUS; ignored for _KNN. Converted to the tree's scalar type.
-     */
-    double radius;
-} nbhd_neighborhood_spec;
 
 /**
  * Size and shape of a dynamic tree.
@@ -1529,6 +1592,39 @@ nbhd_status nbhd_tree_knn_radius_index(const nbhd_tree *tree,
                                        size_t *count);
 
 /**
+ * The default query options: the exact Euclidean metric, an inclusive radius.
+ */
+nbhd_query_options nbhd_query_options_default(void);
+
+/**
+ * The neighbourhood `*spec` (k nearest, within a radius, or the k nearest within a radius)
+ * of the point `query` under `*options` (NULL: the defaults, which answer as nbhd_tree_knn,
+ * nbhd_tree_radius and nbhd_tree_knn_radius): any Minkowski metric, an approximate search, a
+ * strict radius. The radius is a distance in the metric; `sq_dists` receives each
+ * neighbour's key in the metric (squared for Euclidean, the distance for Manhattan and
+ * Chebyshev, sum |x_j - q_j|^p for Minkowski p; see nbhd_metric), in the tree's scalar type;
+ * results are ordered by (key, index). Arguments, buffers and results otherwise as
+ * nbhd_tree_knn.
+ *
+ * Errors: those of nbhd_tree_knn and nbhd_tree_radius; NULL_POINTER for `spec`;
+ * INVALID_OPTION for a metric out of range, a Minkowski p below 1 or NaN, a negative or
+ * non-finite eps; INVALID_RADIUS also for a radius whose key overflows the tree's scalar type
+ * (not under `strict`).
+ *
+ * # Safety
+ * As nbhd_tree_knn; `spec` NULL or a readable nbhd_neighborhood_spec; `options` NULL or a
+ * readable nbhd_query_options.
+ */
+nbhd_status nbhd_tree_search(const nbhd_tree *tree,
+                             const void *query,
+                             const nbhd_neighborhood_spec *spec,
+                             const nbhd_query_options *options,
+                             uint32_t *indices,
+                             void *sq_dists,
+                             size_t capacity,
+                             size_t *count);
+
+/**
  * All points of the tree inside the closed axis-aligned box `min[j] <= x[j] <= max[j]`
  * (every coordinate j).
  *
@@ -1934,6 +2030,22 @@ nbhd_status nbhd_dynamic_knn(const nbhd_dynamic_tree *tree,
                              void *sq_dists,
                              size_t capacity,
                              size_t *count);
+
+/**
+ * The neighbourhood `*spec` of the point `query` among the live points under `*options`
+ * (NULL: the defaults); as nbhd_tree_search.
+ *
+ * # Safety
+ * As nbhd_tree_search, with `tree` a live dynamic tree not being changed by another thread.
+ */
+nbhd_status nbhd_dynamic_search(const nbhd_dynamic_tree *tree,
+                                const void *query,
+                                const nbhd_neighborhood_spec *spec,
+                                const nbhd_query_options *options,
+                                uint32_t *indices,
+                                void *sq_dists,
+                                size_t capacity,
+                                size_t *count);
 
 /**
  * All live points within `radius` of the point `query`; as nbhd_tree_radius.

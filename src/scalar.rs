@@ -121,7 +121,16 @@ impl Scalar for f32 {
     }
     #[inline]
     fn next_down(self) -> Self {
-        f32::next_down(self)
+        // (`f32::next_down` needs Rust 1.86, above the crate's rust-version)
+        if self.is_nan() || self == f32::NEG_INFINITY {
+            self
+        } else if self == 0.0 {
+            -f32::from_bits(1)
+        } else if self > 0.0 {
+            f32::from_bits(self.to_bits() - 1)
+        } else {
+            f32::from_bits(self.to_bits() + 1)
+        }
     }
     #[inline]
     fn from_f64(v: f64) -> Self {
@@ -171,7 +180,16 @@ impl Scalar for f64 {
     }
     #[inline]
     fn next_down(self) -> Self {
-        f64::next_down(self)
+        // (`f64::next_down` needs Rust 1.86, above the crate's rust-version)
+        if self.is_nan() || self == f64::NEG_INFINITY {
+            self
+        } else if self == 0.0 {
+            -f64::from_bits(1)
+        } else if self > 0.0 {
+            f64::from_bits(self.to_bits() - 1)
+        } else {
+            f64::from_bits(self.to_bits() + 1)
+        }
     }
     #[inline]
     fn from_f64(v: f64) -> Self {
@@ -198,5 +216,20 @@ impl Scalar for f64 {
     #[inline(always)]
     fn index_bits(self) -> u32 {
         self.to_bits() as u32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn next_down_is_the_predecessor() {
+        assert_eq!(Scalar::next_down(1.0f64), 1.0 - f64::EPSILON / 2.0);
+        assert_eq!(Scalar::next_down(1.0f32), 1.0 - f32::EPSILON / 2.0);
+        assert_eq!(Scalar::next_down(0.0f64), -f64::from_bits(1));
+        assert_eq!(Scalar::next_down(-1.0f32), -1.0 - f32::EPSILON);
+        assert_eq!(Scalar::next_down(f32::INFINITY), f32::MAX);
+        assert_eq!(Scalar::next_down(f64::NEG_INFINITY), f64::NEG_INFINITY);
     }
 }

@@ -397,6 +397,19 @@ fn c_features_are_clean_under_valgrind() {
 }
 
 #[test]
+fn c_metric_queries_match_brute_force() {
+    run(Command::new(compiled("metric_test")), "tests/c/metric_test");
+}
+
+#[test]
+fn c_metric_queries_are_clean_under_valgrind() {
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(compiled("metric_test"));
+        run(cmd, "valgrind tests/c/metric_test");
+    }
+}
+
+#[test]
 fn c_smoothing_checks_against_a_sphere() {
     run(Command::new(compiled("smooth_test")), "tests/c/smooth_test");
 }

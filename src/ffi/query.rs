@@ -429,7 +429,7 @@ pub extern "C" fn nbhd_query_options_default() -> nbhd_query_options {
 ///
 /// Errors: those of nbhd_tree_knn and nbhd_tree_radius; NULL_POINTER for `spec`;
 /// INVALID_OPTION for a metric out of range, a Minkowski p below 1 or NaN, a negative or
-/// non-finite eps; RADIUS_OUT_OF_RANGE for a radius whose key overflows the tree's scalar type
+/// non-finite eps; INVALID_RADIUS also for a radius whose key overflows the tree's scalar type
 /// (not under `strict`).
 ///
 /// # Safety

@@ -224,7 +224,8 @@ pub struct nbhd_neighborhood_spec {
     /// Number of neighbours (>= 1) for NBHD_NEIGHBORHOOD_KIND_KNN and _KNN_RADIUS; ignored
     /// for _RADIUS. A k larger than the number of points gives all of them.
     pub k: usize,
-    /// Plain (not squared) Euclidean radius, finite and >= 0, inclusive, for _RADIUS and
+    /// Plain (not squared) radius, finite and >= 0, inclusive (Euclidean unless query options
+    /// name another metric, and exclusive under their `strict`), for _RADIUS and
     /// _KNN_RADIUS; ignored for _KNN. Converted to the tree's scalar type.
     pub radius: f64,
 }
