@@ -103,6 +103,7 @@ fn accumulate(points: &[[f32; 3]], frame: usize, threads: usize) -> [Cost; 4] {
     let table = TableOptions {
         exclude_self: false,
         threads,
+        ..Default::default()
     };
     let knn = Neighborhood::Knn { k: 10 };
     let frames: Vec<&[[f32; 3]]> = points.chunks(frame).collect();
@@ -163,6 +164,7 @@ fn sliding(points: &[[f32; 3]], frame: usize, window: usize, threads: usize) -> 
     let table = TableOptions {
         exclude_self: false,
         threads,
+        ..Default::default()
     };
     let knn = Neighborhood::Knn { k: 10 };
     let frames: Vec<&[[f32; 3]]> = points.chunks(frame).collect();
@@ -235,6 +237,7 @@ fn grown_vs_static(points: &[[f32; 3]], frame: usize, queries: &[[f32; 3]], thre
     let table = TableOptions {
         exclude_self: false,
         threads,
+        ..Default::default()
     };
     let knn = Neighborhood::Knn { k: 10 };
     let stat = KdTree::<f32>::build(&PointsView::from_rows(points).unwrap(), &options).unwrap();

@@ -22,13 +22,14 @@ use nbhd::table::neighborhoods_of_all;
 use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, Neighborhood, NonFinitePolicy, PivotPolicy, PointsView,
-    Query, Scalar, TableOptions,
+    Query, QueryOptions, Scalar, TableOptions,
 };
 
 /// One thread for both sides.
 const ONE: TableOptions = TableOptions {
     exclude_self: false,
     threads: 1,
+    query: QueryOptions::DEFAULT,
 };
 
 /// A table operation, in the terms of both libraries.

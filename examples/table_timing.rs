@@ -78,6 +78,7 @@ fn run<T: Scalar>(pts: &[[T; 3]], set_name: &str, op: &str, reps: usize, exclude
     let topts = TableOptions {
         exclude_self,
         threads: 1,
+        ..Default::default()
     };
     for _ in 0..reps {
         let (s, c) = (Instant::now(), cpu_seconds());

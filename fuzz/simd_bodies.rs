@@ -180,6 +180,7 @@ fn search_typed<T: Scalar>(inp: &mut Input<'_>) {
             let o = TableOptions {
                 exclude_self,
                 threads: 1,
+                ..Default::default()
             };
             let (wide, portable) = both_ways(|| tree.neighborhoods(nb, &o).unwrap());
             assert_eq!(wide.offsets(), portable.offsets(), "{nb:?}");

@@ -134,6 +134,7 @@ fn check<T: Scalar>(bytes: &[u8]) {
         let opts = nbhd::TableOptions {
             exclude_self: true,
             threads: 1,
+            ..Default::default()
         };
         assert_eq!(
             tree.neighborhoods(nbhd, &opts),

@@ -123,6 +123,52 @@ impl Metric {
     }
 }
 
+/// The spelling of the command line and reports: `l2`, `l1`, `linf`, `p=<x>`.
+impl std::fmt::Display for Metric {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Metric::Euclidean => f.write_str("l2"),
+            Metric::Manhattan => f.write_str("l1"),
+            Metric::Chebyshev => f.write_str("linf"),
+            Metric::Minkowski(p) => write!(f, "p={p}"),
+        }
+    }
+}
+
+/// Reads `l2`/`euclidean`, `l1`/`manhattan`, `linf`/`chebyshev`, or `p=<x>` (any `x ≥ 1`,
+/// `inf` included, as [`Metric::from_p`]).
+///
+/// ```
+/// use nbhd::Metric;
+///
+/// assert_eq!("l1".parse::<Metric>()?, Metric::Manhattan);
+/// assert_eq!("p=3".parse::<Metric>()?, Metric::Minkowski(3.0));
+/// assert_eq!("p=inf".parse::<Metric>()?, Metric::Chebyshev);
+/// assert_eq!(Metric::Minkowski(1.5).to_string().parse::<Metric>()?, Metric::Minkowski(1.5));
+/// assert!("p=0.5".parse::<Metric>().is_err());
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+impl std::str::FromStr for Metric {
+    type Err = NbhdError;
+
+    fn from_str(s: &str) -> Result<Self> {
+        let t = s.trim().to_ascii_lowercase();
+        match t.as_str() {
+            "l2" | "euclidean" => return Ok(Metric::Euclidean),
+            "l1" | "manhattan" => return Ok(Metric::Manhattan),
+            "linf" | "chebyshev" => return Ok(Metric::Chebyshev),
+            _ => {}
+        }
+        match t.strip_prefix("p=").map(str::parse::<f64>) {
+            Some(Ok(p)) => Metric::from_p(p),
+            _ => Err(NbhdError::InvalidOption {
+                name: "metric",
+                reason: format!("{s:?} is none of l2, l1, linf, p=<x> (x ≥ 1)"),
+            }),
+        }
+    }
+}
+
 /// How one traversal measures (plumbing of `NeighborIndex::visit_with`): the metric in its
 /// canonical form and the factor `scale ≥ 1` a cell's lower bound is multiplied by before it is
 /// compared with the result's bound (1 for an exact search; `(1 + eps)^p` or its square for an
@@ -299,13 +345,7 @@ mod tests {
     #[test]
     fn keys_are_each_norms_form() {
         let (q, p) = ([1.0, -2.0, 0.5], [4.0, 2.0, 0.5]);
-        let key = |metric| {
-            Measure {
-                metric,
-                scale: 1.0,
-            }
-            .apply(KeyOf(&q, &p))
-        };
+        let key = |metric| Measure { metric, scale: 1.0 }.apply(KeyOf(&q, &p));
         assert_eq!(key(Metric::Euclidean), 25.0);
         assert_eq!(key(Metric::Manhattan), 7.0);
         assert_eq!(key(Metric::Chebyshev), 4.0);
@@ -330,7 +370,10 @@ mod tests {
             assert!(Metric::Minkowski(p).canonical().is_err());
         }
         assert_eq!(Metric::Minkowski(2.0).canonical(), Ok(Metric::Euclidean));
-        assert_eq!(Metric::Minkowski(1.5).canonical(), Ok(Metric::Minkowski(1.5)));
+        assert_eq!(
+            Metric::Minkowski(1.5).canonical(),
+            Ok(Metric::Minkowski(1.5))
+        );
     }
 
     #[test]

@@ -12,7 +12,9 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     // vocabulary every part shares
     &["scalar", "error", "linalg", "select", "prefetch", "simd"],
-    &["points", "parallel", "progress", "scatter", "names", "metric"],
+    &[
+        "points", "parallel", "progress", "scatter", "names", "metric",
+    ],
     // the caller's points, validated and packed
     &["cloud"],
     // queries and their baselines (brute force, PCA sweep), then tables of their answers

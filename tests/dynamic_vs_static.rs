@@ -191,6 +191,7 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
                     &TableOptions {
                         exclude_self,
                         threads: 1,
+                        ..Default::default()
                     },
                 )
                 .unwrap();
@@ -198,6 +199,7 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
                 let opts = TableOptions {
                     exclude_self,
                     threads,
+                    ..Default::default()
                 };
                 assert_eq!(tree.neighborhoods(nbhd, &opts).unwrap(), want);
             }
@@ -222,6 +224,7 @@ fn check<T: Scalar>(tree: &DynamicKdTree<T>, model: &Model<T>, rng: &mut Rng) {
             let opts = TableOptions {
                 exclude_self: false,
                 threads,
+                ..Default::default()
             };
             assert_eq!(tree.neighborhoods_of(&qview, nbhd, &opts).unwrap(), want);
         }
@@ -548,6 +551,7 @@ fn bad_input() {
         let opts = TableOptions {
             exclude_self: false,
             threads,
+            ..Default::default()
         };
         assert_eq!(
             tree.neighborhoods_of(&qv, Neighborhood::Knn { k: 1 }, &opts),

@@ -72,6 +72,7 @@ fn static_tree<T: Scalar>(dim: usize) {
                 let o = TableOptions {
                     exclude_self,
                     threads,
+                    ..Default::default()
                 };
                 let table = t.neighborhoods(nb, &o).unwrap();
                 assert_eq!((table.len(), table.total()), (0, 0));
@@ -142,6 +143,7 @@ fn zero_queries<T: Scalar>(dim: usize) {
             let o = TableOptions {
                 exclude_self: false,
                 threads,
+                ..Default::default()
             };
             let rows = t.neighborhoods_of(&qv, nb, &o).unwrap();
             assert_eq!((rows.len(), rows.total()), (0, 0), "{nb:?}");

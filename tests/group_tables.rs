@@ -84,6 +84,7 @@ fn check<T: Scalar>(coords: &[T], d: usize, leaf_sizes: &[usize]) {
                                 &TableOptions {
                                     exclude_self,
                                     threads,
+                                    ..Default::default()
                                 },
                             )
                             .unwrap();
@@ -104,6 +105,7 @@ fn check<T: Scalar>(coords: &[T], d: usize, leaf_sizes: &[usize]) {
                         &TableOptions {
                             exclude_self,
                             threads: 2,
+                            ..Default::default()
                         },
                     )
                     .unwrap();

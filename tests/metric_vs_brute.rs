@@ -82,7 +82,9 @@ fn build<T: Scalar>(coords: &[T], d: usize, pivot: PivotPolicy) -> (KdTree<T>, D
     // three trees of the forest: a large one and two small ones
     for part in [0..n / 2, n / 2..n * 3 / 4, n * 3 / 4..n] {
         if !part.is_empty() {
-            growing.insert_flat(&coords[part.start * d..part.end * d]).unwrap();
+            growing
+                .insert_flat(&coords[part.start * d..part.end * d])
+                .unwrap();
         }
     }
     (tree, growing)
@@ -104,7 +106,11 @@ fn check_exact<T: Scalar>(coords: &[T], d: usize, options: &QueryOptions, seed: 
         .unwrap();
     let far = options.metric.distance_of(tmp.last().unwrap().sq_dist);
     // (keys of p = 100 overflow f32 beyond a distance of 2.4)
-    let far = if far.is_finite() { far } else { T::from_f64(2.0) };
+    let far = if far.is_finite() {
+        far
+    } else {
+        T::from_f64(2.0)
+    };
     for pivot in PivotPolicy::ALL {
         let (tree, growing) = build(coords, d, pivot);
         let mut qs: Vec<Query<'_, T>> = stored
@@ -194,7 +200,10 @@ fn check_approximate<T: Scalar>(coords: &[T], d: usize, metric: Metric, eps: f64
             tree.search_with(q, knn, &approx, &mut got).unwrap();
             assert_eq!(got.len(), want.len());
             for (g, w) in got.iter().zip(&want) {
-                assert!(dist(g) <= (1.0 + eps) * dist(w) * tol, "{metric:?} eps {eps}");
+                assert!(
+                    dist(g) <= (1.0 + eps) * dist(w) * tol,
+                    "{metric:?} eps {eps}"
+                );
             }
             let r = T::from_f64(0.8);
             let ball = Neighborhood::Radius {
@@ -289,7 +298,10 @@ fn strict_radii_leave_out_the_points_on_the_radius() {
         tree.search_with(q, ball, &inclusive, &mut a).unwrap();
         tree.search_with(q, ball, &strict, &mut b).unwrap();
         let on = inclusive.metric.key_of(1.0);
-        assert!(a.iter().any(|n| n.sq_dist == on), "p {p}: some point on the radius");
+        assert!(
+            a.iter().any(|n| n.sq_dist == on),
+            "p {p}: some point on the radius"
+        );
         a.retain(|n| n.sq_dist < on);
         assert_eq!(a, b, "p {p}");
     }
@@ -310,7 +322,8 @@ fn default_options_are_the_plain_queries() {
         let q = Query::stored_excluding_self(i);
         tree.knn(q, 10, &mut a).unwrap();
         let knn = Neighborhood::Knn { k: 10 };
-        tree.search_with(q, knn, &QueryOptions::default(), &mut b).unwrap();
+        tree.search_with(q, knn, &QueryOptions::default(), &mut b)
+            .unwrap();
         tree.search_with(q, knn, &two, &mut c).unwrap();
         assert_eq!(a, b);
         assert_eq!(a, c);
@@ -330,7 +343,10 @@ fn bad_metrics_and_eps_are_refused() {
             ..QueryOptions::default()
         };
         let e = tree.search_with(q, knn, &o, &mut out).unwrap_err();
-        assert!(matches!(e, NbhdError::InvalidOption { name: "p", .. }), "{e}");
+        assert!(
+            matches!(e, NbhdError::InvalidOption { name: "p", .. }),
+            "{e}"
+        );
         assert!(QueryOptions::with_p(p).is_err());
     }
     for eps in [-1.0, f64::NAN, f64::INFINITY] {
@@ -339,14 +355,14 @@ fn bad_metrics_and_eps_are_refused() {
             ..QueryOptions::default()
         };
         let e = tree.search_with(q, knn, &o, &mut out).unwrap_err();
-        assert!(matches!(e, NbhdError::InvalidOption { name: "eps", .. }), "{e}");
+        assert!(
+            matches!(e, NbhdError::InvalidOption { name: "eps", .. }),
+            "{e}"
+        );
     }
     // a radius whose key overflows: refused inclusive, no bound when strict
     let l100 = QueryOptions::with_p(100.0).unwrap();
-    let big = Neighborhood::KnnRadius {
-        k: 3,
-        radius: 1e10,
-    };
+    let big = Neighborhood::KnnRadius { k: 3, radius: 1e10 };
     let e = tree.search_with(q, big, &l100, &mut out).unwrap_err();
     assert!(matches!(e, NbhdError::RadiusOutOfRange { .. }), "{e}");
     let strict = QueryOptions {

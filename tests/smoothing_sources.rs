@@ -129,6 +129,7 @@ fn tables_that_do_not_fit_the_points_are_refused() {
             &TableOptions {
                 exclude_self: false,
                 threads: 0,
+                ..Default::default()
             },
         )
         .unwrap();

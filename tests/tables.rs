@@ -34,6 +34,7 @@ fn tree_tables_equal_brute_force_tables_for_any_thread_count() {
                             &TableOptions {
                                 exclude_self,
                                 threads,
+                                ..Default::default()
                             },
                         )
                         .unwrap();

@@ -46,6 +46,7 @@ fn check<T: Scalar>(coords: &[T], queries: &[[T; 3]], nbhds: &[Neighborhood<T>])
                     let opts = TableOptions {
                         exclude_self,
                         threads: 1,
+                        ..Default::default()
                     };
                     let table = tree.neighborhoods(nbhd, &opts).unwrap();
                     for i in 0..n {

@@ -106,6 +106,7 @@ fn check_against_brute<T: Scalar>(c: &[T], d: usize, listed: &[u32], what: &str)
                 let o = TableOptions {
                     exclude_self,
                     threads,
+                    ..Default::default()
                 };
                 let t = tree.neighborhoods(nb, &o).unwrap();
                 let b = neighborhoods_of_all(&brute, nb, exclude_self).unwrap();

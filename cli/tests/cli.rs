@@ -329,7 +329,9 @@ fn nbhd_without_a_command_runs_the_demo_and_prints_the_summary() {
 
 // ---- neighbourhoods against brute force -----------------------------------------------------
 
-use nbhd::{BruteForce, NeighborSearch, Neighborhood, NonFinitePolicy, PointsView, Query};
+use nbhd::{
+    BruteForce, NeighborSearch, Neighborhood, NonFinitePolicy, PointsView, Query, QueryOptions,
+};
 
 /// 400 points of a noisy sphere, 40 of them duplicates, one NaN point (index 17); written as
 /// XYZ text with every digit.
@@ -379,6 +381,17 @@ fn expect_brute(
     exclude_self: bool,
     what: &str,
 ) {
+    expect_brute_with(bf, got, nbhd, &QueryOptions::default(), exclude_self, what);
+}
+
+fn expect_brute_with(
+    bf: &BruteForce<f64>,
+    got: &[(Vec<u32>, Vec<f64>)],
+    nbhd: Neighborhood<f64>,
+    options: &QueryOptions,
+    exclude_self: bool,
+    what: &str,
+) {
     assert_eq!(got.len(), 400, "{what}");
     let mut want = Vec::new();
     for (i, (idx, d)) in got.iter().enumerate() {
@@ -386,15 +399,11 @@ fn expect_brute(
             assert!(idx.is_empty(), "{what}: the NaN point has an empty row");
             continue;
         }
-        bf.search(
-            Query::Stored {
-                index: i as u32,
-                exclude_self,
-            },
-            nbhd,
-            &mut want,
-        )
-        .unwrap();
+        let q = Query::Stored {
+            index: i as u32,
+            exclude_self,
+        };
+        bf.search_with(q, nbhd, options, &mut want).unwrap();
         let wi: Vec<u32> = want.iter().map(|n| n.index).collect();
         let wd: Vec<f64> = want.iter().map(|n| n.sq_dist).collect();
         assert_eq!(idx, &wi, "{what}: row {i}");
@@ -455,6 +464,66 @@ fn knn_radius_and_neighbors_equal_brute_force_for_every_tree_variant() {
                 expect_brute(&bf, &rows(&v), nb, exclude, &a.join(" "));
             }
         }
+    }
+}
+
+/// `--metric`, `--strict` and `--eps`: the library's answers under those query options.
+#[test]
+fn metrics_and_strict_radii_equal_brute_force() {
+    let (file, pts) = sphere_file("sphere-metric.xyz");
+    let bf = brute(&pts);
+    for (metric, strict) in [
+        ("l1", false),
+        ("linf", true),
+        ("p=3", false),
+        ("p=1.5", true),
+    ] {
+        let options = QueryOptions {
+            metric: metric.parse().unwrap(),
+            strict,
+            ..QueryOptions::default()
+        };
+        let cases: [(&[&str], Neighborhood<f64>); 2] = [
+            (&["knn", "-k", "6"], Neighborhood::Knn { k: 6 }),
+            (
+                &["neighbors", "-k", "5", "-r", "0.2"],
+                Neighborhood::KnnRadius { k: 5, radius: 0.2 },
+            ),
+        ];
+        for (args, nb) in cases {
+            let mut a = vec!["--json"];
+            a.extend(args);
+            a.extend([file.as_str(), "--metric", metric, "--exclude-self"]);
+            if strict {
+                a.push("--strict");
+            }
+            let v = json_of(&nbhd(&a));
+            assert_eq!(v["metric"], metric);
+            expect_brute_with(&bf, &rows(&v), nb, &options, true, &a.join(" "));
+        }
+    }
+    // an approximate search keeps its guarantee; a bad metric or eps is refused by name
+    let v = json_of(&nbhd(&["--json", "knn", "-k", "4", &file, "--eps", "0.5"]));
+    let mut want = Vec::new();
+    for (i, (_, d2)) in rows(&v).iter().enumerate().filter(|(i, _)| *i != 17) {
+        bf.search(
+            Query::stored(i as u32),
+            Neighborhood::Knn { k: 4 },
+            &mut want,
+        )
+        .unwrap();
+        assert_eq!(d2.len(), 4);
+        for (g, w) in d2.iter().zip(&want) {
+            assert!(
+                g.sqrt() <= 1.5 * w.sq_dist.sqrt() * (1.0 + 1e-12),
+                "row {i}"
+            );
+        }
+    }
+    for (bad, want) in [(["--metric", "p=0.5"], "p"), (["--eps", "-1"], "eps")] {
+        let o = nbhd(&["knn", "-k", "4", &file, bad[0], bad[1]]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains(want), "{bad:?}: {}", stderr(&o));
     }
 }
 

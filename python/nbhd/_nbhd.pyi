@@ -88,13 +88,34 @@ class KdTree:
     def stats(self) -> dict[str, int]: ...
     def options(self) -> dict[str, Any]: ...
     def __len__(self) -> int: ...
-    def knn(self, x: ArrayLike, k: int, *, threads: int = 0) -> tuple[U32, Floats]:
-        """1-D x: (indices, sq_dists) of length min(k, size); 2-D x (m, d): arrays (m, min(k, size))."""
+    def knn(
+        self, x: ArrayLike, k: int, *, p: float = 2.0, eps: float = 0.0, threads: int = 0
+    ) -> tuple[U32, Floats]:
+        """1-D x: (indices, sq_dists) of length min(k, size); 2-D x (m, d): arrays (m, min(k, size)).
+        p: Minkowski p-norm (sq_dists hold its key: squared for p = 2); eps: approximate search."""
     def radius(
-        self, x: ArrayLike, radius: float, *, sorted: bool = True, threads: int = 0
+        self,
+        x: ArrayLike,
+        radius: float,
+        *,
+        sorted: bool = True,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
+        threads: int = 0,
     ) -> Union[tuple[U32, Floats], Table]:
         """1-D x: (indices, sq_dists); 2-D x: a Table with one row per query."""
-    def knn_radius(self, x: ArrayLike, k: int, radius: float, *, threads: int = 0) -> Union[tuple[U32, Floats], Table]:
+    def knn_radius(
+        self,
+        x: ArrayLike,
+        k: int,
+        radius: float,
+        *,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
+        threads: int = 0,
+    ) -> Union[tuple[U32, Floats], Table]:
         """1-D x: (indices, sq_dists); 2-D x: a Table with one row per query."""
     def neighborhoods(
         self,
@@ -103,6 +124,9 @@ class KdTree:
         radius: Optional[float] = None,
         exclude_self: bool = True,
         sorted: bool = True,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
         threads: int = 0,
     ) -> Table: ...
     def to_bytes(self) -> bytes:
@@ -147,11 +171,31 @@ class DynamicKdTree:
     def point(self, index: int) -> Floats: ...
     def stats(self) -> dict[str, Any]: ...
     def __len__(self) -> int: ...
-    def knn(self, x: ArrayLike, k: int, *, threads: int = 0) -> tuple[U32, Floats]: ...
+    def knn(
+        self, x: ArrayLike, k: int, *, p: float = 2.0, eps: float = 0.0, threads: int = 0
+    ) -> tuple[U32, Floats]: ...
     def radius(
-        self, x: ArrayLike, radius: float, *, sorted: bool = True, threads: int = 0
+        self,
+        x: ArrayLike,
+        radius: float,
+        *,
+        sorted: bool = True,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
+        threads: int = 0,
     ) -> Union[tuple[U32, Floats], Table]: ...
-    def knn_radius(self, x: ArrayLike, k: int, radius: float, *, threads: int = 0) -> Union[tuple[U32, Floats], Table]: ...
+    def knn_radius(
+        self,
+        x: ArrayLike,
+        k: int,
+        radius: float,
+        *,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
+        threads: int = 0,
+    ) -> Union[tuple[U32, Floats], Table]: ...
     def neighborhoods(
         self,
         *,
@@ -159,6 +203,9 @@ class DynamicKdTree:
         radius: Optional[float] = None,
         exclude_self: bool = True,
         sorted: bool = True,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
         threads: int = 0,
     ) -> Table: ...
     def to_bytes(self) -> bytes: ...

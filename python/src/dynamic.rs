@@ -184,62 +184,65 @@ impl PyDynamicKdTree {
     }
 
     /// The `k` nearest live points of `x`; as `KdTree.knn`.
-    #[pyo3(signature = (x, k, *, threads = 0))]
+    #[pyo3(signature = (x, k, *, p = 2.0, eps = 0.0, threads = 0))]
     fn knn<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
         k: usize,
+        p: f64,
+        eps: f64,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        index::query(
-            &self.index,
-            py,
-            x,
-            index::spec(Some(k), None, true)?,
-            threads,
-        )?
-        .dense(py, k.min(self.size()))
+        let spec = index::spec(Some(k), None, true)?;
+        let options = index::options(p, eps, false)?;
+        index::query(&self.index, py, x, spec, options, threads)?.dense(py, k.min(self.size()))
     }
 
     /// All live points within `radius` of `x`; as `KdTree.radius`.
-    #[pyo3(signature = (x, radius, *, sorted = true, threads = 0))]
+    #[pyo3(signature = (x, radius, *, sorted = true, p = 2.0, eps = 0.0, strict = false,
+                        threads = 0))]
+    #[allow(clippy::too_many_arguments)]
     fn radius<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
         radius: f64,
         sorted: bool,
+        p: f64,
+        eps: f64,
+        strict: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        index::query(
-            &self.index,
-            py,
-            x,
-            index::spec(None, Some(radius), sorted)?,
-            threads,
-        )?
-        .into_py(py)
+        let spec = index::spec(None, Some(radius), sorted)?;
+        let options = index::options(p, eps, strict)?;
+        index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
     }
 
     /// The `k` nearest among the live points within `radius` of `x`; as `KdTree.knn_radius`.
-    #[pyo3(signature = (x, k, radius, *, threads = 0))]
+    #[pyo3(signature = (x, k, radius, *, p = 2.0, eps = 0.0, strict = false, threads = 0))]
+    #[allow(clippy::too_many_arguments)]
     fn knn_radius<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
         k: usize,
         radius: f64,
+        p: f64,
+        eps: f64,
+        strict: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let spec = index::spec(Some(k), Some(radius), true)?;
-        index::query(&self.index, py, x, spec, threads)?.into_py(py)
+        let options = index::options(p, eps, strict)?;
+        index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
     }
 
     /// The neighbourhood of every live point as a `Table` with a row per index given (empty
     /// for points not live); as `KdTree.neighborhoods`.
     #[pyo3(signature = (*, k = None, radius = None, exclude_self = true, sorted = true,
-                        threads = 0))]
+                        p = 2.0, eps = 0.0, strict = false, threads = 0))]
+    #[allow(clippy::too_many_arguments)]
     fn neighborhoods(
         &self,
         py: Python<'_>,
@@ -247,10 +250,14 @@ impl PyDynamicKdTree {
         radius: Option<f64>,
         exclude_self: bool,
         sorted: bool,
+        p: f64,
+        eps: f64,
+        strict: bool,
         threads: usize,
     ) -> PyResult<PyTable> {
         let spec = index::spec(k, radius, sorted)?;
-        index::neighborhoods(&self.index, py, spec, exclude_self, threads)
+        let options = index::options(p, eps, strict)?;
+        index::neighborhoods(&self.index, py, spec, options, exclude_self, threads)
     }
 
     /// The tree in the saved dynamic-tree format (docs/tree-file-format.md) as `bytes`; what

@@ -3,8 +3,8 @@
 //! it, so a query is bound once for both classes.
 
 use nbhd::handle::{AnyIndex, AnyTable};
-use nbhd::{with_index, with_table, NeighborSearch, NeighborhoodSpec, Query, ScalarType};
-use nbhd::{Neighbor, Scalar, TableOptions};
+use nbhd::{with_index, with_table, NeighborIndex, NeighborhoodSpec, Query, ScalarType};
+use nbhd::{Metric, Neighbor, QueryOptions, Scalar, TableOptions};
 use numpy::{Element, PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
@@ -31,6 +31,18 @@ pub(crate) fn spec(
         return Err(value_err("give k, radius, or both"));
     }
     Ok(NeighborhoodSpec { k, radius, sorted })
+}
+
+/// The query options named by `p` (the Minkowski p-norm, 1 ≤ p ≤ ∞), `eps` and `strict`,
+/// checked: a bad value raises `NbhdValueError` naming it.
+pub(crate) fn options(p: f64, eps: f64, strict: bool) -> PyResult<QueryOptions> {
+    let options = QueryOptions {
+        metric: Metric::from_p(p).or_raise()?,
+        eps,
+        strict,
+    };
+    options.validate().or_raise()?;
+    Ok(options)
 }
 
 /// One query's neighbours as `(indices, sq_dists)` arrays.
@@ -80,6 +92,7 @@ pub(crate) fn query<'py>(
     py: Python<'py>,
     x: &Bound<'py, PyAny>,
     spec: NeighborhoodSpec,
+    options: QueryOptions,
     threads: usize,
 ) -> PyResult<Answer<'py>> {
     let (arr, _) = float_array(x, Some(dtype(index)))?;
@@ -89,18 +102,18 @@ pub(crate) fn query<'py>(
             let flat = arr.call_method1("reshape", (-1,))?;
             let ro: PyReadonlyArray1<'_, T> = flat.cast::<PyArray1<T>>()?.readonly();
             let q: Vec<T> = ro.as_array().to_vec();
-            let nbhd = spec.to::<T>().or_raise()?;
+            let nbhd = spec.to_with::<T>(&options).or_raise()?;
             let found = py
                 .detach(|| {
                     let mut out = Vec::new();
-                    t.search(Query::point(&q), nbhd, &mut out).map(|_| out)
+                    t.search_with(Query::point(&q), nbhd, &options, &mut out).map(|_| out)
                 })
                 .or_raise()?;
             Ok(Answer::One(pair(py, found)?))
         } else {
             let pts = Points::<T>::new(&arr)?;
             let view = pts.view().or_raise()?;
-            let opts = TableOptions { exclude_self: false, threads };
+            let opts = TableOptions { exclude_self: false, threads, query: options };
             let rows = py.detach(|| index.neighborhoods_of(&view, spec, &opts)).or_raise()?;
             Ok(Answer::Many(table(py, rows, index.source_len())?))
         }
@@ -112,12 +125,14 @@ pub(crate) fn neighborhoods(
     index: &AnyIndex,
     py: Python<'_>,
     spec: NeighborhoodSpec,
+    options: QueryOptions,
     exclude_self: bool,
     threads: usize,
 ) -> PyResult<PyTable> {
     let opts = TableOptions {
         exclude_self,
         threads,
+        query: options,
     };
     let rows = py.detach(|| index.neighborhoods(spec, &opts)).or_raise()?;
     table(py, rows, index.source_len())

@@ -147,69 +147,83 @@ impl PyKdTree {
     /// One point (1-D `x` of length d): `(indices, sq_dists)`, each of length min(k, size).
     /// A batch (2-D `x`, m × d): `(indices, sq_dists)` of shape (m, min(k, size)), answered in
     /// parallel (`threads`), identical for any thread count. Distances are squared.
-    #[pyo3(signature = (x, k, *, threads = 0))]
+    ///
+    /// Every query takes `p`, the Minkowski p-norm it measures by (1 ≤ p ≤ ∞; default 2,
+    /// Euclidean): `sq_dists` then hold the metric's key — squared for p = 2, the distance for
+    /// p = 1 and ∞, Σ|x_j − q_j|^p otherwise (`d = key ** (1 / p)`) — and a radius is a
+    /// distance in it. `eps > 0` makes the search approximate (scipy's rule: the i-th neighbour
+    /// within `1 + eps` times the true i-th; a radius result holds every point within
+    /// `radius / (1 + eps)` and none beyond `radius * (1 + eps)`); `strict=True` makes a
+    /// radius exclusive (scipy's `distance_upper_bound`).
+    #[pyo3(signature = (x, k, *, p = 2.0, eps = 0.0, threads = 0))]
     fn knn<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
         k: usize,
+        p: f64,
+        eps: f64,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        index::query(
-            &self.index,
-            py,
-            x,
-            index::spec(Some(k), None, true)?,
-            threads,
-        )?
-        .dense(py, k.min(self.size()))
+        let spec = index::spec(Some(k), None, true)?;
+        let options = index::options(p, eps, false)?;
+        index::query(&self.index, py, x, spec, options, threads)?.dense(py, k.min(self.size()))
     }
 
-    /// All stored points within `radius` of `x` (plain Euclidean radius, inclusive:
-    /// ‖p − x‖ ≤ radius), ordered by (sq_dist, index) unless `sorted=False`.
+    /// All stored points within `radius` of `x` (plain radius, inclusive: ‖p − x‖ ≤ radius,
+    /// exclusive with `strict=True`), ordered by (sq_dist, index) unless `sorted=False`.
+    /// `p`, `eps`: as `knn`.
     ///
     /// One point: `(indices, sq_dists)`. A batch (2-D `x`): a `Table` of rows, one per query.
-    #[pyo3(signature = (x, radius, *, sorted = true, threads = 0))]
+    #[pyo3(signature = (x, radius, *, sorted = true, p = 2.0, eps = 0.0, strict = false,
+                        threads = 0))]
+    #[allow(clippy::too_many_arguments)]
     fn radius<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
         radius: f64,
         sorted: bool,
+        p: f64,
+        eps: f64,
+        strict: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
-        index::query(
-            &self.index,
-            py,
-            x,
-            index::spec(None, Some(radius), sorted)?,
-            threads,
-        )?
-        .into_py(py)
+        let spec = index::spec(None, Some(radius), sorted)?;
+        let options = index::options(p, eps, strict)?;
+        index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
     }
 
     /// The ε-k-neighbourhood of `x`: the `k` nearest among the stored points within `radius`
-    /// (thesis Section 2.1.1). One point: `(indices, sq_dists)`; a batch: a `Table`.
-    #[pyo3(signature = (x, k, radius, *, threads = 0))]
+    /// (thesis Section 2.1.1). One point: `(indices, sq_dists)`; a batch: a `Table`. `p`,
+    /// `eps`, `strict`: as `knn` and `radius`.
+    #[pyo3(signature = (x, k, radius, *, p = 2.0, eps = 0.0, strict = false, threads = 0))]
+    #[allow(clippy::too_many_arguments)]
     fn knn_radius<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
         k: usize,
         radius: f64,
+        p: f64,
+        eps: f64,
+        strict: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let spec = index::spec(Some(k), Some(radius), true)?;
-        index::query(&self.index, py, x, spec, threads)?.into_py(py)
+        let options = index::options(p, eps, strict)?;
+        index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
     }
 
     /// The neighbourhood of every stored point as a `Table` (row i for the caller's point i;
     /// skipped points get empty rows): the `k` nearest (`k` alone), all within `radius`
     /// (`radius` alone) or the ε-k-neighbourhood (both). `exclude_self` leaves each point out
     /// of its own row (its duplicates at distance 0 stay). Computed in parallel, one tree
-    /// descent per group of neighbouring points; identical bytes for any `threads`.
+    /// descent per group of neighbouring points; identical bytes for any `threads`. `p`, `eps`,
+    /// `strict`: as `knn` and `radius` (each row then one search).
     #[pyo3(signature = (*, k = None, radius = None, exclude_self = true, sorted = true,
-                        threads = 0))]
+                        p = 2.0, eps = 0.0, strict = false, threads = 0))]
+    #[allow(clippy::too_many_arguments)]
     fn neighborhoods(
         &self,
         py: Python<'_>,
@@ -217,10 +231,14 @@ impl PyKdTree {
         radius: Option<f64>,
         exclude_self: bool,
         sorted: bool,
+        p: f64,
+        eps: f64,
+        strict: bool,
         threads: usize,
     ) -> PyResult<PyTable> {
         let spec = index::spec(k, radius, sorted)?;
-        index::neighborhoods(&self.index, py, spec, exclude_self, threads)
+        let options = index::options(p, eps, strict)?;
+        index::neighborhoods(&self.index, py, spec, options, exclude_self, threads)
     }
 
     /// The tree in the saved-tree format (docs/tree-file-format.md) as `bytes`: a versioned
@@ -350,6 +368,7 @@ impl PyTable {
     /// squared distances (`distances=True`: the distances, as cKDTree's
     /// `sparse_distance_matrix` gives). Entries at distance 0 (duplicates, or the point itself
     /// with `exclude_self=False`) are stored explicitly, so the sparsity pattern is the table.
+    /// `distances=True` takes square roots: for tables of the default metric (p = 2) only.
     #[pyo3(signature = (*, distances = false))]
     fn to_csr<'py>(&self, py: Python<'py>, distances: bool) -> PyResult<Bound<'py, PyAny>> {
         let np = py.import("numpy")?;

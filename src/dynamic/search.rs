@@ -211,7 +211,8 @@ impl<T: Scalar> NeighborIndex<T> for DynamicKdTree<T> {
         impl<T: Scalar, C: ResultSet<T>> NormUser<T> for Collect<'_, T, C> {
             type Out = ();
             fn with<N: Norm<T>>(self, norm: N) {
-                self.forest.collect_norm(self.q, self.exclude, norm, self.set);
+                self.forest
+                    .collect_norm(self.q, self.exclude, norm, self.set);
             }
         }
         measure.apply(Collect {

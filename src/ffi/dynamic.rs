@@ -10,8 +10,8 @@ use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::table::{nbhd_neighborhoods, neighborhoods, neighborhoods_of};
 use super::tree::{hand_out_index, IndexHandle};
 use super::types::{
-    nbhd_build_options, nbhd_neighborhood_spec, nbhd_points, nbhd_query_options, nbhd_table_options,
-    read_build_options, PointsArg,
+    nbhd_build_options, nbhd_neighborhood_spec, nbhd_points, nbhd_query_options,
+    nbhd_table_options, read_build_options, PointsArg,
 };
 use crate::handle::AnyIndex;
 use crate::query::NeighborhoodSpec;

@@ -47,6 +47,13 @@ pub struct QueryOptions {
 }
 
 impl QueryOptions {
+    /// The defaults (exact Euclidean, inclusive radius) as a constant.
+    pub const DEFAULT: Self = Self {
+        metric: Metric::Euclidean,
+        eps: 0.0,
+        strict: false,
+    };
+
     /// Exact queries by the Minkowski `p`-norm ([`Metric::from_p`]).
     pub fn with_p(p: f64) -> Result<Self> {
         Ok(Self {
@@ -90,9 +97,11 @@ impl QueryOptions {
             }
             Neighborhood::Knn { k } => (k, T::INFINITY, 1.0 / f),
             // pruned at r / (1 + eps): the cells' bounds scaled by 1/f against r·(1+eps)'s key
-            Neighborhood::Radius { radius, .. } => {
-                (usize::MAX, self.radius_key(metric, f, radius)?, 1.0 / (f * f))
-            }
+            Neighborhood::Radius { radius, .. } => (
+                usize::MAX,
+                self.radius_key(metric, f, radius)?,
+                1.0 / (f * f),
+            ),
             Neighborhood::KnnRadius { k, radius } => {
                 (k, self.radius_key(metric, f, radius)?, 1.0 / f)
             }
@@ -130,7 +139,11 @@ impl QueryOptions {
         } else {
             key * T::from_f64(1.0 / f)
         };
-        Ok(if self.strict { outer.next_down() } else { outer })
+        Ok(if self.strict {
+            outer.next_down()
+        } else {
+            outer
+        })
     }
 }
 

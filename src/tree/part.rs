@@ -44,7 +44,8 @@ impl<T: Scalar> KdTree<T> {
         impl<T: Scalar, C: ResultSet<T>> NormUser<T> for Descend<'_, T, C> {
             type Out = ();
             fn with<N: Norm<T>>(self, norm: N) {
-                self.tree.search_into_norm(self.q, self.exclude, norm, self.out);
+                self.tree
+                    .search_into_norm(self.q, self.exclude, norm, self.out);
             }
         }
         measure.apply(Descend {

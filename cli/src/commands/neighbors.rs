@@ -7,7 +7,8 @@
 //!
 //! Output: one line per neighbour, `query,rank,index,sq_dist` (caller indices: the points'
 //! positions in the file, counted from 0; `sq_dist` is the squared Euclidean distance, written
-//! with every digit), or a JSON document.
+//! with every digit — under `--metric`, that metric's key: the distance for l1 and linf,
+//! Σ|Δ|^p for p=<x>), or a JSON document.
 
 use crate::args::{length_text, parse_length, InputArgs, TreeArgs};
 use crate::error::{Context, Result};
@@ -19,7 +20,8 @@ use nbhd::smooth::Length;
 use nbhd::NeighborIndex;
 use nbhd::Persist;
 use nbhd::{
-    BuildOptions, KdTree, NeighborSearch, NeighborTable, Neighborhood, TableOptions, TreeStats,
+    BuildOptions, KdTree, Metric, NeighborSearch, NeighborTable, Neighborhood, QueryOptions,
+    TableOptions, TreeStats,
 };
 use serde_json::json;
 use std::io::Write;
@@ -54,6 +56,21 @@ pub struct Common {
     /// file's
     #[arg(long = "tree", value_name = "FILE")]
     pub tree_file: Option<PathBuf>,
+
+    /// The distance: l2 (Euclidean, the default), l1 (Manhattan), linf (Chebyshev) or p=<x>
+    /// (Minkowski, x ≥ 1). The radius is a distance in it; sq_dist holds its key: squared for
+    /// l2, the distance for l1 and linf, Σ|Δ|^p for p=<x>
+    #[arg(long, default_value = "l2", value_parser = parse_metric)]
+    pub metric: Metric,
+
+    /// Approximate search (≥ 0): each neighbour within (1 + eps) times the exact one's
+    /// distance; a radius keeps every point within ε/(1 + eps), none beyond ε·(1 + eps)
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub eps: f64,
+
+    /// The radius is exclusive (‖x − q‖ < ε), as scipy's distance_upper_bound
+    #[arg(long)]
+    pub strict: bool,
 
     // The input file and its format: here, so that --from is listed after --queries.
     #[command(flatten)]
@@ -121,6 +138,10 @@ pub fn run_neighbors(a: NeighborsArgs, out: &Output) -> Result<()> {
     run(a.common, Kind::KnnRadius(a.k, a.radius), out)
 }
 
+fn parse_metric(s: &str) -> std::result::Result<Metric, String> {
+    s.parse().map_err(|e: nbhd::NbhdError| e.to_string())
+}
+
 fn check_k(k: i64) -> Result<usize> {
     if k < 1 {
         return Err(format!("k must be at least 1 (got {k})").into());
@@ -151,6 +172,7 @@ struct Facts {
     h: Option<f64>,
     radius: Option<f64>,
     nbhd: Neighborhood<f64>,
+    query: QueryOptions,
     exclude_self: bool,
     points: usize,
     tree: BuildOptions,
@@ -170,6 +192,12 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
     if c.exclude_self && c.queries.is_some() {
         return Err("--exclude-self applies to the input's own points, not to --queries".into());
     }
+    let query = QueryOptions {
+        metric: c.metric,
+        eps: c.eps,
+        strict: c.strict,
+    };
+    query.validate()?;
     let cloud = c.input.read()?;
     let queries = match &c.queries {
         Some(q) => Some((q, read::cloud(q, c.input.from.map(Into::into))?)),
@@ -199,12 +227,16 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
         (Some(k), Some(radius)) => Neighborhood::KnnRadius { k, radius },
         (None, None) => unreachable!("every kind has k or a radius"),
     };
-    nbhd.validate()?;
     let t = Instant::now();
     let table = {
         let _s = Progress::spinner(out, "computing neighbourhoods");
         let queries = queries.as_ref().map(|(path, cloud)| (*path, cloud));
-        table(&tree, nbhd, c.exclude_self, queries, &name)?
+        let opts = TableOptions {
+            exclude_self: c.exclude_self,
+            threads: 0,
+            query,
+        };
+        table(&tree, nbhd, &opts, queries, &name)?
     };
     let facts = Facts {
         name,
@@ -214,6 +246,7 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
         h,
         radius,
         nbhd,
+        query,
         exclude_self: c.exclude_self,
         points: cloud.len(),
         tree: opts,
@@ -289,18 +322,12 @@ fn load_tree(file: &Path, cloud: &PointCloud, name: &str) -> Result<(KdTree<f64>
 fn table(
     tree: &KdTree<f64>,
     nbhd: Neighborhood<f64>,
-    exclude_self: bool,
+    opts: &TableOptions,
     queries: Option<(&PathBuf, &PointCloud)>,
     name: &str,
 ) -> Result<NeighborTable<f64>> {
     match queries {
-        None => {
-            let opts = TableOptions {
-                exclude_self,
-                threads: 0,
-            };
-            tree.neighborhoods(nbhd, &opts).context(name)
-        }
+        None => tree.neighborhoods(nbhd, opts).context(name),
         Some((path, q)) => {
             let qname = path.display().to_string();
             let qv = q.view().context(&qname)?;
@@ -309,8 +336,7 @@ fn table(
                     format!("{qname}: query point {i} has a NaN or infinite coordinate").into(),
                 );
             }
-            tree.neighborhoods_of(&qv, nbhd, &TableOptions::default())
-                .context(name)
+            tree.neighborhoods_of(&qv, nbhd, opts).context(name)
         }
     }
 }
@@ -334,6 +360,9 @@ impl Facts {
             "radius": self.radius.map(num),
             "radius_given": self.length.map(length_text),
             "spacing_h": self.h.map(num),
+            "metric": self.query.metric.to_string(),
+            "eps": num(self.query.eps),
+            "strict": self.query.strict,
             "exclude_self": self.exclude_self,
             "points": self.points,
             "skipped_non_finite": self.points - self.stats.points,

@@ -748,6 +748,7 @@ fn time_table<T: Float>(s: &Subjects<'_, T>, p: &rayon::ThreadPool, row: &mut Ro
     let opts = TableOptions {
         exclude_self: false,
         threads: row.threads,
+        ..Default::default()
     };
     let (mut ours, mut theirs) = (0, 0);
     [row.nbhd_s, row.kiddo_s] = interleaved_medians(

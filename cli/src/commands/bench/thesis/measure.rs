@@ -106,6 +106,7 @@ impl Searcher for KdTree<f64> {
         let opts = TableOptions {
             exclude_self: true,
             threads: 1,
+            ..Default::default()
         };
         Ok(self.neighborhoods(nbhd, &opts)?.total())
     }
