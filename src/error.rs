@@ -92,13 +92,14 @@ pub enum NbhdError {
     /// A worker thread pool could not be created.
     ThreadPool(String),
     /// The radius is finite in the caller's type but not in the tree's scalar type, or its
-    /// square (the squared distances are compared in that type) overflows it.
+    /// key overflows it (keys are compared in that type: the square for the Euclidean metric,
+    /// `r^p` for a Minkowski p, `src/metric.rs`).
     RadiusOutOfRange {
         /// The radius the caller passed.
         radius: f64,
         /// The tree's scalar type (`"f32"` or `"f64"`).
         scalar: &'static str,
-        /// The largest radius whose square is finite in that type.
+        /// The largest radius whose key is finite in that type.
         max: f64,
     },
     /// A size computed from the caller's description overflows the address space (for
@@ -354,8 +355,8 @@ impl fmt::Display for NbhdError {
                 max,
             } => write!(
                 f,
-                "radius {radius:e} is too large for a tree of {scalar}: squared distances are \
-                 compared in {scalar}, and radii above {max:.4e} overflow it"
+                "radius {radius:e} is too large for a tree of {scalar}: squared distances (keys \
+                 of the metric) are compared in {scalar}, and radii above {max:.4e} overflow it"
             ),
             SizeOverflow { what } => write!(f, "{what} overflows the address space"),
             OutOfMemory { what, bytes } => write!(

@@ -423,7 +423,7 @@ pub struct TableOptions {
     /// Worker threads: 0 uses the current rayon pool. The table is identical for any value.
     pub threads: usize,
     /// How each row's query measures (metric, eps, strict radius; default exact Euclidean):
-    /// the rows are then those of [`NeighborIndex::search_with`](crate::NeighborIndex::search_with),
+    /// the rows are then those of `NeighborIndex::search_with` (`src/index/`),
     /// and `sq_dists` hold the metric's keys.
     pub query: QueryOptions,
 }

@@ -72,7 +72,7 @@ impl<T: Scalar> NeighborSearch<T> for BruteForce<T> {
 impl<T: Scalar> BruteForce<T> {
     /// The exact neighbourhood of `query` under `options`' metric and strictness, ordered by
     /// `(sq_dist, index)` unless an unsorted radius query was asked for: the reference of
-    /// [`NeighborIndex::search_with`](crate::NeighborIndex::search_with). Every key is folded
+    /// `NeighborIndex::search_with` (`src/index/`). Every key is folded
     /// over the axes in order, as the tree folds it, so keys are bit-identical. `eps` is
     /// checked but not used (the exact answer is within every approximation), except that a
     /// radius admits keys up to that of `r · (1 + eps)`, as an approximate tree search does.

@@ -71,7 +71,7 @@ pub enum Neighborhood<T> {
     },
     /// All points with `‖x − q‖ ≤ radius`.
     Radius {
-        /// Plain Euclidean radius (≥ 0).
+        /// Plain Euclidean radius (≥ 0; a distance in the metric of [`QueryOptions`] if given).
         radius: T,
         /// Sort by `(sq_dist, index)`; `false` returns the same set faster, unordered.
         sorted: bool,
@@ -80,7 +80,7 @@ pub enum Neighborhood<T> {
     KnnRadius {
         /// How many at most (≥ 1).
         k: usize,
-        /// Plain Euclidean radius (≥ 0).
+        /// Plain Euclidean radius (≥ 0; a distance in the metric of [`QueryOptions`] if given).
         radius: T,
     },
 }
@@ -200,7 +200,7 @@ impl NeighborhoodSpec {
     }
 
     /// The neighbourhood in the scalar type `T` for a query under `options`
-    /// ([`NeighborIndex::search_with`](crate::NeighborIndex::search_with), which checks the
+    /// (`NeighborIndex::search_with` (`src/index/`), which checks the
     /// radius's key in the metric): a radius whose key `T` cannot hold is
     /// [`NbhdError::RadiusOutOfRange`] naming the value given — under `options.strict` no bound
     /// (beyond `T`'s range, the largest finite `T`). Other errors as [`NeighborhoodSpec::to`].

@@ -22,8 +22,8 @@ use crate::error::{NbhdError, Result};
 use crate::metric::{Measure, Metric};
 use crate::scalar::{Scalar, ScalarType};
 
-/// Options of a query ([`NeighborIndex::search_with`](crate::NeighborIndex::search_with), and
-/// of tables through [`TableOptions::query`](crate::TableOptions::query)).
+/// Options of a query (`NeighborIndex::search_with` (`src/index/`), and
+/// of tables through `TableOptions::query` (`src/table.rs`)).
 ///
 /// ```
 /// use nbhd::{Metric, QueryOptions};
