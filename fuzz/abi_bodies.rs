@@ -524,8 +524,93 @@ pub fn build_query(data: &[u8]) {
             _ => assert_eq!(count, 0, "{func}: count after an error"),
         }
     }
+    // (after the queries above, so that the inputs found before keep their paths)
+    search_with_options(&mut inp, tree, &st);
     // SAFETY: `tree` came from nbhd_tree_build and is freed once.
     unsafe { nbhd_tree_free(tree) };
+}
+
+/// nbhd_tree_search with arbitrary query options (metric enum values out of range, any p and
+/// eps, strict) and neighbourhood specs: a documented status, or ordered results of the
+/// tree's points.
+fn search_with_options(inp: &mut Input, tree: *mut nbhd_tree, st: &nbhd_stats) {
+    let tree_f64 = st.scalar_type == nbhd_scalar_type::F64;
+    for _ in 0..inp.below(4) {
+        let mode = inp.u8();
+        let query: Vec<f64> = (0..st.dim).map(|_| inp.coord(mode)).collect();
+        let query32: Vec<f32> = query.iter().map(|&v| v as f32).collect();
+        let q: *const c_void = if tree_f64 {
+            query.as_ptr().cast()
+        } else {
+            query32.as_ptr().cast()
+        };
+        let mut spec = MaybeUninit::new(nbhd_neighborhood_spec {
+            kind: nbhd_neighborhood_kind::Knn,
+            k: inp.size(st.points),
+            radius: inp.real(),
+        });
+        let mut o = MaybeUninit::new(nbhd_query_options_default());
+        let (sp, op) = (spec.as_mut_ptr(), o.as_mut_ptr());
+        // SAFETY: `sp` and `op` point to live, aligned structs; the enums receive any int and
+        // the bool any byte C may store.
+        unsafe {
+            addr_of_mut!((*sp).kind)
+                .cast::<c_int>()
+                .write(inp.raw_enum(3));
+            addr_of_mut!((*op).metric)
+                .cast::<c_int>()
+                .write(inp.raw_enum(4));
+            addr_of_mut!((*op).p).write(inp.real());
+            addr_of_mut!((*op).eps).write(inp.real());
+            addr_of_mut!((*op).strict).cast::<u8>().write(inp.u8());
+        }
+        let capacity = inp.below(2 * st.points + 2);
+        let mut idx = vec![u32::MAX; capacity];
+        let mut d64 = vec![f64::NAN; capacity];
+        let mut d32 = vec![f32::NAN; capacity];
+        let dp: *mut c_void = if tree_f64 {
+            d64.as_mut_ptr().cast()
+        } else {
+            d32.as_mut_ptr().cast()
+        };
+        let mut count = usize::MAX;
+        // SAFETY: `tree` is live; `q` holds `dim` values of the tree's type; the structs are
+        // live; the buffers are writable for `capacity` values; `count` is writable.
+        let status = unsafe {
+            nbhd_tree_search(
+                tree,
+                q,
+                spec.as_ptr(),
+                o.as_ptr(),
+                idx.as_mut_ptr(),
+                dp,
+                capacity,
+                &mut count,
+            )
+        };
+        let allowed = [
+            S::NonFiniteQuery,
+            S::InvalidK,
+            S::InvalidRadius,
+            S::InvalidOption,
+            S::InvalidArgument,
+            S::BufferTooSmall,
+        ];
+        check("nbhd_tree_search", status, &allowed);
+        match status {
+            S::Ok => {
+                assert!(count <= capacity, "nbhd_tree_search: {count} > {capacity}");
+                let d: Vec<f64> = if tree_f64 {
+                    d64[..count].to_vec()
+                } else {
+                    d32[..count].iter().map(|&v| f64::from(v)).collect()
+                };
+                check_results(&idx[..count], Some(&d), st.source_points);
+            }
+            S::BufferTooSmall => assert!(count > capacity),
+            _ => assert_eq!(count, 0, "nbhd_tree_search: count after an error"),
+        }
+    }
 }
 
 /// The coordinate mode of query points: mostly ordinary, sometimes anything.
