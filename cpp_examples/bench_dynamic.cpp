@@ -97,7 +97,9 @@ static double nbhd_knn(const nbhd_dynamic_tree *tree, const P *frame, size_t m,
                        unsigned threads) {
     nbhd_points q = {frame, m, 3, 0, NBHD_SCALAR_TYPE_F32};
     nbhd_neighborhood_spec spec = {NBHD_NEIGHBORHOOD_KIND_KNN, 10, 0.0};
-    nbhd_table_options o = {false, threads};
+    nbhd_table_options o = nbhd_table_options_default();
+    o.exclude_self = false;
+    o.threads = threads;
     nbhd_neighborhoods *t = nullptr;
     ok(nbhd_dynamic_neighborhoods_of(tree, &q, &spec, &o, &t), "nbhd_dynamic_neighborhoods_of");
     const float *d = static_cast<const float *>(nbhd_neighborhoods_sq_dists(t));

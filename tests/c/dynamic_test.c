@@ -187,9 +187,10 @@ static void compare(const nbhd_dynamic_tree *dyn, int f32) {
     {
         nbhd_neighborhood_spec spec = {NBHD_NEIGHBORHOOD_KIND_KNN, 5, 0.0};
         nbhd_neighborhood_spec eps = {NBHD_NEIGHBORHOOD_KIND_KNN_RADIUS, 4, 0.3};
-        nbhd_table_options two = {true, 2};
+        nbhd_table_options two = nbhd_table_options_default();
         nbhd_neighborhoods *a = NULL, *b = NULL;
         nbhd_points qs = points_of(f32, f32 ? (const void *)poolf : (const void *)pool, 0, 40);
+        two.threads = 2;
         CHECK_STATUS(nbhd_dynamic_neighborhoods(dyn, &spec, NULL, &a), NBHD_STATUS_OK);
         CHECK_STATUS(nbhd_tree_neighborhoods(st, &spec, NULL, &b), NBHD_STATUS_OK);
         CHECK(a != NULL && b != NULL && same_table(a, b, f32));
