@@ -1206,10 +1206,10 @@ const char *nbhd_version_string(void);
 
 /**
  * A static, human-readable description of a status code, such as "k must be at least 1".
- * Never NULL, never to be freed. `status` is taken as an `int` so that any value is answered
- * safely: one that is no nbhd_status gives "unknown status".
+ * Never NULL, never to be freed. Any value is answered safely: one that is no nbhd_status
+ * (a status of a later release, `(nbhd_status)-1`) gives "unknown status".
  */
-const char *nbhd_status_string(int status);
+const char *nbhd_status_string(nbhd_status status);
 
 /**
  * The reason the last failed nbhd call on the calling thread failed, in words that name the
@@ -1952,7 +1952,7 @@ nbhd_status nbhd_neighborhoods_row(const nbhd_neighborhoods *table,
  * `options` must be NULL or point to an nbhd_build_options; `out_tree` NULL or writable.
  */
 nbhd_status nbhd_dynamic_create(size_t dim,
-                                int scalar_type,
+                                nbhd_scalar_type scalar_type,
                                 const nbhd_build_options *options,
                                 nbhd_dynamic_tree **out_tree);
 
