@@ -16,8 +16,8 @@
 use std::io::Write;
 
 use super::{bit, DynamicKdTree, Part};
-use crate::cloud::NonFinitePolicy;
 use crate::error::Result;
+use crate::packed::NonFinitePolicy;
 use crate::parallel::MAX_THREADS;
 use crate::points::point_bytes;
 use crate::query::NeighborSearch;

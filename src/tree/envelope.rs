@@ -13,8 +13,8 @@ use std::io::{Read, Write};
 use std::path::Path;
 
 use super::{BuildOptions, MedianAlgorithm, PivotPolicy};
-use crate::cloud::NonFinitePolicy;
 use crate::error::{NbhdError, Result, SavedTreeError};
+use crate::packed::NonFinitePolicy;
 use crate::scalar::{Scalar, ScalarType};
 
 /// The first 8 bytes of a saved tree.
