@@ -368,6 +368,28 @@ pub trait SavedHeader {
     fn dim(&self) -> usize;
 }
 
+/// Implements [`SavedHeader`] for a header struct from its fields of the same names
+/// (`total_len`, `payload_crc`, `scalar`, `dim`): every saved format's header has them.
+macro_rules! saved_header {
+    ($info:ty) => {
+        impl $crate::tree::SavedHeader for $info {
+            fn total_len(&self) -> u64 {
+                self.total_len
+            }
+            fn payload_crc(&self) -> u32 {
+                self.payload_crc
+            }
+            fn scalar(&self) -> $crate::scalar::ScalarType {
+                self.scalar
+            }
+            fn dim(&self) -> usize {
+                self.dim
+            }
+        }
+    };
+}
+pub(crate) use saved_header;
+
 /// A format of saved index: its header and payload (the plumbing [`Persist`] is written over).
 #[doc(hidden)]
 pub trait SavedFormat: Sized {
