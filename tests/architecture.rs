@@ -14,7 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["scalar", "error", "linalg", "select", "prefetch", "simd"],
     &["points", "parallel", "progress", "scatter", "names"],
     // the caller's points, validated and packed
-    &["cloud"],
+    &["packed"],
     // queries and their baselines (brute force, PCA sweep), then tables of their answers
     &["query"],
     &["table"],
