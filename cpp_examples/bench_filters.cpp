@@ -114,7 +114,11 @@ static void run(const char *name, pcl::PointCloud<pcl::PointXYZ>::Ptr cloud, dou
         for (size_t th = 1; th <= 2; th++)
             t[th - 1] = best([&] {
                 nbhd_tree *tree = build(*cloud, th);
-                if (nbhd_remove_statistical_outliers(tree, 20, 1.0, th, kept.data(), n, &count, nullptr) != NBHD_STATUS_OK)
+                nbhd_statistical_outlier_options o = nbhd_statistical_outlier_options_default();
+                o.k = 20;
+                o.std_ratio = 1.0;
+                o.threads = th;
+                if (nbhd_remove_statistical_outliers(tree, &o, kept.data(), n, &count, nullptr) != NBHD_STATUS_OK)
                     std::abort();
                 nbhd_tree_free(tree);
             });
@@ -134,7 +138,10 @@ static void run(const char *name, pcl::PointCloud<pcl::PointXYZ>::Ptr cloud, dou
         for (size_t th = 1; th <= 2; th++)
             t[th - 1] = best([&] {
                 nbhd_tree *tree = build(*cloud, th);
-                if (nbhd_remove_radius_outliers(tree, radius, 4, th, kept.data(), n, &count, nullptr) != NBHD_STATUS_OK)
+                nbhd_radius_outlier_options o = nbhd_radius_outlier_options_default();
+                o.min_neighbors = 4;
+                o.threads = th;
+                if (nbhd_remove_radius_outliers(tree, radius, &o, kept.data(), n, &count, nullptr) != NBHD_STATUS_OK)
                     std::abort();
                 nbhd_tree_free(tree);
             });
@@ -158,7 +165,9 @@ static void run(const char *name, pcl::PointCloud<pcl::PointXYZ>::Ptr cloud, dou
         double t[2];
         for (size_t th = 1; th <= 2; th++)
             t[th - 1] = best([&] {
-                if (nbhd_voxel_grid(&pts, &l, 1, 0, th, cen.data(), near.data(), n, &count) != NBHD_STATUS_OK)
+                nbhd_voxel_grid_options o = nbhd_voxel_grid_options_default();
+                o.threads = th;
+                if (nbhd_voxel_grid(&pts, &l, 1, &o, cen.data(), near.data(), n, &count) != NBHD_STATUS_OK)
                     std::abort();
             });
         char what[64];
@@ -218,10 +227,12 @@ static void run(const char *name, pcl::PointCloud<pcl::PointXYZ>::Ptr cloud, dou
                 tree = build(*cloud, th);
             });
             size_t cap = 0;
-            nbhd_tree_in_boxes(tree, boxes.data(), B, th, offsets.data(), nullptr, 0, &cap);
+            nbhd_box_options o = nbhd_box_options_default();
+            o.threads = th;
+            nbhd_tree_in_boxes(tree, boxes.data(), B, &o, offsets.data(), nullptr, 0, &cap);
             std::vector<uint32_t> idx(cap);
             t[th - 1] = best([&] {
-                if (nbhd_tree_in_boxes(tree, boxes.data(), B, th, offsets.data(), idx.data(), cap, &total) != NBHD_STATUS_OK)
+                if (nbhd_tree_in_boxes(tree, boxes.data(), B, &o, offsets.data(), idx.data(), cap, &total) != NBHD_STATUS_OK)
                     std::abort();
             });
             nbhd_tree_free(tree);

@@ -146,8 +146,11 @@ int main(int argc, char **argv) {
         double pcl_ms = ms_since(t);
         std::sort(pcl_kept.begin(), pcl_kept.end());
         t = std::chrono::steady_clock::now();
-        nbhd_status st = nbhd_remove_statistical_outliers(tree, (size_t)k, alpha, 0, kept.data(),
-                                                          n, &count, nullptr);
+        nbhd_statistical_outlier_options o = nbhd_statistical_outlier_options_default();
+        o.k = (size_t)k;
+        o.std_ratio = alpha;
+        nbhd_status st = nbhd_remove_statistical_outliers(tree, &o, kept.data(), n, &count,
+                                                          nullptr);
         double ours_ms = ms_since(t);
         CHECK(st == NBHD_STATUS_OK, "%s", nbhd_last_error_message());
         // the bridge: PCL keeps the NaN points
@@ -190,8 +193,10 @@ int main(int argc, char **argv) {
         std::sort(pcl_kept.begin(), pcl_kept.end());
         double below = (double)std::nextafter(radius, 0.0f);
         t = std::chrono::steady_clock::now();
-        nbhd_status st = nbhd_remove_radius_outliers(tree, below, (size_t)min_nb, 0, kept.data(),
-                                                     n, &count, nullptr);
+        nbhd_radius_outlier_options o = nbhd_radius_outlier_options_default();
+        o.min_neighbors = (size_t)min_nb;
+        nbhd_status st = nbhd_remove_radius_outliers(tree, below, &o, kept.data(), n, &count,
+                                                     nullptr);
         double ours_ms = ms_since(t);
         CHECK(st == NBHD_STATUS_OK, "%s", nbhd_last_error_message());
         std::vector<uint32_t> ours(kept.begin(), kept.begin() + count);

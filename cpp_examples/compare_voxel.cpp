@@ -76,8 +76,11 @@ int main(int argc, char **argv) {
     std::size_t count = 0;
     std::vector<double> cen(cloud->size() * 3);
     std::vector<uint32_t> nearest(cloud->size());
-    nbhd_status st = nbhd_voxel_grid(&pts, &l, 1, min_points, 2, cen.data(), nearest.data(),
-                                     cloud->size(), &count);
+    nbhd_voxel_grid_options o = nbhd_voxel_grid_options_default();
+    o.min_points_per_voxel = min_points;
+    o.threads = 2;
+    nbhd_status st = nbhd_voxel_grid(&pts, &l, 1, &o, cen.data(), nearest.data(), cloud->size(),
+                                     &count);
     CHECK(st == NBHD_STATUS_OK, "status %d", (int)st);
     CHECK(count == out.size(), "nbhd %zu voxels, PCL %zu", count, out.size());
     if (st != NBHD_STATUS_OK || count != out.size()) {

@@ -8,7 +8,7 @@
 #include <string.h>
 
 static int fail(const char* what, nbhd_status s) {
-    fprintf(stderr, "link_check: %s: %s (%s)\n", what, nbhd_status_string((int)s), nbhd_last_error_message());
+    fprintf(stderr, "link_check: %s: %s (%s)\n", what, nbhd_status_string(s), nbhd_last_error_message());
     return 1;
 }
 

@@ -5,7 +5,9 @@
 //!
 //! `cargo run --release --example robust_timing [points] [threads] [repeats] [noise]`, or with a
 //! point file (PCD, PLY, ...) in place of the point count to time a scan (its non-finite points
-//! dropped, as `cpp_examples/bench_smoothing` drops them; no quality figures).
+//! dropped, as `cpp_examples/bench_smoothing` drops them; no quality figures). Each run also
+//! prints a digest of the bits of the smoothed points and normals, to compare two builds (or
+//! thread counts) bit for bit.
 use glam::DVec3;
 use nbhd::geometry::neighbors::mean_spacing;
 use nbhd::shapes::metrics::evaluate;
@@ -39,12 +41,13 @@ fn main() {
             .collect();
         let (t, r) = time(&p, repeats);
         println!(
-            "{path}: {} points, {threads} thread(s), median (min) of {repeats}: {:.3} ({:.3}) s; {} iterations, noise estimates {:?}",
+            "{path}: {} points, {threads} thread(s), median (min) of {repeats}: {:.3} ({:.3}) s; {} iterations, noise estimates {:?}; digest {:08x}",
             p.len(),
             t[t.len() / 2],
             t[0],
             r.moved.len(),
-            rounded(&r.noise)
+            rounded(&r.noise),
+            digest(&r)
         );
         return;
     }
@@ -56,14 +59,16 @@ fn main() {
     let q = evaluate(&torus, &s, h, &r.result.points, Some(&r.normals)).expect("evaluated");
     println!(
         "{n} points, noise {noise}h, {threads} thread(s), median (min) of {repeats}: {:.3} ({:.3}) s; \
-         {} iterations, noise estimates {:?}; RMS {:.3}h, shrinkage {:+.3}h, normal error {:.2}°",
+         {} iterations, noise estimates {:?}; RMS {:.3}h, shrinkage {:+.3}h, normal error {:.2}°; \
+         digest {:08x}",
         times[times.len() / 2],
         times[0],
         r.moved.len(),
         rounded(&r.noise),
         q.rms,
         q.shrinkage,
-        q.normal_error_deg.unwrap_or(f64::NAN)
+        q.normal_error_deg.unwrap_or(f64::NAN),
+        digest(&r)
     );
 }
 
@@ -84,6 +89,15 @@ fn time(p: &[DVec3], repeats: usize) -> (Vec<f64>, RobustReport) {
     }
     times.sort_by(f64::total_cmp);
     (times, last.expect("at least one repeat"))
+}
+
+/// CRC-32 of the bits of the smoothed points and the normals, in the caller's order.
+fn digest(r: &RobustReport) -> u32 {
+    let bytes: Vec<u8> = (r.result.points.iter().chain(&r.normals))
+        .flat_map(|p| p.to_array())
+        .flat_map(f64::to_le_bytes)
+        .collect();
+    crc32fast::hash(&bytes)
 }
 
 /// Values to three decimals, for printing.

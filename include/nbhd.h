@@ -96,10 +96,10 @@
  *     release of the same SONAME.
  *   - Everything else gets a new SONAME: a 0.x minor release (0.1 -> 0.2) or, from 1.0 on, a
  *     major release. The dynamic linker then keeps loading the library a program was built for.
- *   - Option structs (nbhd_build_options, nbhd_table_options, nbhd_smooth_options,
- *     nbhd_robust_options) grow: new fields are added at their end, with defaults that keep the
- *     previous behaviour, in releases with a new SONAME (a program compiled against the smaller
- *     struct would hand the library too few bytes). Your source stays compatible across such
+ *   - Option structs (nbhd_build_options, nbhd_table_options and every other nbhd_*_options)
+ *     grow: new fields are added at their end, with defaults that keep the previous behaviour,
+ *     in releases with a new SONAME (a program compiled against the smaller struct would hand
+ *     the library too few bytes). Your source stays compatible across such
  *     releases if you always start from the library's defaults and set fields by name:
  *         nbhd_build_options o = nbhd_build_options_default();
  *         o.threads = 4;
@@ -709,6 +709,30 @@ typedef struct {
 } nbhd_neighborhood_spec;
 
 /**
+ * Options of nbhd_tree_in_boxes. Start from nbhd_box_options_default() and change fields.
+ */
+typedef struct {
+    /**
+     * Worker threads: 0 uses a shared pool with one thread per core, n >= 1 a pool of n
+     * threads; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION. The rows are the
+     * same for every value. Default: 0.
+     */
+    size_t threads;
+} nbhd_box_options;
+
+/**
+ * Options of nbhd_tree_spacing. Start from nbhd_spacing_options_default() and change fields.
+ */
+typedef struct {
+    /**
+     * Worker threads: 0 uses a shared pool with one thread per core, n >= 1 a pool of n
+     * threads; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION. The spacing is the
+     * same for every value. Default: 0.
+     */
+    size_t threads;
+} nbhd_spacing_options;
+
+/**
  * The nearest-neighbour spacing of a point set: the distance of each point to its nearest
  * other point, summarised. `mean` is the h of every relative length (epsilon = 6 h).
  */
@@ -726,6 +750,62 @@ typedef struct {
      */
     size_t points;
 } nbhd_spacing;
+
+/**
+ * Options of nbhd_remove_statistical_outliers. Start from
+ * nbhd_statistical_outlier_options_default() and change fields.
+ */
+typedef struct {
+    /**
+     * Number of nearest *other* points whose distances are averaged, >= 1 and below the
+     * number of points (PCL's setMeanK, Open3D's nb_neighbors). Default: 50.
+     */
+    size_t k;
+    /**
+     * A point is kept when its mean distance is at most mean + std_ratio * s (PCL's
+     * setStddevMulThresh, Open3D's std_ratio); finite, may be negative. Default: 1.
+     */
+    double std_ratio;
+    /**
+     * Worker threads: 0 uses a shared pool with one thread per core, n >= 1 a pool of n
+     * threads; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION. The result is the
+     * same for every value. Default: 0.
+     */
+    size_t threads;
+} nbhd_statistical_outlier_options;
+
+/**
+ * Options of nbhd_remove_radius_outliers (the radius is an argument of its own, as in
+ * nbhd_tree_radius). Start from nbhd_radius_outlier_options_default() and change fields.
+ */
+typedef struct {
+    /**
+     * A point is kept when at least this many *other* points lie within the radius. PCL's
+     * setMinNeighborsInRadius(m) is the same m (its count includes the point itself and keeps
+     * counts > m). 0 keeps every point the tree holds. Default: 2.
+     */
+    size_t min_neighbors;
+    /**
+     * Worker threads, as in nbhd_statistical_outlier_options. Default: 0.
+     */
+    size_t threads;
+} nbhd_radius_outlier_options;
+
+/**
+ * Options of nbhd_voxel_grid (the leaf sizes are arguments of their own). Start from
+ * nbhd_voxel_grid_options_default() and change fields.
+ */
+typedef struct {
+    /**
+     * Voxels with fewer points are left out (PCL's setMinimumPointsNumberPerVoxel; 0 and 1
+     * keep every occupied voxel). Default: 0.
+     */
+    size_t min_points_per_voxel;
+    /**
+     * Worker threads, as in nbhd_statistical_outlier_options. Default: 0.
+     */
+    size_t threads;
+} nbhd_voxel_grid_options;
 
 /**
  * Options of nbhd_tree_neighborhoods. Start from nbhd_table_options_default().
@@ -1189,10 +1269,10 @@ const char *nbhd_version_string(void);
 
 /**
  * A static, human-readable description of a status code, such as "k must be at least 1".
- * Never NULL, never to be freed. `status` is taken as an `int` so that any value is answered
- * safely: one that is no nbhd_status gives "unknown status".
+ * Never NULL, never to be freed. Any value is answered safely: one that is no nbhd_status
+ * (a status of a later release, `(nbhd_status)-1`) gives "unknown status".
  */
-const char *nbhd_status_string(int status);
+const char *nbhd_status_string(nbhd_status status);
 
 /**
  * The reason the last failed nbhd call on the calling thread failed, in words that name the
@@ -1656,12 +1736,17 @@ nbhd_status nbhd_tree_in_box(const nbhd_tree *tree,
                              size_t *count);
 
 /**
+ * The default box options: the shared thread pool.
+ */
+nbhd_box_options nbhd_box_options_default(void);
+
+/**
  * The points inside each box of a batch, computed in parallel; rows in the boxes' order,
  * identical for any thread count.
  *
  * - `boxes`: `n_boxes * 2 * dim` values in the tree's scalar type: box i is its `min`
  *   corner (`dim` values) then its `max` corner. Closed boxes, as nbhd_tree_in_box.
- * - `threads`: 0 for a thread per core, else 1 ..= NBHD_MAX_THREADS.
+ * - `options`: NULL for the defaults (the shared thread pool).
  * - `offsets`: `n_boxes + 1` values (size_t); row i is `indices[offsets[i] .. offsets[i + 1]]`,
  *   the caller indices inside box i, ascending.
  * - `indices`: `capacity` values; `*total` receives the number of indices over all rows.
@@ -1675,38 +1760,53 @@ nbhd_status nbhd_tree_in_box(const nbhd_tree *tree,
  *
  * # Safety
  * `tree` must be NULL or a live handle; `boxes` NULL or `n_boxes * 2 * dim` readable values
- * of the tree's scalar type; `offsets` NULL or writable for `n_boxes + 1` values; `indices`
- * NULL or writable for `capacity` values; `total` NULL or writable.
+ * of the tree's scalar type; `options` NULL or readable; `offsets` NULL or writable for
+ * `n_boxes + 1` values; `indices` NULL or writable for `capacity` values; `total` NULL or
+ * writable.
  */
 nbhd_status nbhd_tree_in_boxes(const nbhd_tree *tree,
                                const void *boxes,
                                size_t n_boxes,
-                               size_t threads,
+                               const nbhd_box_options *options,
                                size_t *offsets,
                                uint32_t *indices,
                                size_t capacity,
                                size_t *total);
 
 /**
- * The nearest-neighbour spacing of the tree's points, computed on `threads` workers (0: a
- * thread per core); the same value for any thread count. Points skipped at build time are
- * left out.
+ * The default spacing options: the shared thread pool.
+ */
+nbhd_spacing_options nbhd_spacing_options_default(void);
+
+/**
+ * The nearest-neighbour spacing of the tree's points, computed on `options->threads` workers
+ * (`options` NULL for the defaults); the same value for any thread count. Points skipped at
+ * build time are left out.
  *
  * Errors: NULL_POINTER (`tree`, `out`), MISALIGNED_POINTER, INVALID_OPTION (fewer than two
  * points in the tree, or threads above NBHD_MAX_THREADS). On error `*out` is all zero.
  *
  * # Safety
- * `tree` must be NULL or a live handle; `out` NULL or writable.
+ * `tree` must be NULL or a live handle; `options` NULL or readable; `out` NULL or writable.
  */
-nbhd_status nbhd_tree_spacing(const nbhd_tree *tree, size_t threads, nbhd_spacing *out);
+nbhd_status nbhd_tree_spacing(const nbhd_tree *tree,
+                              const nbhd_spacing_options *options,
+                              nbhd_spacing *out);
+
+/**
+ * The default statistical outlier options: PCL's tutorial values k = 50, std_ratio = 1,
+ * the shared thread pool.
+ */
+nbhd_statistical_outlier_options nbhd_statistical_outlier_options_default(void);
 
 /**
  * Statistical outlier removal (PCL's StatisticalOutlierRemoval, Open3D's
- * remove_statistical_outlier): for each point its mean distance d_i to its `k` nearest
- * other points (PCL's setMeanK(k): PCL searches k + 1 and skips the point itself); over all
- * points the mean m and the sample standard deviation s (n - 1 in the denominator, as PCL);
- * a point is kept when d_i <= m + std_ratio * s. Points skipped at build time are never
- * kept and take no part in m and s (PCL 1.13 keeps NaN points in its output).
+ * remove_statistical_outlier): for each point its mean distance d_i to its `options->k`
+ * nearest other points (PCL's setMeanK(k): PCL searches k + 1 and skips the point itself);
+ * over all points the mean m and the sample standard deviation s (n - 1 in the denominator,
+ * as PCL); a point is kept when d_i <= m + std_ratio * s. `options` may be NULL for the
+ * defaults. Points skipped at build time are never kept and take no part in m and s (PCL 1.13
+ * keeps NaN points in its output).
  *
  * - `kept`: `capacity` values (uint32_t); receives the caller indices of the kept points,
  *   ascending, `*count` of them. The number of points given to nbhd_tree_build always
@@ -1719,25 +1819,28 @@ nbhd_status nbhd_tree_spacing(const nbhd_tree *tree, size_t threads, nbhd_spacin
  * BUFFER_TOO_SMALL, OUT_OF_MEMORY. On error `*count` is 0 except for BUFFER_TOO_SMALL.
  *
  * # Safety
- * `tree` must be NULL or a live handle; `kept` NULL or writable for `capacity` values;
- * `count` NULL or writable; `mask` NULL or writable for the number of points given.
+ * `tree` must be NULL or a live handle; `options` NULL or readable; `kept` NULL or writable
+ * for `capacity` values; `count` NULL or writable; `mask` NULL or writable for the number of
+ * points given.
  */
 nbhd_status nbhd_remove_statistical_outliers(const nbhd_tree *tree,
-                                             size_t k,
-                                             double std_ratio,
-                                             size_t threads,
+                                             const nbhd_statistical_outlier_options *options,
                                              uint32_t *kept,
                                              size_t capacity,
                                              size_t *count,
                                              uint8_t *mask);
 
 /**
+ * The default radius outlier options: at least 2 other points within the radius, the shared
+ * thread pool.
+ */
+nbhd_radius_outlier_options nbhd_radius_outlier_options_default(void);
+
+/**
  * Radius outlier removal (PCL's RadiusOutlierRemoval, Open3D's remove_radius_outlier): a
- * point is kept when at least `min_neighbors` other points lie within `radius` (plain
- * Euclidean, inclusive: |x - p| <= radius). PCL's setMinNeighborsInRadius(m) is the same m
- * (its count includes the point itself and keeps counts > m). 0 keeps every point the tree
- * holds. Points skipped at build time are never kept. Results as
- * nbhd_remove_statistical_outliers.
+ * point is kept when at least `options->min_neighbors` other points lie within `radius`
+ * (plain Euclidean, inclusive: |x - p| <= radius). `options` may be NULL for the defaults.
+ * Points skipped at build time are never kept. Results as nbhd_remove_statistical_outliers.
  *
  * Errors: NULL_POINTER, MISALIGNED_POINTER, INVALID_RADIUS (negative, NaN, infinite, or too
  * large for the tree's type), INVALID_OPTION (threads), BUFFER_TOO_SMALL, OUT_OF_MEMORY.
@@ -1747,12 +1850,16 @@ nbhd_status nbhd_remove_statistical_outliers(const nbhd_tree *tree,
  */
 nbhd_status nbhd_remove_radius_outliers(const nbhd_tree *tree,
                                         double radius,
-                                        size_t min_neighbors,
-                                        size_t threads,
+                                        const nbhd_radius_outlier_options *options,
                                         uint32_t *kept,
                                         size_t capacity,
                                         size_t *count,
                                         uint8_t *mask);
+
+/**
+ * The default voxel-grid options: every occupied voxel kept, the shared thread pool.
+ */
+nbhd_voxel_grid_options nbhd_voxel_grid_options_default(void);
 
 /**
  * Voxel-grid downsampling (PCL's VoxelGrid, Open3D's voxel_down_sample) of the points
@@ -1763,7 +1870,7 @@ nbhd_status nbhd_remove_radius_outliers(const nbhd_tree *tree,
  * exactly (centroids summed in ascending index; PCL's order within a voxel is not defined).
  *
  * - `leaf`: `leaf_count` edge lengths, 1 (a cube) or `points->dim`; each finite and > 0.
- * - `min_points_per_voxel`: voxels with fewer points are left out (0 and 1 keep all).
+ * - `options`: NULL for the defaults (every occupied voxel, the shared pool).
  * - `centroids`: NULL, or `capacity * points->dim` doubles: voxel v's centroid at
  *   `centroids[v * dim ..]` (float values converted exactly).
  * - `nearest`: NULL, or `capacity` uint32_t: voxel v's point nearest its centroid.
@@ -1780,14 +1887,13 @@ nbhd_status nbhd_remove_radius_outliers(const nbhd_tree *tree,
  *
  * # Safety
  * `points` NULL or a readable description of readable memory; `leaf` NULL or readable for
- * `leaf_count` values; `centroids`, `nearest` NULL or writable as described; `count` NULL or
- * writable.
+ * `leaf_count` values; `options` NULL or readable; `centroids`, `nearest` NULL or writable as
+ * described; `count` NULL or writable.
  */
 nbhd_status nbhd_voxel_grid(const nbhd_points *points,
                             const double *leaf,
                             size_t leaf_count,
-                            size_t min_points_per_voxel,
-                            size_t threads,
+                            const nbhd_voxel_grid_options *options,
                             double *centroids,
                             uint32_t *nearest,
                             size_t capacity,
@@ -1942,7 +2048,7 @@ nbhd_status nbhd_neighborhoods_row(const nbhd_neighborhoods *table,
  * `options` must be NULL or point to an nbhd_build_options; `out_tree` NULL or writable.
  */
 nbhd_status nbhd_dynamic_create(size_t dim,
-                                int scalar_type,
+                                nbhd_scalar_type scalar_type,
                                 const nbhd_build_options *options,
                                 nbhd_dynamic_tree **out_tree);
 

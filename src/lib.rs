@@ -11,7 +11,6 @@
 #![warn(missing_docs)]
 #![warn(clippy::undocumented_unsafe_blocks)]
 
-pub(crate) mod cloud;
 pub mod dynamic;
 pub mod error;
 #[doc(hidden)]
@@ -25,6 +24,7 @@ pub mod io;
 pub(crate) mod linalg;
 pub mod metric;
 pub mod names;
+pub(crate) mod packed;
 pub(crate) mod parallel;
 pub mod points;
 pub(crate) mod prefetch;
@@ -40,11 +40,11 @@ pub mod smooth;
 pub mod table;
 pub mod tree;
 
-pub use cloud::NonFinitePolicy;
 pub use dynamic::DynamicKdTree;
 pub use error::{NbhdError, Result};
 pub use index::{IndexRows, NeighborIndex, Spacing};
 pub use metric::Metric;
+pub use packed::NonFinitePolicy;
 pub use parallel::MAX_THREADS;
 pub use points::{PointsView, MAX_POINTS};
 pub use query::brute::BruteForce;

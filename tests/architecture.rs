@@ -16,7 +16,7 @@ const LAYERS: &[&[&str]] = &[
         "points", "parallel", "progress", "scatter", "names", "metric",
     ],
     // the caller's points, validated and packed
-    &["cloud"],
+    &["packed"],
     // queries and their baselines (brute force, PCA sweep), then tables of their answers
     &["query"],
     &["table"],

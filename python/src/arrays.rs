@@ -88,6 +88,16 @@ pub fn ndim(arr: &Bound<'_, PyAny>) -> PyResult<usize> {
     arr.getattr("ndim")?.extract()
 }
 
+/// Refuses `arr` unless it is 2-D: points as rows, (n, `d`) (`d` names the columns asked for).
+pub fn check_rows(arr: &Bound<'_, PyAny>, d: &str) -> PyResult<()> {
+    match ndim(arr)? {
+        2 => Ok(()),
+        n => Err(value_err(format!(
+            "points must be a 2-D array (n, {d}), not {n}-D"
+        ))),
+    }
+}
+
 /// An (n, d) array made 2-D: a 1-D array of d values is one point (1, d).
 pub fn as_rows<'py>(arr: &Bound<'py, PyAny>, what: &str) -> PyResult<(Bound<'py, PyAny>, bool)> {
     match ndim(arr)? {
@@ -172,12 +182,7 @@ fn as_bytes<T: Scalar>(v: &[T]) -> &[u8] {
 /// and the smoothing, which compute in `f64`.
 pub fn dvec3s(obj: &Bound<'_, PyAny>) -> PyResult<Vec<glam::DVec3>> {
     let (arr, _) = float_array(obj, Some(Dtype::F64))?;
-    if ndim(&arr)? != 2 {
-        return Err(value_err(format!(
-            "points must be a 2-D array (n, 3), not {}-D",
-            ndim(&arr)?
-        )));
-    }
+    check_rows(&arr, "3")?;
     let ro: PyReadonlyArray2<'_, f64> = arr
         .cast::<PyArray2<f64>>()
         .map_err(|e| value_err(e.to_string()))?

@@ -3,11 +3,11 @@
 //! library's saved format.
 
 use nbhd::handle::AnyIndex;
-use nbhd::{with_index, BuildOptions, NeighborIndex, Query, ScalarType};
+use nbhd::{with_index, NeighborIndex, Query, ScalarType};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyType};
 
-use crate::arrays::{float_array, ndim, vec1, Dtype, Points};
+use crate::arrays::{check_rows, float_array, vec1, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
 use crate::index::{self, dtype};
 use crate::options;
@@ -77,13 +77,7 @@ impl PyDynamicKdTree {
         threads: usize,
         growth: usize,
     ) -> PyResult<Self> {
-        let options = BuildOptions {
-            pivot: options::pivot(pivot)?,
-            median: options::median(median)?,
-            leaf_size,
-            non_finite: options::non_finite(non_finite)?,
-            threads,
-        };
+        let options = options::build(pivot, median, leaf_size, non_finite, threads)?;
         let scalar = match dtype {
             "float32" => ScalarType::F32,
             "float64" => ScalarType::F64,
@@ -102,12 +96,7 @@ impl PyDynamicKdTree {
     /// batch and returns the index of the first: the batch gets `first .. first + n`.
     fn insert(&mut self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<u32> {
         let (arr, _) = float_array(points, Some(dtype(&self.index)))?;
-        if ndim(&arr)? != 2 {
-            return Err(value_err(format!(
-                "points must be a 2-D array (n, d), not {}-D",
-                ndim(&arr)?
-            )));
-        }
+        check_rows(&arr, "d")?;
         match dtype(&self.index) {
             Dtype::F32 => insert_rows::<f32>(&mut self.index, py, &arr),
             Dtype::F64 => insert_rows::<f64>(&mut self.index, py, &arr),

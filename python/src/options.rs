@@ -5,7 +5,7 @@
 use glam::DVec3;
 use nbhd::geometry::{DensityForm, Orientation, OrientationKind, PrincipalFormula};
 use nbhd::smooth::{Curvature, FeatureCriterion, Length, Units, Weighting};
-use nbhd::{MedianAlgorithm, NonFinitePolicy, PivotPolicy};
+use nbhd::{BuildOptions, MedianAlgorithm, NonFinitePolicy, PivotPolicy};
 use pyo3::prelude::*;
 
 use crate::errors::{value_err, OrRaise};
@@ -34,6 +34,23 @@ pub fn median(name: &str) -> PyResult<MedianAlgorithm> {
 /// `reject` or `skip`.
 pub fn non_finite(name: &str) -> PyResult<NonFinitePolicy> {
     name.parse::<NonFinitePolicy>().or_raise()
+}
+
+/// The build options of `KdTree` and `DynamicKdTree`, from the names Python passes.
+pub fn build(
+    pivot_name: &str,
+    median_name: &str,
+    leaf_size: usize,
+    non_finite_name: &str,
+    threads: usize,
+) -> PyResult<BuildOptions> {
+    Ok(BuildOptions {
+        pivot: pivot(pivot_name)?,
+        median: median(median_name)?,
+        leaf_size,
+        non_finite: non_finite(non_finite_name)?,
+        threads,
+    })
 }
 
 /// A length of `v` in `units` (`relative`: multiples of the mean spacing h; `absolute`: the

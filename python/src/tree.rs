@@ -2,12 +2,12 @@
 //! float32 or float64, its single and batch queries, and its all-point tables as compressed rows.
 
 use nbhd::handle::AnyIndex;
-use nbhd::{BuildOptions, NbhdError, NeighborTable, Scalar};
+use nbhd::{NbhdError, NeighborTable, Scalar};
 use numpy::{Element, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple, PyType};
 
-use crate::arrays::{float_array, ndim, vec1, Dtype, Points};
+use crate::arrays::{check_rows, float_array, vec1, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
 use crate::index::{self, dtype};
 use crate::options;
@@ -50,20 +50,9 @@ impl PyKdTree {
         non_finite: &str,
         threads: usize,
     ) -> PyResult<Self> {
-        let options = BuildOptions {
-            pivot: options::pivot(pivot)?,
-            median: options::median(median)?,
-            leaf_size,
-            non_finite: options::non_finite(non_finite)?,
-            threads,
-        };
+        let options = options::build(pivot, median, leaf_size, non_finite, threads)?;
         let (arr, dtype) = float_array(points, None)?;
-        if ndim(&arr)? != 2 {
-            return Err(value_err(format!(
-                "points must be a 2-D array (n, d), not {}-D",
-                ndim(&arr)?
-            )));
-        }
+        check_rows(&arr, "d")?;
         let index = match dtype {
             Dtype::F32 => {
                 let pts = Points::<f32>::new(&arr)?;

@@ -49,8 +49,8 @@ mod search;
 use std::any::Any;
 use std::sync::{Arc, OnceLock};
 
-use crate::cloud::NonFinitePolicy;
 use crate::error::{NbhdError, Result};
+use crate::packed::NonFinitePolicy;
 use crate::points::{point_bytes, PointsView};
 use crate::scalar::Scalar;
 use crate::tree::{BuildOptions, KdTree};

@@ -16,8 +16,8 @@
 use std::io::Write;
 
 use super::{bit, DynamicKdTree, Part};
-use crate::cloud::NonFinitePolicy;
 use crate::error::Result;
+use crate::packed::NonFinitePolicy;
 use crate::parallel::MAX_THREADS;
 use crate::points::point_bytes;
 use crate::query::NeighborSearch;
@@ -27,7 +27,7 @@ use crate::tree::{
     u64_at, write_saved, written_by, Kind, DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
 };
 use crate::tree::{
-    BuildOptions, KdTree, LoadOptions, Persist, SavedFormat, SavedHeader, HEADER_LEN, MAGIC,
+    saved_header, BuildOptions, KdTree, LoadOptions, Persist, SavedFormat, HEADER_LEN, MAGIC,
 };
 
 /// The format version of saved dynamic trees this library writes and reads.
@@ -179,20 +179,7 @@ impl SavedDynamicInfo {
     }
 }
 
-impl SavedHeader for SavedDynamicInfo {
-    fn total_len(&self) -> u64 {
-        self.total_len
-    }
-    fn payload_crc(&self) -> u32 {
-        self.payload_crc
-    }
-    fn scalar(&self) -> ScalarType {
-        self.scalar
-    }
-    fn dim(&self) -> usize {
-        self.dim
-    }
-}
+saved_header!(SavedDynamicInfo);
 
 /// The bits of the coordinates kept for an index that is not live (NaN in `T`).
 fn not_live_bits<T: Scalar>() -> u64 {

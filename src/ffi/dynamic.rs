@@ -1,10 +1,10 @@
 //! The dynamic tree handle (`src/dynamic/`): create, insert a batch, remove indices, the
 //! single queries and tables of the static tree, statistics, free.
 
-use std::ffi::{c_int, c_void};
+use std::ffi::c_void;
 
 use super::args::{check_optional, deref, init_out};
-use super::enums::{nbhd_scalar_type, CEnum};
+use super::enums::{enum_argument, nbhd_scalar_type, ScalarTypeArg};
 use super::query::{query as single_query, search, At, Results};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::table::{nbhd_neighborhoods, neighborhoods, neighborhoods_of};
@@ -80,7 +80,7 @@ pub struct nbhd_dynamic_stats {
 #[no_mangle]
 pub unsafe extern "C" fn nbhd_dynamic_create(
     dim: usize,
-    scalar_type: c_int,
+    scalar_type: ScalarTypeArg,
     options: *const nbhd_build_options,
     out_tree: *mut *mut nbhd_dynamic_tree,
 ) -> nbhd_status {
@@ -89,11 +89,7 @@ pub unsafe extern "C" fn nbhd_dynamic_create(
         let out = unsafe { init_out(out_tree, "out_tree", std::ptr::null_mut()) }?;
         // SAFETY: `options` is NULL or readable (caller).
         let options = unsafe { read_build_options(options) }?;
-        let scalar = nbhd_scalar_type::from_value(scalar_type).ok_or_else(|| {
-            FfiError::InvalidArgument(format!(
-                "scalar_type {scalar_type} is not a value of nbhd_scalar_type"
-            ))
-        })?;
+        let scalar: nbhd_scalar_type = enum_argument(scalar_type, "scalar_type")?;
         let inner = AnyIndex::growing(dim, ScalarType::from(scalar), &options)?;
         // SAFETY: `out` was checked by `init_out`.
         unsafe { hand_out_index(out, inner) };

@@ -81,6 +81,20 @@ pub enum nbhd_scalar_type {
 }
 same_variants!(nbhd_scalar_type, ScalarType, [F32, F64]);
 
+/// An nbhd_scalar_type passed by value from C: the `int` C passes, checked against
+/// [`CEnum`] before use, since a Rust enum holding a value C may pass, such as
+/// `(nbhd_scalar_type)7`, would be undefined behaviour. cbindgen.toml names it
+/// `nbhd_scalar_type` in the header, so C sees the enum's type.
+pub(crate) type ScalarTypeArg = c_int;
+
+/// Reads an enum value `raw` that C passed by value as argument `arg`:
+/// NBHD_STATUS_INVALID_ARGUMENT naming it when it is no value of `E`.
+pub(crate) fn enum_argument<E: CEnum>(raw: c_int, arg: &str) -> Result<E, FfiError> {
+    E::from_value(raw).ok_or_else(|| {
+        FfiError::InvalidArgument(format!("{arg} {raw} is not a value of {}", E::C_NAME))
+    })
+}
+
 /// How a tree node chooses its splitting dimension and pivot (thesis Sections 3.2 and 5.4).
 /// Every policy splits by the composite (lexicographic) order, so duplicates never make the
 /// tree degenerate.

@@ -2,7 +2,8 @@
 //! of `src/filter/`, over a built tree.
 
 use super::args::{check_optional, check_ptr, deref, init_out};
-use super::status::{guard, nbhd_status, FfiError};
+use super::fields::{c_field, CStruct};
+use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::tree::nbhd_tree;
 use super::types::{nbhd_points, PointsArg};
 use crate::error::NbhdError;
@@ -24,26 +25,55 @@ pub struct nbhd_spacing {
     pub points: usize,
 }
 
-/// The nearest-neighbour spacing of the tree's points, computed on `threads` workers (0: a
-/// thread per core); the same value for any thread count. Points skipped at build time are
-/// left out.
+/// Options of nbhd_tree_spacing. Start from nbhd_spacing_options_default() and change fields.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct nbhd_spacing_options {
+    /// Worker threads: 0 uses a shared pool with one thread per core, n >= 1 a pool of n
+    /// threads; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION. The spacing is the
+    /// same for every value. Default: 0.
+    pub threads: usize,
+}
+
+/// The default spacing options: the shared thread pool.
+#[no_mangle]
+pub extern "C" fn nbhd_spacing_options_default() -> nbhd_spacing_options {
+    let defaults = nbhd_spacing_options { threads: 0 };
+    guard_value("nbhd_spacing_options_default", defaults, || defaults)
+}
+
+/// Reads `*options` field by field: the thread count of the core's `spacing`; NULL gives the
+/// defaults.
+///
+/// # Safety
+/// `options` must be NULL or point to a readable `nbhd_spacing_options`.
+unsafe fn read_spacing_threads(options: *const nbhd_spacing_options) -> Result<usize, FfiError> {
+    let defaults = nbhd_spacing_options_default();
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    Ok(c_field!(o.threads))
+}
+
+/// The nearest-neighbour spacing of the tree's points, computed on `options->threads` workers
+/// (`options` NULL for the defaults); the same value for any thread count. Points skipped at
+/// build time are left out.
 ///
 /// Errors: NULL_POINTER (`tree`, `out`), MISALIGNED_POINTER, INVALID_OPTION (fewer than two
 /// points in the tree, or threads above NBHD_MAX_THREADS). On error `*out` is all zero.
 ///
 /// # Safety
-/// `tree` must be NULL or a live handle; `out` NULL or writable.
+/// `tree` must be NULL or a live handle; `options` NULL or readable; `out` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn nbhd_tree_spacing(
     tree: *const nbhd_tree,
-    threads: usize,
+    options: *const nbhd_spacing_options,
     out: *mut nbhd_spacing,
 ) -> nbhd_status {
     guard("nbhd_tree_spacing", || {
         // SAFETY: `out` is NULL or writable (caller).
         let out = unsafe { init_out(out, "out", nbhd_spacing::default()) }?;
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: `tree` is NULL or a live handle; `options` NULL or readable (caller).
+        let (tree, threads) = unsafe { (deref(tree, "tree")?, read_spacing_threads(options)?) };
         let s = tree.inner.spacing(threads)?;
         // SAFETY: `out` is non-NULL, aligned and writable (checked by init_out).
         unsafe {
@@ -93,12 +123,68 @@ unsafe fn write_kept(
     Ok(())
 }
 
+/// Options of nbhd_remove_statistical_outliers. Start from
+/// nbhd_statistical_outlier_options_default() and change fields.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct nbhd_statistical_outlier_options {
+    /// Number of nearest *other* points whose distances are averaged, >= 1 and below the
+    /// number of points (PCL's setMeanK, Open3D's nb_neighbors). Default: 50.
+    pub k: usize,
+    /// A point is kept when its mean distance is at most mean + std_ratio * s (PCL's
+    /// setStddevMulThresh, Open3D's std_ratio); finite, may be negative. Default: 1.
+    pub std_ratio: f64,
+    /// Worker threads: 0 uses a shared pool with one thread per core, n >= 1 a pool of n
+    /// threads; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION. The result is the
+    /// same for every value. Default: 0.
+    pub threads: usize,
+}
+
+impl From<StatisticalOutlierOptions> for nbhd_statistical_outlier_options {
+    fn from(o: StatisticalOutlierOptions) -> Self {
+        Self {
+            k: o.k,
+            std_ratio: o.std_ratio,
+            threads: o.threads,
+        }
+    }
+}
+
+/// The default statistical outlier options: PCL's tutorial values k = 50, std_ratio = 1,
+/// the shared thread pool.
+#[no_mangle]
+pub extern "C" fn nbhd_statistical_outlier_options_default() -> nbhd_statistical_outlier_options {
+    let defaults = StatisticalOutlierOptions::default().into();
+    guard_value("nbhd_statistical_outlier_options_default", defaults, || {
+        defaults
+    })
+}
+
+/// Reads `*options` field by field into the core's options; NULL gives the defaults. The core
+/// checks the values.
+///
+/// # Safety
+/// `options` must be NULL or point to a readable `nbhd_statistical_outlier_options`.
+unsafe fn read_statistical_options(
+    options: *const nbhd_statistical_outlier_options,
+) -> Result<StatisticalOutlierOptions, FfiError> {
+    let defaults = nbhd_statistical_outlier_options_default();
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    Ok(StatisticalOutlierOptions {
+        k: c_field!(o.k),
+        std_ratio: c_field!(o.std_ratio),
+        threads: c_field!(o.threads),
+    })
+}
+
 /// Statistical outlier removal (PCL's StatisticalOutlierRemoval, Open3D's
-/// remove_statistical_outlier): for each point its mean distance d_i to its `k` nearest
-/// other points (PCL's setMeanK(k): PCL searches k + 1 and skips the point itself); over all
-/// points the mean m and the sample standard deviation s (n - 1 in the denominator, as PCL);
-/// a point is kept when d_i <= m + std_ratio * s. Points skipped at build time are never
-/// kept and take no part in m and s (PCL 1.13 keeps NaN points in its output).
+/// remove_statistical_outlier): for each point its mean distance d_i to its `options->k`
+/// nearest other points (PCL's setMeanK(k): PCL searches k + 1 and skips the point itself);
+/// over all points the mean m and the sample standard deviation s (n - 1 in the denominator,
+/// as PCL); a point is kept when d_i <= m + std_ratio * s. `options` may be NULL for the
+/// defaults. Points skipped at build time are never kept and take no part in m and s (PCL 1.13
+/// keeps NaN points in its output).
 ///
 /// - `kept`: `capacity` values (uint32_t); receives the caller indices of the kept points,
 ///   ascending, `*count` of them. The number of points given to nbhd_tree_build always
@@ -111,15 +197,13 @@ unsafe fn write_kept(
 /// BUFFER_TOO_SMALL, OUT_OF_MEMORY. On error `*count` is 0 except for BUFFER_TOO_SMALL.
 ///
 /// # Safety
-/// `tree` must be NULL or a live handle; `kept` NULL or writable for `capacity` values;
-/// `count` NULL or writable; `mask` NULL or writable for the number of points given.
+/// `tree` must be NULL or a live handle; `options` NULL or readable; `kept` NULL or writable
+/// for `capacity` values; `count` NULL or writable; `mask` NULL or writable for the number of
+/// points given.
 #[no_mangle]
-#[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn nbhd_remove_statistical_outliers(
     tree: *const nbhd_tree,
-    k: usize,
-    std_ratio: f64,
-    threads: usize,
+    options: *const nbhd_statistical_outlier_options,
     kept: *mut u32,
     capacity: usize,
     count: *mut usize,
@@ -128,26 +212,69 @@ pub unsafe extern "C" fn nbhd_remove_statistical_outliers(
     guard("nbhd_remove_statistical_outliers", || {
         // SAFETY: `count` is NULL or writable (caller).
         let count = unsafe { init_out(count, "count", 0) }?;
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: `tree` is NULL or a live handle; `options` NULL or readable (caller).
+        let (tree, options) = unsafe { (deref(tree, "tree")?, read_statistical_options(options)?) };
         check_optional(kept.cast_const(), "kept")?;
-        let options = StatisticalOutlierOptions {
-            k,
-            std_ratio,
-            threads,
-        };
         let result = tree.inner.statistical_outlier_removal(&options)?;
         // SAFETY: the buffers are as the caller describes (contract above).
         unsafe { write_kept(&result, kept, capacity, count, mask) }
     })
 }
 
+/// Options of nbhd_remove_radius_outliers (the radius is an argument of its own, as in
+/// nbhd_tree_radius). Start from nbhd_radius_outlier_options_default() and change fields.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct nbhd_radius_outlier_options {
+    /// A point is kept when at least this many *other* points lie within the radius. PCL's
+    /// setMinNeighborsInRadius(m) is the same m (its count includes the point itself and keeps
+    /// counts > m). 0 keeps every point the tree holds. Default: 2.
+    pub min_neighbors: usize,
+    /// Worker threads, as in nbhd_statistical_outlier_options. Default: 0.
+    pub threads: usize,
+}
+
+impl From<RadiusOutlierOptions> for nbhd_radius_outlier_options {
+    fn from(o: RadiusOutlierOptions) -> Self {
+        Self {
+            min_neighbors: o.min_neighbors,
+            threads: o.threads,
+        }
+    }
+}
+
+/// The default radius outlier options: at least 2 other points within the radius, the shared
+/// thread pool.
+#[no_mangle]
+pub extern "C" fn nbhd_radius_outlier_options_default() -> nbhd_radius_outlier_options {
+    // The radius is the call's argument: every other field is the core's default.
+    let defaults = RadiusOutlierOptions::within(0.0).into();
+    guard_value("nbhd_radius_outlier_options_default", defaults, || defaults)
+}
+
+/// Reads `*options` field by field into the core's options for `radius`; NULL gives the
+/// defaults. The core checks the values.
+///
+/// # Safety
+/// `options` must be NULL or point to a readable `nbhd_radius_outlier_options`.
+unsafe fn read_radius_options(
+    radius: f64,
+    options: *const nbhd_radius_outlier_options,
+) -> Result<RadiusOutlierOptions, FfiError> {
+    let defaults = nbhd_radius_outlier_options_default();
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    Ok(RadiusOutlierOptions {
+        radius,
+        min_neighbors: c_field!(o.min_neighbors),
+        threads: c_field!(o.threads),
+    })
+}
+
 /// Radius outlier removal (PCL's RadiusOutlierRemoval, Open3D's remove_radius_outlier): a
-/// point is kept when at least `min_neighbors` other points lie within `radius` (plain
-/// Euclidean, inclusive: |x - p| <= radius). PCL's setMinNeighborsInRadius(m) is the same m
-/// (its count includes the point itself and keeps counts > m). 0 keeps every point the tree
-/// holds. Points skipped at build time are never kept. Results as
-/// nbhd_remove_statistical_outliers.
+/// point is kept when at least `options->min_neighbors` other points lie within `radius`
+/// (plain Euclidean, inclusive: |x - p| <= radius). `options` may be NULL for the defaults.
+/// Points skipped at build time are never kept. Results as nbhd_remove_statistical_outliers.
 ///
 /// Errors: NULL_POINTER, MISALIGNED_POINTER, INVALID_RADIUS (negative, NaN, infinite, or too
 /// large for the tree's type), INVALID_OPTION (threads), BUFFER_TOO_SMALL, OUT_OF_MEMORY.
@@ -155,12 +282,10 @@ pub unsafe extern "C" fn nbhd_remove_statistical_outliers(
 /// # Safety
 /// As nbhd_remove_statistical_outliers.
 #[no_mangle]
-#[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn nbhd_remove_radius_outliers(
     tree: *const nbhd_tree,
     radius: f64,
-    min_neighbors: usize,
-    threads: usize,
+    options: *const nbhd_radius_outlier_options,
     kept: *mut u32,
     capacity: usize,
     count: *mut usize,
@@ -169,17 +294,61 @@ pub unsafe extern "C" fn nbhd_remove_radius_outliers(
     guard("nbhd_remove_radius_outliers", || {
         // SAFETY: `count` is NULL or writable (caller).
         let count = unsafe { init_out(count, "count", 0) }?;
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: `tree` is NULL or a live handle; `options` NULL or readable (caller).
+        let (tree, options) =
+            unsafe { (deref(tree, "tree")?, read_radius_options(radius, options)?) };
         check_optional(kept.cast_const(), "kept")?;
-        let options = RadiusOutlierOptions {
-            radius,
-            min_neighbors,
-            threads,
-        };
         let result = tree.inner.radius_outlier_removal(&options)?;
         // SAFETY: the buffers are as the caller describes (contract above).
         unsafe { write_kept(&result, kept, capacity, count, mask) }
+    })
+}
+
+/// Options of nbhd_voxel_grid (the leaf sizes are arguments of their own). Start from
+/// nbhd_voxel_grid_options_default() and change fields.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct nbhd_voxel_grid_options {
+    /// Voxels with fewer points are left out (PCL's setMinimumPointsNumberPerVoxel; 0 and 1
+    /// keep every occupied voxel). Default: 0.
+    pub min_points_per_voxel: usize,
+    /// Worker threads, as in nbhd_statistical_outlier_options. Default: 0.
+    pub threads: usize,
+}
+
+impl From<VoxelGridOptions> for nbhd_voxel_grid_options {
+    fn from(o: VoxelGridOptions) -> Self {
+        Self {
+            min_points_per_voxel: o.min_points_per_voxel,
+            threads: o.threads,
+        }
+    }
+}
+
+/// The default voxel-grid options: every occupied voxel kept, the shared thread pool.
+#[no_mangle]
+pub extern "C" fn nbhd_voxel_grid_options_default() -> nbhd_voxel_grid_options {
+    // The edge lengths are the call's arguments: every other field is the core's default.
+    let defaults = VoxelGridOptions::cube(1.0).into();
+    guard_value("nbhd_voxel_grid_options_default", defaults, || defaults)
+}
+
+/// Reads `*options` field by field into the core's options for the edge lengths `leaf`; NULL
+/// gives the defaults. The core checks the values.
+///
+/// # Safety
+/// `options` must be NULL or point to a readable `nbhd_voxel_grid_options`.
+unsafe fn read_voxel_options(
+    leaf: Vec<f64>,
+    options: *const nbhd_voxel_grid_options,
+) -> Result<VoxelGridOptions, FfiError> {
+    let defaults = nbhd_voxel_grid_options_default();
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    Ok(VoxelGridOptions {
+        leaf,
+        min_points_per_voxel: c_field!(o.min_points_per_voxel),
+        threads: c_field!(o.threads),
     })
 }
 
@@ -191,7 +360,7 @@ pub unsafe extern "C" fn nbhd_remove_radius_outliers(
 /// exactly (centroids summed in ascending index; PCL's order within a voxel is not defined).
 ///
 /// - `leaf`: `leaf_count` edge lengths, 1 (a cube) or `points->dim`; each finite and > 0.
-/// - `min_points_per_voxel`: voxels with fewer points are left out (0 and 1 keep all).
+/// - `options`: NULL for the defaults (every occupied voxel, the shared pool).
 /// - `centroids`: NULL, or `capacity * points->dim` doubles: voxel v's centroid at
 ///   `centroids[v * dim ..]` (float values converted exactly).
 /// - `nearest`: NULL, or `capacity` uint32_t: voxel v's point nearest its centroid.
@@ -208,16 +377,15 @@ pub unsafe extern "C" fn nbhd_remove_radius_outliers(
 ///
 /// # Safety
 /// `points` NULL or a readable description of readable memory; `leaf` NULL or readable for
-/// `leaf_count` values; `centroids`, `nearest` NULL or writable as described; `count` NULL or
-/// writable.
+/// `leaf_count` values; `options` NULL or readable; `centroids`, `nearest` NULL or writable as
+/// described; `count` NULL or writable.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn nbhd_voxel_grid(
     points: *const nbhd_points,
     leaf: *const f64,
     leaf_count: usize,
-    min_points_per_voxel: usize,
-    threads: usize,
+    options: *const nbhd_voxel_grid_options,
     centroids: *mut f64,
     nearest: *mut u32,
     capacity: usize,
@@ -239,11 +407,8 @@ pub unsafe extern "C" fn nbhd_voxel_grid(
         // SAFETY: `leaf` is non-NULL, aligned and readable for `leaf_count` values (caller),
         // and `leaf_count` is 1 or the points' dimension (checked just above).
         let leaf = unsafe { std::slice::from_raw_parts(leaf, leaf_count) }.to_vec();
-        let options = VoxelGridOptions {
-            leaf,
-            min_points_per_voxel,
-            threads,
-        };
+        // SAFETY: `options` is NULL or readable (caller).
+        let options = unsafe { read_voxel_options(leaf, options) }?;
         let (cents, near): (Vec<f64>, Vec<u32>) = match arg.scalar {
             ScalarType::F32 => {
                 let g = voxel_grid::<f32>(&view, &options)?;

@@ -5,7 +5,8 @@
 use std::ffi::c_void;
 
 use super::args::{check_aligned, check_optional, check_ptr, deref, init_out};
-use super::status::{guard, nbhd_status, FfiError};
+use super::fields::{c_field, CStruct};
+use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::tree::nbhd_tree;
 use crate::error::NbhdError;
 use crate::index::NeighborIndex;
@@ -135,12 +136,41 @@ unsafe fn one_box<T: Scalar, I: NeighborIndex<T>>(
     }
 }
 
+/// Options of nbhd_tree_in_boxes. Start from nbhd_box_options_default() and change fields.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct nbhd_box_options {
+    /// Worker threads: 0 uses a shared pool with one thread per core, n >= 1 a pool of n
+    /// threads; more than NBHD_MAX_THREADS is NBHD_STATUS_INVALID_OPTION. The rows are the
+    /// same for every value. Default: 0.
+    pub threads: usize,
+}
+
+/// The default box options: the shared thread pool.
+#[no_mangle]
+pub extern "C" fn nbhd_box_options_default() -> nbhd_box_options {
+    let defaults = nbhd_box_options { threads: 0 };
+    guard_value("nbhd_box_options_default", defaults, || defaults)
+}
+
+/// Reads `*options` field by field: the thread count of the core's `in_boxes`; NULL gives the
+/// defaults.
+///
+/// # Safety
+/// `options` must be NULL or point to a readable `nbhd_box_options`.
+unsafe fn read_box_threads(options: *const nbhd_box_options) -> Result<usize, FfiError> {
+    let defaults = nbhd_box_options_default();
+    // SAFETY: forwarded from the caller.
+    let o = unsafe { CStruct::options(options, &defaults) }?;
+    Ok(c_field!(o.threads))
+}
+
 /// The points inside each box of a batch, computed in parallel; rows in the boxes' order,
 /// identical for any thread count.
 ///
 /// - `boxes`: `n_boxes * 2 * dim` values in the tree's scalar type: box i is its `min`
 ///   corner (`dim` values) then its `max` corner. Closed boxes, as nbhd_tree_in_box.
-/// - `threads`: 0 for a thread per core, else 1 ..= NBHD_MAX_THREADS.
+/// - `options`: NULL for the defaults (the shared thread pool).
 /// - `offsets`: `n_boxes + 1` values (size_t); row i is `indices[offsets[i] .. offsets[i + 1]]`,
 ///   the caller indices inside box i, ascending.
 /// - `indices`: `capacity` values; `*total` receives the number of indices over all rows.
@@ -154,15 +184,16 @@ unsafe fn one_box<T: Scalar, I: NeighborIndex<T>>(
 ///
 /// # Safety
 /// `tree` must be NULL or a live handle; `boxes` NULL or `n_boxes * 2 * dim` readable values
-/// of the tree's scalar type; `offsets` NULL or writable for `n_boxes + 1` values; `indices`
-/// NULL or writable for `capacity` values; `total` NULL or writable.
+/// of the tree's scalar type; `options` NULL or readable; `offsets` NULL or writable for
+/// `n_boxes + 1` values; `indices` NULL or writable for `capacity` values; `total` NULL or
+/// writable.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn nbhd_tree_in_boxes(
     tree: *const nbhd_tree,
     boxes: *const c_void,
     n_boxes: usize,
-    threads: usize,
+    options: *const nbhd_box_options,
     offsets: *mut usize,
     indices: *mut u32,
     capacity: usize,
@@ -171,8 +202,8 @@ pub unsafe extern "C" fn nbhd_tree_in_boxes(
     guard("nbhd_tree_in_boxes", || {
         // SAFETY: `total` is NULL or writable (caller).
         let total = unsafe { init_out(total, "total", 0) }?;
-        // SAFETY: `tree` is NULL or a live handle (caller).
-        let tree = unsafe { deref(tree, "tree") }?;
+        // SAFETY: `tree` is NULL or a live handle; `options` NULL or readable (caller).
+        let (tree, threads) = unsafe { (deref(tree, "tree")?, read_box_threads(options)?) };
         check_ptr(offsets.cast_const(), "offsets")?;
         check_optional(indices.cast_const(), "indices")?;
         let out = BatchOut {

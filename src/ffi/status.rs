@@ -332,11 +332,16 @@ pub(crate) fn guard_value<R>(func: &str, fallback: R, body: impl FnOnce() -> R) 
     }
 }
 
+/// An nbhd_status passed by value from C: the `int` C passes (a status of a later release, or
+/// any integer, must be answered safely; a Rust enum holding it would be undefined
+/// behaviour). cbindgen.toml names it `nbhd_status` in the header, so C sees the enum's type.
+pub(crate) type StatusArg = c_int;
+
 /// A static, human-readable description of a status code, such as "k must be at least 1".
-/// Never NULL, never to be freed. `status` is taken as an `int` so that any value is answered
-/// safely: one that is no nbhd_status gives "unknown status".
+/// Never NULL, never to be freed. Any value is answered safely: one that is no nbhd_status
+/// (a status of a later release, `(nbhd_status)-1`) gives "unknown status".
 #[no_mangle]
-pub extern "C" fn nbhd_status_string(status: c_int) -> *const c_char {
+pub extern "C" fn nbhd_status_string(status: StatusArg) -> *const c_char {
     guard_value("nbhd_status_string", c"unknown status".as_ptr(), || {
         nbhd_status::ALL
             .iter()

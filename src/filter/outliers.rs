@@ -149,6 +149,18 @@ pub struct RadiusOutlierOptions {
     pub threads: usize,
 }
 
+impl RadiusOutlierOptions {
+    /// Radius `radius`, at least 2 other points within it (the CLI's default; PCL's is 1), the
+    /// current pool.
+    pub fn within(radius: f64) -> Self {
+        Self {
+            radius,
+            min_neighbors: 2,
+            threads: 0,
+        }
+    }
+}
+
 /// Radius outlier removal: keeps point `i` when `|{j ≠ i : ‖x_j − x_i‖ ≤ radius}| ≥
 /// min_neighbors` (duplicates count). Each point's search stops at `min_neighbors` (an
 /// ε-k-neighbourhood, Section 2.1.1), so a large radius costs no more than a small one.

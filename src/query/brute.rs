@@ -2,9 +2,9 @@
 //! the oracle of the tests.
 
 use super::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query, QueryOptions};
-use crate::cloud::{Cloud, NonFinitePolicy};
 use crate::error::Result;
 use crate::metric::{Norm, NormUser};
+use crate::packed::{NonFinitePolicy, PackedPoints};
 use crate::points::PointsView;
 use crate::query::resolve_query;
 use crate::scalar::Scalar;
@@ -12,16 +12,16 @@ use crate::scalar::Scalar;
 /// Answers every query by scanning all points.
 #[derive(Clone, Debug)]
 pub struct BruteForce<T> {
-    cloud: Cloud<T>,
+    packed: PackedPoints<T>,
     slot_of: Vec<u32>,
 }
 
 impl<T: Scalar> BruteForce<T> {
     /// Copies the points of `view` (non-finite points handled by `policy`).
     pub fn new(view: &PointsView<'_>, policy: NonFinitePolicy) -> Result<Self> {
-        let cloud = Cloud::from_view(view, policy)?;
-        let slot_of = cloud.slots_by_caller_index();
-        Ok(Self { cloud, slot_of })
+        let packed = PackedPoints::from_view(view, policy)?;
+        let slot_of = packed.slots_by_caller_index();
+        Ok(Self { packed, slot_of })
     }
 }
 
@@ -36,11 +36,11 @@ pub(crate) fn sq_dist<T: Scalar>(a: &[T], b: &[T]) -> T {
 
 impl<T: Scalar> NeighborSearch<T> for BruteForce<T> {
     fn dim(&self) -> usize {
-        self.cloud.dim
+        self.packed.dim
     }
 
     fn source_len(&self) -> usize {
-        self.cloud.source_len
+        self.packed.source_len
     }
 
     fn search(
@@ -50,16 +50,17 @@ impl<T: Scalar> NeighborSearch<T> for BruteForce<T> {
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()> {
         nbhd.validate()?;
-        let cloud = &self.cloud;
-        let (q, exclude) = resolve_query(query, cloud.dim, cloud.source_len, &self.slot_of, |s| {
-            cloud.point(s)
-        })?;
+        let packed = &self.packed;
+        let (q, exclude) =
+            resolve_query(query, packed.dim, packed.source_len, &self.slot_of, |s| {
+                packed.point(s)
+            })?;
         let (k, sq_radius) = nbhd.limits();
         let mut heap = NeighborHeap::new(out, k, sq_radius);
-        for slot in 0..cloud.len() {
-            let id = cloud.ids[slot];
+        for slot in 0..packed.len() {
+            let id = packed.ids[slot];
             if Some(id) != exclude {
-                heap.push(id, sq_dist(q, cloud.point(slot)));
+                heap.push(id, sq_dist(q, packed.point(slot)));
             }
         }
         if nbhd.is_sorted() {
@@ -84,12 +85,13 @@ impl<T: Scalar> BruteForce<T> {
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()> {
         let plan = options.plan(nbhd)?;
-        let cloud = &self.cloud;
-        let (q, exclude) = resolve_query(query, cloud.dim, cloud.source_len, &self.slot_of, |s| {
-            cloud.point(s)
-        })?;
+        let packed = &self.packed;
+        let (q, exclude) =
+            resolve_query(query, packed.dim, packed.source_len, &self.slot_of, |s| {
+                packed.point(s)
+            })?;
         struct Scan<'a, T> {
-            cloud: &'a Cloud<T>,
+            packed: &'a PackedPoints<T>,
             q: &'a [T],
             exclude: Option<u32>,
             heap: NeighborHeap<'a, T>,
@@ -97,18 +99,18 @@ impl<T: Scalar> BruteForce<T> {
         impl<T: Scalar> NormUser<T> for Scan<'_, T> {
             type Out = ();
             fn with<N: Norm<T>>(mut self, norm: N) {
-                let d = self.cloud.dim;
-                for slot in 0..self.cloud.len() {
-                    let id = self.cloud.ids[slot];
+                let d = self.packed.dim;
+                for slot in 0..self.packed.len() {
+                    let id = self.packed.ids[slot];
                     if Some(id) != self.exclude {
-                        let key = norm.key(self.q, self.cloud.point(slot), d);
+                        let key = norm.key(self.q, self.packed.point(slot), d);
                         self.heap.push(id, key);
                     }
                 }
             }
         }
         plan.measure.apply(Scan {
-            cloud,
+            packed,
             q,
             exclude,
             heap: NeighborHeap::new(out, plan.k, plan.bound),
@@ -123,11 +125,11 @@ impl<T: Scalar> BruteForce<T> {
     /// convention of `src/query/in_box.rs`), by testing every point: the reference of the
     /// tree's box query.
     pub fn in_box(&self, min: &[T], max: &[T], out: &mut Vec<u32>) -> Result<()> {
-        super::in_box::check_box(min, max, self.cloud.dim, None)?;
+        super::in_box::check_box(min, max, self.packed.dim, None)?;
         out.clear();
-        for slot in 0..self.cloud.len() {
-            if super::in_box::in_closed_box(self.cloud.point(slot), min, max) {
-                out.push(self.cloud.ids[slot]);
+        for slot in 0..self.packed.len() {
+            if super::in_box::in_closed_box(self.packed.point(slot), min, max) {
+                out.push(self.packed.ids[slot]);
             }
         }
         out.sort_unstable();

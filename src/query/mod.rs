@@ -312,7 +312,7 @@ pub trait NeighborSearch<T: Scalar>: Sync {
     ) -> Result<()>;
 }
 /// Resolves a query to its coordinates and the caller index to leave out: the shared first
-/// step of every searcher. `slot_of` maps caller indices to slots of `cloud`.
+/// step of every searcher. `slot_of` maps caller indices to the searcher's slots.
 pub(crate) fn resolve_query<'q, T: Scalar>(
     query: Query<'q, T>,
     dim: usize,

@@ -18,9 +18,9 @@
 
 use super::brute::sq_dist;
 use super::{Neighbor, NeighborHeap, NeighborSearch, Neighborhood, Query};
-use crate::cloud::{Cloud, NonFinitePolicy};
 use crate::error::Result;
 use crate::linalg::sym_eigen;
+use crate::packed::{NonFinitePolicy, PackedPoints};
 use crate::points::PointsView;
 use crate::query::resolve_query;
 use crate::scalar::{Scalar, ScalarType};
@@ -47,7 +47,7 @@ const PRUNE_LIMIT: f64 = 1e300;
 #[derive(Clone, Debug)]
 pub struct PcaSweep<T> {
     /// The points, reordered by ascending projection on the first axis (ties by input order).
-    cloud: Cloud<T>,
+    packed: PackedPoints<T>,
     /// Slot of every caller index (`u32::MAX` for skipped points).
     slot_of: Vec<u32>,
     /// Principal axes as rows of a `d × d` matrix, by descending variance, unit length.
@@ -67,22 +67,22 @@ impl<T: Scalar> PcaSweep<T> {
     /// principal axes of the whole set about its barycentre and sorts the points along the
     /// first one. `O(n d² + n log n)`.
     pub fn new(view: &PointsView<'_>, policy: NonFinitePolicy) -> Result<Self> {
-        let cloud = Cloud::<T>::from_view(view, policy)?;
-        if cloud.len() == 0 {
+        let packed = PackedPoints::<T>::from_view(view, policy)?;
+        if packed.len() == 0 {
             // No principal axes without a point.
             return Err(crate::error::NbhdError::EmptyInput);
         }
-        let (n, d) = (cloud.len(), cloud.dim);
-        let max_abs = cloud
+        let (n, d) = (packed.len(), packed.dim);
+        let max_abs = packed
             .coords
             .iter()
             .fold(0.0f64, |m, c| m.max(c.to_f64().abs()));
         let prune = max_abs < PRUNE_LIMIT;
-        let axes = principal_axes(&cloud, max_abs);
+        let axes = principal_axes(&packed, max_abs);
 
         let proj: Vec<f64> = (0..n)
             .flat_map(|s| {
-                let p = cloud.point(s);
+                let p = packed.point(s);
                 axes.chunks_exact(d).map(move |a| project(p, a))
             })
             .collect();
@@ -99,20 +99,20 @@ impl<T: Scalar> PcaSweep<T> {
         let mut others = Vec::with_capacity(n * (d - 1));
         for &s in &order {
             let s = s as usize;
-            coords.extend_from_slice(cloud.point(s));
-            ids.push(cloud.ids[s]);
+            coords.extend_from_slice(packed.point(s));
+            ids.push(packed.ids[s]);
             first.push(proj[s * d]);
             others.extend_from_slice(&proj[s * d + 1..(s + 1) * d]);
         }
-        let cloud = Cloud {
+        let packed = PackedPoints {
             coords,
             ids,
             dim: d,
-            source_len: cloud.source_len,
+            source_len: packed.source_len,
         };
-        let slot_of = cloud.slots_by_caller_index();
+        let slot_of = packed.slots_by_caller_index();
         Ok(Self {
-            cloud,
+            packed,
             slot_of,
             axes,
             first,
@@ -131,11 +131,11 @@ impl<T: Scalar> PcaSweep<T> {
     /// Offers every point to the heap (no pruning): the fallback for coordinates too large
     /// for safe projection bounds.
     fn scan_all(&self, q: &[T], exclude: Option<u32>, heap: &mut NeighborHeap<'_, T>) {
-        let cloud = &self.cloud;
-        for slot in 0..cloud.len() {
-            let id = cloud.ids[slot];
+        let packed = &self.packed;
+        for slot in 0..packed.len() {
+            let id = packed.ids[slot];
             if Some(id) != exclude {
-                heap.push(id, sq_dist(q, cloud.point(slot)));
+                heap.push(id, sq_dist(q, packed.point(slot)));
             }
         }
     }
@@ -152,7 +152,7 @@ impl<T: Scalar> PcaSweep<T> {
         exclude: Option<u32>,
         heap: &mut NeighborHeap<'_, T>,
     ) {
-        let id = self.cloud.ids[slot];
+        let id = self.packed.ids[slot];
         if Some(id) == exclude {
             return;
         }
@@ -162,7 +162,7 @@ impl<T: Scalar> PcaSweep<T> {
         if po.iter().zip(pq_others).any(|(&p, &pq)| (p - pq).abs() > w) {
             return;
         }
-        heap.push(id, sq_dist(q, self.cloud.point(slot)));
+        heap.push(id, sq_dist(q, self.packed.point(slot)));
     }
 
     /// All points within the radius: the window of the first axis, scanned in order.
@@ -283,12 +283,12 @@ fn project<T: Scalar>(p: &[T], a: &[f64]) -> f64 {
         .fold(0.0, |acc, (&x, &y)| acc + x.to_f64() * y)
 }
 
-/// Unit principal axes of the cloud (rows, descending variance) from the covariance about the
+/// Unit principal axes of the points (rows, descending variance) from the covariance about the
 /// barycentre (thesis eq. (2.8) over the whole set), computed on coordinates scaled by
 /// `1 / max_abs` so that no square overflows. Any unit vectors make the sweep exact; the
 /// principal ones make it fast. Falls back to the coordinate axes if anything is not finite.
-fn principal_axes<T: Scalar>(cloud: &Cloud<T>, max_abs: f64) -> Vec<f64> {
-    let (n, d) = (cloud.len(), cloud.dim);
+fn principal_axes<T: Scalar>(packed: &PackedPoints<T>, max_abs: f64) -> Vec<f64> {
+    let (n, d) = (packed.len(), packed.dim);
     let mut identity = vec![0.0; d * d];
     for i in 0..d {
         identity[i * d + i] = 1.0;
@@ -300,7 +300,7 @@ fn principal_axes<T: Scalar>(cloud: &Cloud<T>, max_abs: f64) -> Vec<f64> {
     };
     let mut mean = vec![0.0f64; d];
     for s in 0..n {
-        for (m, x) in mean.iter_mut().zip(cloud.point(s)) {
+        for (m, x) in mean.iter_mut().zip(packed.point(s)) {
             *m += x.to_f64() * scale;
         }
     }
@@ -310,7 +310,7 @@ fn principal_axes<T: Scalar>(cloud: &Cloud<T>, max_abs: f64) -> Vec<f64> {
     let mut cov = vec![0.0f64; d * d];
     let mut diff = vec![0.0f64; d];
     for s in 0..n {
-        for ((t, x), m) in diff.iter_mut().zip(cloud.point(s)).zip(&mean) {
+        for ((t, x), m) in diff.iter_mut().zip(packed.point(s)).zip(&mean) {
             *t = x.to_f64() * scale - m;
         }
         for i in 0..d {
@@ -342,11 +342,11 @@ fn principal_axes<T: Scalar>(cloud: &Cloud<T>, max_abs: f64) -> Vec<f64> {
 
 impl<T: Scalar> NeighborSearch<T> for PcaSweep<T> {
     fn dim(&self) -> usize {
-        self.cloud.dim
+        self.packed.dim
     }
 
     fn source_len(&self) -> usize {
-        self.cloud.source_len
+        self.packed.source_len
     }
 
     fn search(
@@ -356,10 +356,10 @@ impl<T: Scalar> NeighborSearch<T> for PcaSweep<T> {
         out: &mut Vec<Neighbor<T>>,
     ) -> Result<()> {
         nbhd.validate()?;
-        let cloud = &self.cloud;
-        let d = cloud.dim;
-        let (q, exclude) = resolve_query(query, d, cloud.source_len, &self.slot_of, |s| {
-            cloud.point(s)
+        let packed = &self.packed;
+        let d = packed.dim;
+        let (q, exclude) = resolve_query(query, d, packed.source_len, &self.slot_of, |s| {
+            packed.point(s)
         })?;
         let (k, sq_radius) = nbhd.limits();
         let mut heap = NeighborHeap::new(out, k, sq_radius);

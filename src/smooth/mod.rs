@@ -32,7 +32,6 @@ use glam::DVec3;
 use rayon::prelude::*;
 use source::knn_rows;
 
-pub(crate) use crate::cloud::finite_subset;
 use crate::geometry::neighbors::cut_to;
 use crate::geometry::normals::quotient_of;
 pub use crate::geometry::source;
@@ -41,6 +40,7 @@ pub(crate) use crate::index::check_spacing;
 pub use crate::index::{Length, Units};
 use crate::named_option;
 use crate::names::OptionName;
+pub(crate) use crate::packed::finite_subset;
 pub(crate) use crate::progress::progress_in_units;
 pub use crate::progress::Stage;
 /// The fast exact k-nearest table the robust smoothing's rows start from (`src/tree/`).

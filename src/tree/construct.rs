@@ -1,6 +1,6 @@
 //! The build driver: from the caller's points to a [`KdTree`]. It reads the points (all of
 //! them, or the listed subset of [`KdTree::build_subset`]; straight into compact records for
-//! dimensions 1 to 3, through a [`Cloud`] otherwise), runs the build the options ask for
+//! dimensions 1 to 3, through a [`PackedPoints`] otherwise), runs the build the options ask for
 //! (`build.rs`, `presorted.rs`) on the thread count asked for, and keeps the coordinates and
 //! caller indices in tree order.
 
@@ -10,8 +10,8 @@ use super::build::{build_parallel, build_serial, BuildInput, Subtree};
 use super::layout::{BySlot, Inline, Layout, Record};
 use super::presorted;
 use super::{BuildOptions, KdTree, MedianAlgorithm};
-use crate::cloud::{Cloud, NonFinitePolicy};
 use crate::error::{NbhdError, Result};
+use crate::packed::{NonFinitePolicy, PackedPoints};
 use crate::parallel::with_threads;
 use crate::points::PointsView;
 use crate::scalar::{Scalar, ScalarType};
@@ -106,23 +106,23 @@ impl<T: Scalar> KdTree<T> {
             2 => build_inline::<T, 2>(view, selection, options)?,
             3 => build_inline::<T, 3>(view, selection, options)?,
             _ => {
-                let cloud = Cloud::<T>::from_view_at(
+                let packed = PackedPoints::<T>::from_view_at(
                     view,
                     (0..selection.len()).map(|i| selection.at(i)),
                     options.non_finite,
                 )?;
-                let n = cloud.len();
+                let n = packed.len();
                 let layout = BySlot {
-                    coords: &cloud.coords,
+                    coords: &packed.coords,
                     dim,
                 };
                 let mut slots: Vec<u32> = (0..n as u32).collect();
                 let subtree = run_build(layout, options, &mut slots)?;
                 let coords = slots
                     .iter()
-                    .flat_map(|&s| cloud.point(s as usize).iter().copied())
+                    .flat_map(|&s| packed.point(s as usize).iter().copied())
                     .collect();
-                let ids = slots.iter().map(|&s| cloud.ids[s as usize]).collect();
+                let ids = slots.iter().map(|&s| packed.ids[s as usize]).collect();
                 (subtree, coords, ids)
             }
         };
@@ -172,7 +172,7 @@ fn checked_subset(indices: &[u32], count: usize) -> Result<Cow<'_, [u32]>> {
 
 /// Builds with compact records of dimension `D`, read straight from the caller's buffer;
 /// returns the nodes, the coordinates and the caller indices in tree order. A record's slot is
-/// the caller's index itself: it orders ties exactly as the packed slots of a [`Cloud`] would
+/// the caller's index itself: it orders ties exactly as the slots of a [`PackedPoints`] would
 /// (both increase with the caller's index), and needs no map back.
 fn build_inline<T: Scalar, const D: usize>(
     view: &PointsView<'_>,
@@ -253,7 +253,7 @@ fn read_records_parallel<T: Scalar, S: Scalar, const D: usize>(
 
 /// The finite selected points of `view` (stored as `S`) as records of `T` coordinates, applying
 /// `policy` to the others (a value finite in `S` that overflows `T` counts as non-finite, as
-/// in [`Cloud::from_view`]).
+/// in [`PackedPoints::from_view`]).
 fn read_records<T: Scalar, S: Scalar, const D: usize>(
     view: &PointsView<'_>,
     sel: Selection<'_>,

@@ -13,8 +13,8 @@ use std::io::{Read, Write};
 use std::path::Path;
 
 use super::{BuildOptions, MedianAlgorithm, PivotPolicy};
-use crate::cloud::NonFinitePolicy;
 use crate::error::{NbhdError, Result, SavedTreeError};
+use crate::packed::NonFinitePolicy;
 use crate::scalar::{Scalar, ScalarType};
 
 /// The first 8 bytes of a saved tree.
@@ -367,6 +367,28 @@ pub trait SavedHeader {
     /// Dimension.
     fn dim(&self) -> usize;
 }
+
+/// Implements [`SavedHeader`] for a header struct from its fields of the same names
+/// (`total_len`, `payload_crc`, `scalar`, `dim`): every saved format's header has them.
+macro_rules! saved_header {
+    ($info:ty) => {
+        impl $crate::tree::SavedHeader for $info {
+            fn total_len(&self) -> u64 {
+                self.total_len
+            }
+            fn payload_crc(&self) -> u32 {
+                self.payload_crc
+            }
+            fn scalar(&self) -> $crate::scalar::ScalarType {
+                self.scalar
+            }
+            fn dim(&self) -> usize {
+                self.dim
+            }
+        }
+    };
+}
+pub(crate) use saved_header;
 
 /// A format of saved index: its header and payload (the plumbing [`Persist`] is written over).
 #[doc(hidden)]

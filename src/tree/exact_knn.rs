@@ -787,6 +787,13 @@ mod tests {
         assert_exact(&noisy_sphere(3000, 0.0), 24);
     }
 
+    /// Rows longer than the sorted rows' 64 (the robust smoothing's wide rows, 3 · 48 + the
+    /// margin), gathered first since those are.
+    #[test]
+    fn wide_rows_are_the_exact_nearest() {
+        assert_exact(&noisy_sphere(3000, 0.0), 144);
+    }
+
     #[test]
     fn rows_are_exact_far_from_the_origin() {
         // coordinates of about 1e5 with a spacing of about 0.05: many rows left to f64

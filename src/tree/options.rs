@@ -1,10 +1,10 @@
 //! Build options of the k-d tree: pivot policy (thesis Sections 3.2, 5.4), median algorithm
 //! (Section 3.3 and Chapter 6), leaf bucket size, non-finite policy and threads.
 
-use crate::cloud::NonFinitePolicy;
 use crate::error::{NbhdError, Result};
 use crate::named_option;
 use crate::names::OptionName;
+use crate::packed::NonFinitePolicy;
 
 /// How a node chooses its splitting dimension and pivot.
 ///

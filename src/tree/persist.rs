@@ -15,9 +15,10 @@
 use std::io::Write;
 use std::sync::OnceLock;
 
+use super::envelope::saved_header;
 use super::envelope::{
     check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size, u32_at,
-    u64_at, written_by, Kind, SavedFormat, SavedHeader, FORMAT_VERSION, HEADER_LEN, MAGIC,
+    u64_at, written_by, Kind, SavedFormat, FORMAT_VERSION, HEADER_LEN, MAGIC,
 };
 use super::envelope::{DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND};
 use super::node::{Node, LEAF};
@@ -190,20 +191,7 @@ impl SavedTreeInfo {
     }
 }
 
-impl SavedHeader for SavedTreeInfo {
-    fn total_len(&self) -> u64 {
-        self.total_len
-    }
-    fn payload_crc(&self) -> u32 {
-        self.payload_crc
-    }
-    fn scalar(&self) -> ScalarType {
-        self.scalar
-    }
-    fn dim(&self) -> usize {
-        self.dim
-    }
-}
+saved_header!(SavedTreeInfo);
 
 /// Bytes handed to the writer at a time when a tree is written.
 const CHUNK: usize = 1 << 16;

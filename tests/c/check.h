@@ -31,7 +31,7 @@ static int failures = 0;
         if (st_ != (expected)) {                                                               \
             failures++;                                                                        \
             fprintf(stderr, "%s:%d: %s gave %d (%s; %s), expected %s\n", __FILE__, __LINE__,   \
-                    #call, (int)st_, nbhd_status_string((int)st_), nbhd_last_error_message(),  \
+                    #call, (int)st_, nbhd_status_string(st_), nbhd_last_error_message(),         \
                     #expected);                                                                \
         }                                                                                      \
     } while (0)

@@ -426,8 +426,13 @@ static void test_errors(void) {
     CHECK_STATUS(nbhd_dynamic_create(0, NBHD_SCALAR_TYPE_F32, NULL, &dyn),
                  NBHD_STATUS_ZERO_DIMENSION);
     CHECK(dyn == NULL);
-    CHECK_STATUS(nbhd_dynamic_create(DIM, 7, NULL, &dyn), NBHD_STATUS_INVALID_ARGUMENT);
-    CHECK_MESSAGE("scalar_type");
+    /* A value of no nbhd_scalar_type, as C may pass one: refused, never undefined behaviour. */
+    CHECK_STATUS(nbhd_dynamic_create(DIM, (nbhd_scalar_type)7, NULL, &dyn),
+                 NBHD_STATUS_INVALID_ARGUMENT);
+    CHECK_MESSAGE("scalar_type 7 is not a value of nbhd_scalar_type");
+    CHECK(dyn == NULL);
+    CHECK_STATUS(nbhd_dynamic_create(DIM, (nbhd_scalar_type)-1, NULL, &dyn),
+                 NBHD_STATUS_INVALID_ARGUMENT);
     /* A dimension no point of which fits in memory: refused as nbhd_tree_build refuses it. */
     CHECK_STATUS(nbhd_dynamic_create(SIZE_MAX, NBHD_SCALAR_TYPE_F32, NULL, &dyn),
                  NBHD_STATUS_INVALID_ARGUMENT);

@@ -64,6 +64,8 @@ static void test_boxes(int f32) {
     float boxesf[3 * 2 * DIM];
     uint32_t want[N], got[N], batch[3 * N];
     size_t offsets[4], count = 99, total = 99, b, i, expect_total = 0;
+    nbhd_box_options bo = nbhd_box_options_default();
+    CHECK(bo.threads == 0);
     for (b = 0; b < 3; b++) {
         for (i = 0; i < 2 * DIM; i++) {
             allf[b * 2 * DIM + i] = boxes[b][i];
@@ -94,7 +96,8 @@ static void test_boxes(int f32) {
     /* the batch: same rows, any thread count */
     for (i = 1; i <= 3; i += 2) {
         const void *all = f32 ? (const void *)boxesf : (const void *)allf;
-        CHECK_STATUS(nbhd_tree_in_boxes(tree, all, 3, i, offsets, batch, 3 * N, &total),
+        bo.threads = i;
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, all, 3, &bo, offsets, batch, 3 * N, &total),
                      NBHD_STATUS_OK);
         CHECK(total == expect_total && offsets[0] == 0 && offsets[3] == total);
         for (b = 0; b < 3; b++) {
@@ -102,11 +105,11 @@ static void test_boxes(int f32) {
             CHECK(offsets[b + 1] - offsets[b] == n);
             CHECK(n == 0 || memcmp(batch + offsets[b], want, n * sizeof(uint32_t)) == 0);
         }
-        CHECK_STATUS(nbhd_tree_in_boxes(tree, all, 3, i, offsets, NULL, 0, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, all, 3, &bo, offsets, NULL, 0, &total),
                      NBHD_STATUS_BUFFER_TOO_SMALL);
         CHECK(total == expect_total);
     }
-    CHECK_STATUS(nbhd_tree_in_boxes(tree, NULL, 0, 0, offsets, NULL, 0, &total), NBHD_STATUS_OK);
+    CHECK_STATUS(nbhd_tree_in_boxes(tree, NULL, 0, NULL, offsets, NULL, 0, &total), NBHD_STATUS_OK);
     CHECK(total == 0 && offsets[0] == 0);
     /* bad boxes */
     {
@@ -133,19 +136,23 @@ static void test_boxes(int f32) {
             double inv[4 * DIM] = {0, 0, 0, 1, 1, 1, 0, 1, 0, 1, 0, 1};
             float invf[4 * DIM] = {0, 0, 0, 1, 1, 1, 0, 1, 0, 1, 0, 1};
             CHECK_STATUS(nbhd_tree_in_boxes(tree, f32 ? (const void *)invf : (const void *)inv, 2,
-                                         0, offsets, batch, N, &total),
+                                         NULL, offsets, batch, N, &total),
                          NBHD_STATUS_INVALID_BOX);
             CHECK_MESSAGE("box 1");
             CHECK(total == 0);
         }
-        CHECK_STATUS(nbhd_tree_in_boxes(tree, l, 0, 0, offsets, batch, N, &total), NBHD_STATUS_OK);
-        CHECK_STATUS(nbhd_tree_in_boxes(tree, NULL, 1, 0, offsets, batch, N, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, l, 0, NULL, offsets, batch, N, &total), NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, NULL, 1, NULL, offsets, batch, N, &total),
                      NBHD_STATUS_NULL_POINTER);
-        CHECK_STATUS(nbhd_tree_in_boxes(tree, f32 ? (const void *)boxesf : (const void *)allf, 1, 0, NULL, batch, N, &total),
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, f32 ? (const void *)boxesf : (const void *)allf, 1, NULL, NULL, batch, N, &total),
                      NBHD_STATUS_NULL_POINTER);
-        CHECK_STATUS(nbhd_tree_in_boxes(tree, f32 ? (const void *)boxesf : (const void *)allf, 1, 5000, offsets, batch, N, &total),
+        bo.threads = 5000;
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, f32 ? (const void *)boxesf : (const void *)allf, 1, &bo, offsets, batch, N, &total),
                      NBHD_STATUS_INVALID_OPTION);
-        CHECK_STATUS(nbhd_tree_in_boxes(tree, allf, SIZE_MAX / 2, 0, offsets, batch, N, &total),
+        CHECK_MESSAGE("5000");
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, allf, 1, (const nbhd_box_options *)((const char *)&bo + 1), offsets, batch, N, &total),
+                     NBHD_STATUS_MISALIGNED_POINTER);
+        CHECK_STATUS(nbhd_tree_in_boxes(tree, allf, SIZE_MAX / 2, NULL, offsets, batch, N, &total),
                      NBHD_STATUS_INVALID_ARGUMENT);
     }
     nbhd_tree_free(tree);
@@ -160,6 +167,7 @@ static int cmp_double(const void *a, const void *b) {
 static void test_spacing(int f32) {
     nbhd_tree *tree = build(f32);
     nbhd_spacing s, s1;
+    nbhd_spacing_options so = nbhd_spacing_options_default();
     static double nearest[N];
     double sum = 0.0, median;
     size_t i, j, k;
@@ -179,15 +187,21 @@ static void test_spacing(int f32) {
     }
     qsort(nearest, N, sizeof(double), cmp_double);
     median = N % 2 ? nearest[N / 2] : 0.5 * (nearest[N / 2 - 1] + nearest[N / 2]);
-    CHECK_STATUS(nbhd_tree_spacing(tree, 0, &s), NBHD_STATUS_OK);
-    CHECK_STATUS(nbhd_tree_spacing(tree, 3, &s1), NBHD_STATUS_OK);
+    CHECK(so.threads == 0);
+    CHECK_STATUS(nbhd_tree_spacing(tree, NULL, &s), NBHD_STATUS_OK);
+    so.threads = 3;
+    CHECK_STATUS(nbhd_tree_spacing(tree, &so, &s1), NBHD_STATUS_OK);
     /* the grid coordinates are exact in float too, so every distance is the same */
     CHECK(s.points == N && s.mean == sum / N && s.median == median);
     CHECK(s1.mean == s.mean && s1.median == s.median && s1.points == s.points);
-    CHECK_STATUS(nbhd_tree_spacing(NULL, 0, &s), NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_tree_spacing(NULL, NULL, &s), NBHD_STATUS_NULL_POINTER);
     CHECK(s.points == 0 && s.mean == 0.0);
-    CHECK_STATUS(nbhd_tree_spacing(tree, 0, NULL), NBHD_STATUS_NULL_POINTER);
-    CHECK_STATUS(nbhd_tree_spacing(tree, 5000, &s), NBHD_STATUS_INVALID_OPTION);
+    CHECK_STATUS(nbhd_tree_spacing(tree, NULL, NULL), NBHD_STATUS_NULL_POINTER);
+    so.threads = 5000;
+    CHECK_STATUS(nbhd_tree_spacing(tree, &so, &s), NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("5000");
+    CHECK_STATUS(nbhd_tree_spacing(tree, (const nbhd_spacing_options *)((const char *)&so + 1), &s),
+                 NBHD_STATUS_MISALIGNED_POINTER);
     nbhd_tree_free(tree);
     {
         /* one point: no spacing */
@@ -200,7 +214,7 @@ static void test_spacing(int f32) {
         p.stride = 0;
         p.scalar_type = NBHD_SCALAR_TYPE_F64;
         CHECK_STATUS(nbhd_tree_build(&p, &o, &tree), NBHD_STATUS_OK);
-        CHECK_STATUS(nbhd_tree_spacing(tree, 0, &s), NBHD_STATUS_INVALID_OPTION);
+        CHECK_STATUS(nbhd_tree_spacing(tree, NULL, &s), NBHD_STATUS_INVALID_OPTION);
         CHECK_MESSAGE("at least two");
         nbhd_tree_free(tree);
     }
@@ -213,9 +227,14 @@ static void test_outliers(int f32) {
     static double dmean[N];
     uint32_t kept[N], want[N];
     uint8_t mask[N];
-    size_t count = 0, nwant = 0, i, j, c, kk;
+    size_t count = 0, nwant = 0, nwant2 = 0, i, j, c, kk;
     const size_t K = 4;
     double sum = 0.0, sq = 0.0, mean, sd;
+    nbhd_statistical_outlier_options so = nbhd_statistical_outlier_options_default();
+    nbhd_radius_outlier_options ro = nbhd_radius_outlier_options_default();
+    /* the defaults: PCL's tutorial values, and the CLI's two neighbours */
+    CHECK(so.k == 50 && so.std_ratio == 1.0 && so.threads == 0);
+    CHECK(ro.min_neighbors == 2 && ro.threads == 0);
     for (i = 0; i < N; i++) {
         double best[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
         double s = 0.0;
@@ -244,24 +263,53 @@ static void test_outliers(int f32) {
     for (i = 0; i < N; i++)
         if (dmean[i] <= mean + 0.5 * sd) want[nwant++] = (uint32_t)i;
     CHECK(nwant > 0 && nwant < N);
-    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, K, 0.5, 2, kept, N, &count, mask),
+    so.k = K;
+    so.std_ratio = 0.5;
+    so.threads = 2;
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, &so, kept, N, &count, mask),
                  NBHD_STATUS_OK);
     CHECK(count == nwant && memcmp(kept, want, nwant * sizeof(uint32_t)) == 0);
     for (i = 0, c = 0; i < N; i++) c += mask[i];
     CHECK(c == nwant && mask[want[0]] == 1);
-    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, K, 0.5, 0, NULL, 0, &count, NULL),
+    so.threads = 0;
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, &so, NULL, 0, &count, NULL),
                  NBHD_STATUS_BUFFER_TOO_SMALL);
     CHECK(count == nwant);
-    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, 0, 0.5, 0, kept, N, &count, NULL),
+    /* NULL options are the defaults (k = 50, alpha = 1) */
+    {
+        uint32_t kept2[N];
+        size_t count2 = 0;
+        nbhd_statistical_outlier_options d = nbhd_statistical_outlier_options_default();
+        CHECK_STATUS(nbhd_remove_statistical_outliers(tree, NULL, kept, N, &count, NULL),
+                     NBHD_STATUS_OK);
+        CHECK_STATUS(nbhd_remove_statistical_outliers(tree, &d, kept2, N, &count2, NULL),
+                     NBHD_STATUS_OK);
+        CHECK(count > 0 && count == count2 && memcmp(kept, kept2, count * sizeof(uint32_t)) == 0);
+    }
+    so.k = 0;
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, &so, kept, N, &count, NULL),
                  NBHD_STATUS_INVALID_K);
     CHECK(count == 0);
-    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, N, 0.5, 0, kept, N, &count, NULL),
+    so.k = N;
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, &so, kept, N, &count, NULL),
                  NBHD_STATUS_INVALID_OPTION);
-    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, K, NAN, 0, kept, N, &count, NULL),
+    so.k = K;
+    so.std_ratio = NAN;
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, &so, kept, N, &count, NULL),
                  NBHD_STATUS_INVALID_OPTION);
-    CHECK_STATUS(nbhd_remove_statistical_outliers(NULL, K, 0.5, 0, kept, N, &count, NULL),
+    so.std_ratio = 0.5;
+    so.threads = 5000;
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, &so, kept, N, &count, NULL),
+                 NBHD_STATUS_INVALID_OPTION);
+    CHECK_MESSAGE("5000");
+    so.threads = 0;
+    CHECK_STATUS(nbhd_remove_statistical_outliers(
+                     tree, (const nbhd_statistical_outlier_options *)((const char *)&so + 1), kept,
+                     N, &count, NULL),
+                 NBHD_STATUS_MISALIGNED_POINTER);
+    CHECK_STATUS(nbhd_remove_statistical_outliers(NULL, &so, kept, N, &count, NULL),
                  NBHD_STATUS_NULL_POINTER);
-    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, K, 0.5, 0, kept, N, NULL, NULL),
+    CHECK_STATUS(nbhd_remove_statistical_outliers(tree, &so, kept, N, NULL, NULL),
                  NBHD_STATUS_NULL_POINTER);
     /* radius: at least 3 other points within 0.25 (grid step: points on the sphere count) */
     nwant = 0;
@@ -277,27 +325,43 @@ static void test_outliers(int f32) {
             if (d2 <= 0.25 * 0.25) n++;
         }
         if (n >= 3) want[nwant++] = (uint32_t)i;
+        if (n >= 2) nwant2++;
     }
     CHECK(nwant > 0 && nwant < N);
-    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, 3, 3, kept, N, &count, mask),
+    ro.min_neighbors = 3;
+    ro.threads = 3;
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, &ro, kept, N, &count, mask),
                  NBHD_STATUS_OK);
     CHECK(count == nwant && memcmp(kept, want, nwant * sizeof(uint32_t)) == 0);
     for (i = 0, c = 0; i < N; i++) c += mask[i];
     CHECK(c == nwant);
-    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, 0, 0, kept, N, &count, NULL),
+    ro.min_neighbors = 0;
+    ro.threads = 0;
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, &ro, kept, N, &count, NULL),
                  NBHD_STATUS_OK);
     CHECK(count == N);
-    CHECK_STATUS(nbhd_remove_radius_outliers(tree, -1.0, 3, 0, kept, N, &count, NULL),
+    ro.min_neighbors = 3;
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, -1.0, &ro, kept, N, &count, NULL),
                  NBHD_STATUS_INVALID_RADIUS);
-    CHECK_STATUS(nbhd_remove_radius_outliers(tree, NAN, 3, 0, kept, N, &count, NULL),
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, NAN, &ro, kept, N, &count, NULL),
                  NBHD_STATUS_INVALID_RADIUS);
-    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, 3, 5000, kept, N, &count, NULL),
+    /* NULL options: the default of at least 2 other points within the radius */
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, NULL, kept, N, &count, NULL),
+                 NBHD_STATUS_OK);
+    CHECK(count == nwant2);
+    ro.threads = 5000;
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, &ro, kept, N, &count, NULL),
                  NBHD_STATUS_INVALID_OPTION);
-    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, 3, 0, kept, 1, &count, NULL),
+    ro.threads = 0;
+    CHECK_STATUS(nbhd_remove_radius_outliers(tree, 0.25, &ro, kept, 1, &count, NULL),
                  NBHD_STATUS_BUFFER_TOO_SMALL);
     CHECK(count == nwant);
-    CHECK_STATUS(nbhd_remove_radius_outliers(NULL, 0.25, 3, 0, kept, N, &count, NULL),
+    CHECK_STATUS(nbhd_remove_radius_outliers(NULL, 0.25, &ro, kept, N, &count, NULL),
                  NBHD_STATUS_NULL_POINTER);
+    CHECK_STATUS(nbhd_remove_radius_outliers(
+                     tree, 0.25, (const nbhd_radius_outlier_options *)((const char *)&ro + 1),
+                     kept, N, &count, NULL),
+                 NBHD_STATUS_MISALIGNED_POINTER);
     nbhd_tree_free(tree);
 }
 
@@ -312,6 +376,7 @@ static void test_voxel(int f32) {
     double lo[DIM] = {INFINITY, INFINITY, INFINITY};
     double leaf = 1.0, bad = 0.0;
     int vox[N];
+    nbhd_voxel_grid_options vo = nbhd_voxel_grid_options_default();
     p.data = f32 ? (const void *)ptsf : (const void *)pts;
     p.count = N;
     p.dim = DIM;
@@ -335,7 +400,9 @@ static void test_voxel(int f32) {
             wsumf[id * DIM + c] += ptsf[i * DIM + c];
         }
     }
-    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, 0, 2, cen, near, N, &count), NBHD_STATUS_OK);
+    CHECK(vo.min_points_per_voxel == 0 && vo.threads == 0);
+    vo.threads = 2;
+    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, &vo, cen, near, N, &count), NBHD_STATUS_OK);
     for (v = 0; v < 125; v++) {
         size_t best = N;
         double bd = INFINITY, want[DIM];
@@ -363,29 +430,39 @@ static void test_voxel(int f32) {
     {
         size_t n5 = 0;
         for (v = 0; v < 125; v++) n5 += wcount[v] >= 5;
-        CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, 5, 1, NULL, NULL, N, &count), NBHD_STATUS_OK);
+        vo.min_points_per_voxel = 5;
+        vo.threads = 1;
+        CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, &vo, NULL, NULL, N, &count), NBHD_STATUS_OK);
         CHECK(count == n5);
+        vo.threads = 5000;
+        CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, &vo, NULL, NULL, N, &count),
+                     NBHD_STATUS_INVALID_OPTION);
+        CHECK_MESSAGE("5000");
+        CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1,
+                                     (const nbhd_voxel_grid_options *)((const char *)&vo + 1),
+                                     NULL, NULL, N, &count),
+                     NBHD_STATUS_MISALIGNED_POINTER);
     }
     /* too small: the size needed in *count */
-    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, 0, 1, cen, near, 3, &count),
+    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 1, NULL, cen, near, 3, &count),
                  NBHD_STATUS_BUFFER_TOO_SMALL);
     CHECK(count == nv);
-    CHECK_STATUS(nbhd_voxel_grid(&p, &bad, 1, 0, 1, cen, near, N, &count),
+    CHECK_STATUS(nbhd_voxel_grid(&p, &bad, 1, NULL, cen, near, N, &count),
                  NBHD_STATUS_INVALID_OPTION);
     CHECK(count == 0);
     bad = NAN;
-    CHECK_STATUS(nbhd_voxel_grid(&p, &bad, 1, 0, 1, cen, near, N, &count),
+    CHECK_STATUS(nbhd_voxel_grid(&p, &bad, 1, NULL, cen, near, N, &count),
                  NBHD_STATUS_INVALID_OPTION);
     /* A leaf count other than 1 or the dimension is refused before `leaf` is read: here one
        value is readable, and AddressSanitizer (scripts/sanitize-test.sh) saw the library read
        two before refusing them. */
-    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 2, 0, 1, cen, near, N, &count),
+    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, 2, NULL, cen, near, N, &count),
                  NBHD_STATUS_INVALID_OPTION);
-    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, SIZE_MAX, 0, 1, cen, near, N, &count),
+    CHECK_STATUS(nbhd_voxel_grid(&p, &leaf, SIZE_MAX, NULL, cen, near, N, &count),
                  NBHD_STATUS_INVALID_OPTION);
-    CHECK_STATUS(nbhd_voxel_grid(&p, NULL, 1, 0, 1, cen, near, N, &count),
+    CHECK_STATUS(nbhd_voxel_grid(&p, NULL, 1, NULL, cen, near, N, &count),
                  NBHD_STATUS_NULL_POINTER);
-    CHECK_STATUS(nbhd_voxel_grid(NULL, &leaf, 1, 0, 1, cen, near, N, &count),
+    CHECK_STATUS(nbhd_voxel_grid(NULL, &leaf, 1, NULL, cen, near, N, &count),
                  NBHD_STATUS_NULL_POINTER);
 }
 

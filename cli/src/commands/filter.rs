@@ -46,10 +46,10 @@ pub struct SorArgs {
     /// Output file (.ply, .pcd, .las/.laz, .xyz)
     pub output: PathBuf,
     /// Nearest other points averaged (PCL's setMeanK)
-    #[arg(long, short, default_value_t = 50)]
+    #[arg(long, short, default_value_t = StatisticalOutlierOptions::default().k)]
     pub k: usize,
     /// Multiple of σ above the mean that is still kept (PCL's setStddevMulThresh)
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = StatisticalOutlierOptions::default().std_ratio, allow_hyphen_values = true)]
     pub std_ratio: f64,
     #[command(flatten)]
     pub precision: PrecisionArgs,
@@ -69,7 +69,7 @@ pub struct RorArgs {
     #[arg(long, short, value_parser = parse_length)]
     pub radius: Length,
     /// Other points needed within the radius (PCL's setMinNeighborsInRadius)
-    #[arg(long, short, default_value_t = 2)]
+    #[arg(long, short, default_value_t = RadiusOutlierOptions::within(0.0).min_neighbors)]
     pub min_neighbors: usize,
     #[command(flatten)]
     pub precision: PrecisionArgs,

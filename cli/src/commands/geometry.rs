@@ -88,49 +88,97 @@ pub fn run(a: Args, what: What, out: &Output) -> Result<()> {
     };
     let secs = t.elapsed().as_secs_f64();
     write::add_fields(&mut cloud, &index, &res.outputs, true)?;
-    let stored = write::cloud(&a.output, &cloud, &a.precision.write_options())?;
-    if let Some(png) = &a.png {
-        write::surface_variation_png(png, &cloud, [-1.0, -1.0, -1.0], [0.0, 1.0, 0.0])?;
-    }
     let curv: Vec<f64> = res
         .outputs
         .iter()
         .map(|o| o.max_principal_curvature)
         .collect();
     let mean_curv = curv.iter().sum::<f64>() / curv.len() as f64;
-    let irregular = res.outputs.iter().filter(|o| o.normal_flags != 0).count();
-    out.json(&json!({
+    let summary = Summary {
+        label,
+        skipped: cloud.len() - points.len(),
+        epsilon: res.epsilon,
+        spacing: res.spacing,
+        min_neighbors: Some(res.min_neighbors),
+        degenerate: res.outputs.iter().filter(|o| o.normal_flags != 0).count(),
+        secs,
+    };
+    let extra = json!({
+        "min_neighbors": res.min_neighbors,
+        "mean_abs_max_curvature": num(mean_curv),
+    });
+    finish(&a, &cloud, &summary, extra, out)
+}
+
+/// What a run of `nbhd normals` or `nbhd curvature` computed, for its report.
+struct Summary<'a> {
+    /// What was computed: "normals" or "curvatures".
+    label: &'a str,
+    /// Points left out as non-finite.
+    skipped: usize,
+    /// The radius used, in the points' units.
+    epsilon: f64,
+    /// The mean spacing h.
+    spacing: f64,
+    /// The smallest neighbourhood, where the run reports it (in the text; `extra` has it in
+    /// the JSON).
+    min_neighbors: Option<usize>,
+    /// Normals flagged as degenerate.
+    degenerate: usize,
+    /// Seconds the computation took.
+    secs: f64,
+}
+
+/// Writes `cloud` (and the picture asked for) and reports the run: the JSON fields both
+/// commands give plus the fields of `extra` (an object), and a line of text.
+fn finish(
+    a: &Args,
+    cloud: &PointCloud,
+    s: &Summary<'_>,
+    extra: serde_json::Value,
+    out: &Output,
+) -> Result<()> {
+    let input = &a.input.input;
+    let stored = write::cloud(&a.output, cloud, &a.precision.write_options())?;
+    if let Some(png) = &a.png {
+        write::surface_variation_png(png, cloud, [-1.0, -1.0, -1.0], [0.0, 1.0, 0.0])?;
+    }
+    let mut report = json!({
         "input": input.display().to_string(),
         "output": a.output.display().to_string(),
         "png": a.png.as_ref().map(|p| p.display().to_string()),
         "points": cloud.len(),
-        "skipped_non_finite": cloud.len() - points.len(),
+        "skipped_non_finite": s.skipped,
         "k": a.k,
-        "radius": num(res.epsilon),
+        "radius": num(s.epsilon),
         "radius_given": length_text(a.radius),
-        "spacing_h": num(res.spacing),
-        "min_neighbors": res.min_neighbors,
-        "degenerate_normals": irregular,
-        "mean_abs_max_curvature": num(mean_curv),
+        "spacing_h": num(s.spacing),
+        "degenerate_normals": s.degenerate,
         "fields": cloud.field_names(),
         "precision": stored,
-        "seconds": num(secs),
-    }));
+        "seconds": num(s.secs),
+    });
+    if let (Some(r), serde_json::Value::Object(e)) = (report.as_object_mut(), extra) {
+        r.extend(e);
+    }
+    out.json(&report);
     out.text(format!(
-        "{} -> {}: {} points ({} skipped as non-finite), {label} over the {} nearest within \
-         ε = {:.6} ({}; h = {:.6}), smallest neighbourhood {}, {} degenerate normals, {:.2} s\n\
+        "{} -> {}: {} points ({} skipped as non-finite), {} over the {} nearest within \
+         ε = {:.6} ({}; h = {:.6}){}, {} degenerate normals, {:.2} s\n\
          fields {} ({stored}){}",
         input.display(),
         a.output.display(),
         cloud.len(),
-        cloud.len() - points.len(),
+        s.skipped,
+        s.label,
         a.k,
-        res.epsilon,
+        s.epsilon,
         length_text(a.radius),
-        res.spacing,
-        res.min_neighbors,
-        irregular,
-        secs,
+        s.spacing,
+        s.min_neighbors
+            .map_or(String::new(), |m| format!(", smallest neighbourhood {m}")),
+        s.degenerate,
+        s.secs,
         cloud.field_names().join(" "),
         a.png
             .as_ref()
@@ -159,44 +207,14 @@ fn normals(
     };
     let secs = t.elapsed().as_secs_f64();
     write::add_normals(&mut cloud, index, &res.normals)?;
-    let stored = write::cloud(&a.output, &cloud, &a.precision.write_options())?;
-    if let Some(png) = &a.png {
-        write::surface_variation_png(png, &cloud, [-1.0, -1.0, -1.0], [0.0, 1.0, 0.0])?;
-    }
-    let irregular = res.normals.iter().filter(|e| e.flags != 0).count();
-    out.json(&json!({
-        "input": input.display().to_string(),
-        "output": a.output.display().to_string(),
-        "png": a.png.as_ref().map(|p| p.display().to_string()),
-        "points": cloud.len(),
-        "skipped_non_finite": cloud.len() - points.len(),
-        "k": a.k,
-        "radius": num(res.epsilon),
-        "radius_given": length_text(a.radius),
-        "spacing_h": num(res.spacing),
-        "degenerate_normals": irregular,
-        "fields": cloud.field_names(),
-        "precision": stored,
-        "seconds": num(secs),
-    }));
-    out.text(format!(
-        "{} -> {}: {} points ({} skipped as non-finite), normals over the {} nearest within \
-         ε = {:.6} ({}; h = {:.6}), {} degenerate normals, {:.2} s\n\
-         fields {} ({stored}){}",
-        input.display(),
-        a.output.display(),
-        cloud.len(),
-        cloud.len() - points.len(),
-        a.k,
-        res.epsilon,
-        length_text(a.radius),
-        res.spacing,
-        irregular,
+    let summary = Summary {
+        label: "normals",
+        skipped: cloud.len() - points.len(),
+        epsilon: res.epsilon,
+        spacing: res.spacing,
+        min_neighbors: None,
+        degenerate: res.normals.iter().filter(|e| e.flags != 0).count(),
         secs,
-        cloud.field_names().join(" "),
-        a.png
-            .as_ref()
-            .map_or(String::new(), |p| format!("\npicture {}", p.display())),
-    ));
-    Ok(())
+    };
+    finish(a, &cloud, &summary, json!({}), out)
 }

@@ -153,25 +153,16 @@ impl Rows {
             .par_chunks_mut(width)
             .zip(self.len.par_iter_mut())
             .enumerate()
-            .for_each_init(
-                Default::default,
-                |(sq_dist, keys): &mut (Vec<f64>, Vec<(f64, u32)>), (s, (index, len))| {
-                    if whole(s) {
-                        *len = candidates[s];
-                        return;
-                    }
-                    let index = &mut index[..candidates[s] as usize];
-                    let p = points[s];
-                    sq_dist.clear();
-                    sq_dist.extend(
-                        index
-                            .iter()
-                            .map(|&j| points[j as usize].distance_squared(p)),
-                    );
-                    sort_row(index, sq_dist, order, keys);
-                    *len = sq_dist.iter().take_while(|&&d| d <= e2).count() as u32;
-                },
-            );
+            .for_each_init(RowSort::default, |sort, (s, (index, len))| {
+                if whole(s) {
+                    *len = candidates[s];
+                    return;
+                }
+                let index = &mut index[..candidates[s] as usize];
+                let p = points[s];
+                sort.row(index, |j| points[j].distance_squared(p), order);
+                *len = sort.within(e2) as u32;
+            });
     }
 
     /// The first `k` neighbours of every point within ε as a table over the caller's indices
@@ -199,61 +190,146 @@ impl Rows {
     }
 }
 
-/// Sorts one row by `(sq_dist, caller's index)`. Rows are nearly sorted after a step that moved
-/// points by a fraction of a spacing, so an insertion sort is about one pass; after a step of a
-/// spacing or more (the first ones on noise of several spacings, with rows of 144) the rows are
-/// shuffled, and an insertion sort costs up to n²/4 moves. It is given [`SORT_MOVES`]·n moves,
-/// then the row is sorted by a comparison sort instead: the keys are distinct (the caller's
-/// indices break ties), so both give the same order. `scratch` holds the keys of that sort.
-fn sort_row(index: &mut [u32], sq_dist: &mut [f64], order: &[u32], scratch: &mut Vec<(f64, u32)>) {
-    let before = |a: (f64, u32), b: (f64, u32)| {
-        a.0 < b.0 || (a.0 == b.0 && order[a.1 as usize] < order[b.1 as usize])
-    };
-    let n = index.len().min(sq_dist.len());
-    let mut budget = SORT_MOVES * n;
-    for i in 1..n {
-        let item = (sq_dist[i], index[i]);
+/// The scratch of the row sorts of one worker: a row's keys, sorted by [`RowSort::row`].
+#[derive(Default)]
+struct RowSort {
+    keys: Vec<RowKey>,
+    spare: Vec<RowKey>,
+    buckets: Vec<u32>,
+    counts: Vec<u32>,
+}
+
+impl RowSort {
+    /// Sorts one row of stored positions by `(sq_dist, caller's index)`, the one order of
+    /// `src/query/order.rs`, with `sq_dist(j)` the squared distance of stored point `j`; keeps
+    /// the row's [`RowKey`]s, sorted. The keys are compared as integers: one comparison per
+    /// pair instead of a distance comparison and, on ties, two lookups of caller's indices.
+    ///
+    /// Rows are nearly sorted after a step that moved points by a fraction of a spacing, so an
+    /// insertion sort is about one pass; after a step of a spacing or more (the first ones on
+    /// noise of several spacings, with rows of 144) the rows are shuffled, and an insertion
+    /// sort costs up to n²/4 moves. Such a row (more than one descent in [`SHUFFLED`] keys), or
+    /// one the insertion sort cannot order in [`SORT_MOVES`]·n moves, is distributed by
+    /// distance instead ([`RowSort::distribute`]). The keys are distinct, so both give the same
+    /// order.
+    fn row(&mut self, index: &mut [u32], sq_dist: impl Fn(usize) -> f64, order: &[u32]) {
+        self.keys.clear();
+        self.keys.extend(
+            index
+                .iter()
+                .map(|&j| row_key(sq_dist(j as usize), order[j as usize], j)),
+        );
+        let n = self.keys.len();
+        let descents = self.keys.windows(2).filter(|w| w[1] < w[0]).count();
+        if SHUFFLED * descents > n || !insertion_sort(&mut self.keys, SORT_MOVES * n) {
+            self.distribute();
+        }
+        for (j, &k) in index.iter_mut().zip(&self.keys) {
+            *j = k as u32;
+        }
+    }
+
+    /// How many keys of the sorted row lie within the squared distance `sq_radius`.
+    fn within(&self, sq_radius: f64) -> usize {
+        self.keys.partition_point(|&k| sq_dist_of(k) <= sq_radius)
+    }
+
+    /// Sorts the keys by distributing them into as many buckets as there are keys, of equal
+    /// widths in squared distance, and sorting the buckets' concatenation by insertion, which
+    /// then moves keys only within a bucket: about one key per bucket on a surface (the
+    /// squared distance of the j-th neighbour grows about like j) and in a ball of noise (like
+    /// j^(2/3)), so a pass over the row, where a comparison sort takes n log n comparisons.
+    /// The bucket `min(⌊d · n / (SPAN · mean)⌋, n − 1)` never decreases as `d` grows (each
+    /// rounding is monotone), so the buckets are in order; squared distances beyond [`SPAN`]
+    /// times the mean (candidates that moved away) share the last bucket, and rows of copies
+    /// of a point or of an infinite mean the first: those are sorted by insertion alone.
+    fn distribute(&mut self) {
+        let n = self.keys.len();
+        let mean = self.keys.iter().map(|&k| sq_dist_of(k)).sum::<f64>() / n as f64;
+        let scale = if mean > 0.0 {
+            n as f64 / (SPAN * mean)
+        } else {
+            0.0
+        };
+        let last = n.saturating_sub(1) as u32;
+        self.buckets.clear();
+        self.buckets.extend(
+            self.keys
+                .iter()
+                .map(|&k| ((sq_dist_of(k) * scale) as u32).min(last)),
+        );
+        self.counts.clear();
+        self.counts.resize(n + 1, 0);
+        for &b in &self.buckets {
+            self.counts[b as usize + 1] += 1;
+        }
+        for b in 1..=n {
+            self.counts[b] += self.counts[b - 1];
+        }
+        self.spare.resize(n, 0);
+        for (&k, &b) in self.keys.iter().zip(&self.buckets) {
+            let at = &mut self.counts[b as usize];
+            self.spare[*at as usize] = k;
+            *at += 1;
+        }
+        std::mem::swap(&mut self.keys, &mut self.spare);
+        insertion_sort(&mut self.keys, usize::MAX);
+    }
+}
+
+/// A row entry as one integer that orders as `(sq_dist, caller's index)`: the key of
+/// `src/query/order.rs` above the stored position (which the caller's index determines, so it
+/// never decides the order).
+type RowKey = u128;
+
+/// The [`RowKey`] of stored point `j` (the caller's `caller`) at squared distance `sq_dist`.
+#[inline(always)]
+fn row_key(sq_dist: f64, caller: u32, j: u32) -> RowKey {
+    (crate::query::order::key64(sq_dist, caller) << 32) | RowKey::from(j)
+}
+
+/// The squared distance of a [`RowKey`].
+#[inline(always)]
+fn sq_dist_of(key: RowKey) -> f64 {
+    crate::query::order::unkey64::<f64>(key >> 32).0
+}
+
+/// Sorts `keys` by insertion while that takes at most `budget` moves; false (the keys left
+/// partly sorted, each key still once) once it would take more.
+fn insertion_sort(keys: &mut [RowKey], budget: usize) -> bool {
+    let mut budget = budget;
+    for i in 1..keys.len() {
+        let item = keys[i];
         // in place already (the common case): nothing to move
-        if !before(item, (sq_dist[i - 1], index[i - 1])) {
+        if item > keys[i - 1] {
             continue;
         }
         let mut j = i;
-        while j > 0 && before(item, (sq_dist[j - 1], index[j - 1])) {
-            sq_dist[j] = sq_dist[j - 1];
-            index[j] = index[j - 1];
+        while j > 0 && item < keys[j - 1] {
+            keys[j] = keys[j - 1];
             j -= 1;
         }
-        sq_dist[j] = item.0;
-        index[j] = item.1;
+        keys[j] = item;
         budget = budget.saturating_sub(i - j);
         if budget == 0 {
-            return comparison_sort(&mut index[..n], &mut sq_dist[..n], order, scratch);
+            return false;
         }
     }
+    true
 }
 
-/// Moves per entry an insertion sort of a row may take before [`sort_row`] turns to a
-/// comparison sort.
+/// Moves per entry an insertion sort of a row may take before [`RowSort::row`] turns to
+/// [`RowSort::distribute`].
 const SORT_MOVES: usize = 4;
 
-/// [`sort_row`] by a comparison sort of `(sq_dist, caller's index)` pairs.
-fn comparison_sort(
-    index: &mut [u32],
-    sq_dist: &mut [f64],
-    order: &[u32],
-    keys: &mut Vec<(f64, u32)>,
-) {
-    keys.clear();
-    keys.extend(sq_dist.iter().zip(index.iter()).map(|(&d, &j)| (d, j)));
-    keys.sort_unstable_by(|a, b| {
-        a.0.partial_cmp(&b.0)
-            .unwrap_or(std::cmp::Ordering::Equal)
-            .then(order[a.1 as usize].cmp(&order[b.1 as usize]))
-    });
-    for ((d, j), &(kd, kj)) in sq_dist.iter_mut().zip(index.iter_mut()).zip(keys.iter()) {
-        (*d, *j) = (kd, kj);
-    }
-}
+/// The squared distances [`RowSort::distribute`] spreads over its buckets, in units of their
+/// mean: 2 on a surface (the squared distance of the j-th neighbour grows about like j), 5/3
+/// in a ball of noise; a candidate that moved away goes to the last bucket.
+const SPAN: f64 = 2.0;
+
+/// A row with more than one descent (a key below its predecessor) per this many keys is
+/// distributed at once, without trying the insertion sort first.
+const SHUFFLED: usize = 3;
 
 #[cfg(test)]
 mod tests {
@@ -287,27 +363,42 @@ mod tests {
     }
 
     /// Nearly sorted rows (insertion sort within its budget) and shuffled ones (the
-    /// comparison sort after it), with ties: both the order of `(sq_dist, caller's index)`.
+    /// distribution by distance), with ties: both the order of `(sq_dist, caller's index)`.
     #[test]
-    fn sort_row_orders_any_row_with_ties_by_caller_index() {
+    fn row_sort_orders_any_row_with_ties_by_caller_index() {
         let n = 144u32;
         // caller's index of stored point j: a permutation, so ties are broken by it
         let order: Vec<u32> = (0..n).map(|j| (j * 89) % n).collect();
-        let mut keys = Vec::new();
-        for shuffle in [1u32, 7, 61] {
-            // shuffle 1 leaves the row nearly sorted: each entry a few places off
-            let index: Vec<u32> = (0..n).map(|j| (j * shuffle + j % 3) % n).collect();
-            let dist = |j: u32| f64::from(j / 4 + (j % 5 == 0) as u32);
-            let mut want: Vec<(f64, u32)> = index.iter().map(|&j| (dist(j), j)).collect();
-            want.sort_by(|a, b| {
-                a.0.total_cmp(&b.0)
-                    .then(order[a.1 as usize].cmp(&order[b.1 as usize]))
-            });
-            let mut idx = index.clone();
-            let mut sq: Vec<f64> = index.iter().map(|&j| dist(j)).collect();
-            sort_row(&mut idx, &mut sq, &order, &mut keys);
-            let got: Vec<(f64, u32)> = sq.into_iter().zip(idx).collect();
-            assert_eq!(got, want, "shuffle {shuffle}");
+        let mut sort = RowSort::default();
+        // squared distances in steps with ties; all equal; one candidate far away; one at
+        // an infinite distance (coordinates near the end of the range)
+        let dists: [&dyn Fn(u32) -> f64; 4] = [
+            &|j| f64::from(j / 4 + u32::from(j % 5 == 0)),
+            &|_| 0.0,
+            &|j| if j == 77 { 1e12 } else { f64::from(j % 50) },
+            &|j| if j == 3 { f64::INFINITY } else { f64::from(j) },
+        ];
+        for dist in dists {
+            for shuffle in [1u32, 7, 61] {
+                // shuffle 1 leaves the row nearly sorted: each entry a few places off
+                let index: Vec<u32> = (0..n).map(|j| (j * shuffle + j % 3) % n).collect();
+                let mut want: Vec<(f64, u32)> = index.iter().map(|&j| (dist(j), j)).collect();
+                want.sort_by(|a, b| {
+                    a.0.total_cmp(&b.0)
+                        .then(order[a.1 as usize].cmp(&order[b.1 as usize]))
+                });
+                let mut idx = index.clone();
+                sort.row(&mut idx, |j| dist(j as u32), &order);
+                let got: Vec<(f64, u32)> = sort
+                    .keys
+                    .iter()
+                    .map(|&k| (sq_dist_of(k), k as u32))
+                    .collect();
+                assert_eq!(got, want, "shuffle {shuffle}");
+                assert!(idx.iter().zip(&want).all(|(&j, w)| j == w.1));
+                let within = want.iter().filter(|w| w.0 <= 20.0).count();
+                assert_eq!(sort.within(20.0), within);
+            }
         }
     }
 }

@@ -1,5 +1,6 @@
 //! Rows of a group from one gathered block of candidates: the grouped search's fast path for
-//! k-nearest rows up to `rows::SORTED_MAX_K` and for radius rows of a tree's own points.
+//! k-nearest rows up to `rows::SORTED_MAX_K` (`f32` rows up to `rows::KEY_HEAP_MAX_K`) and for
+//! radius rows of a tree's own points.
 //!
 //! The parent's search offers every candidate to a member's row as it is found, nearest cells
 //! first, and a row that is not yet full takes whatever comes: the first leaves fill it with

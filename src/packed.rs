@@ -1,5 +1,7 @@
-//! A compact, validated copy of a caller's points: `dim` coordinates per point, packed, with
-//! the caller's index of each. Trees and baselines keep one (the tree in its own order).
+//! The caller's points validated: what to do with non-finite ones ([`NonFinitePolicy`]), and a
+//! compact, validated copy ([`PackedPoints`]): `dim` coordinates per point, packed, with the
+//! caller's index of each. Trees and baselines keep one (the tree in its own order). A point
+//! *cloud* with its attributes, as files hold it, is the one concept of `io::cloud`.
 
 use crate::error::{NbhdError, Result};
 use crate::named_option;
@@ -36,7 +38,7 @@ named_option!(NonFinitePolicy);
 
 /// Packed coordinates plus the caller's index of every point.
 #[derive(Clone, Debug)]
-pub struct Cloud<T> {
+pub struct PackedPoints<T> {
     /// `dim` coordinates per point, point after point.
     pub coords: Vec<T>,
     /// Caller's index of each point.
@@ -47,7 +49,7 @@ pub struct Cloud<T> {
     pub source_len: usize,
 }
 
-impl<T: Scalar> Cloud<T> {
+impl<T: Scalar> PackedPoints<T> {
     /// Copies the points of `view`, converting to `T` and applying `policy` to non-finite
     /// points. A value that is finite in the source but overflows `T` (an `f64` beyond the
     /// `f32` range) counts as non-finite. The copy may hold no point (none given, or every one
