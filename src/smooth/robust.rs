@@ -82,13 +82,16 @@
 //! covariance plane) and, while the rows are wide, the median distance ratio of the noise scale
 //! (`distance_ratio` in `robust/scales.rs`, over each point's `d₄ₘ/dₘ`). The spacing h (a mean over the
 //! input's nearest distances, summed in caller order) is computed once. Everything else is per
-//! point. One iteration reads the rows of a point (the `k_plane` nearest of the first search,
-//! `2·k_plane` while wide, all within ε = 12h) and, through the candidate planes and the
-//! neighbours' normals, their rows: a point's new position depends on points within 2ε of it
-//! in the current proxy, and the candidates themselves come from the first search on the input;
-//! a halo of 2ε per iteration (plus the distance points move, at most ε per iteration) bounds
-//! what a tile needs. The points are stored in the k-d tree's order while the
-//! iterations run, so that a point's neighbours lie close in memory.
+//! point. One iteration reads the rows of a point (its candidates are the `k_plane` nearest of the
+//! first search on the input, `WIDE`·`k_plane` = 3·`k_plane` while wide, not cut at ε; of them
+//! it uses those within ε = 12h of it in the current proxy) and reaches three hops along such
+//! rows: the step reads the neighbours' normals, a neighbour's normal is chosen among the
+//! covariance planes of its own wide neighbours, and each plane is fitted to that neighbour's
+//! row. A point's new position thus depends on points within 3ε of it in the current proxy,
+//! and a tile needs, besides the first search's candidates of its points (the exact k nearest,
+//! however far), a halo of 3ε per iteration plus the distance points move in it. The points
+//! are stored in the k-d tree's order while the iterations run, so that a point's neighbours
+//! lie close in memory.
 //!
 //! Speed (docs/smoothing-results.md#speed): one search instead of one per iteration, a quarter of
 //! the candidate planes, the scoring in eight `f32` lanes, and no arc cosine or square root in
