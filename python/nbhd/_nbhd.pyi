@@ -21,6 +21,11 @@ NonFinite = Literal["reject", "skip"]
 Units = Literal["relative", "absolute"]
 OrientationName = Literal["unoriented", "toward-point", "away-from-point", "propagate"]
 
+class Spacing(TypedDict):
+    mean: float
+    median: float
+    points: int
+
 __all__ = [
     "KdTree",
     "Table",
@@ -129,6 +134,11 @@ class KdTree:
         strict: bool = False,
         threads: int = 0,
     ) -> Table: ...
+    def in_box(
+        self, min: npt.ArrayLike, max: npt.ArrayLike, *, threads: int = 0
+    ) -> Union[U32, tuple[npt.NDArray[np.uint64], U32]]:
+        """1-D bounds: the indices inside the closed box; 2-D: (offsets, indices)."""
+    def spacing(self, *, threads: int = 0) -> Spacing: ...
     def to_bytes(self) -> bytes:
         """The saved-tree format (docs/tree-file-format.md); what pickle stores."""
     @classmethod
@@ -208,6 +218,11 @@ class DynamicKdTree:
         strict: bool = False,
         threads: int = 0,
     ) -> Table: ...
+    def in_box(
+        self, min: npt.ArrayLike, max: npt.ArrayLike, *, threads: int = 0
+    ) -> Union[U32, tuple[npt.NDArray[np.uint64], U32]]:
+        """1-D bounds: the indices inside the closed box; 2-D: (offsets, indices)."""
+    def spacing(self, *, threads: int = 0) -> Spacing: ...
     def to_bytes(self) -> bytes: ...
     @classmethod
     def from_bytes(cls, data: bytes) -> DynamicKdTree: ...

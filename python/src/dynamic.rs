@@ -249,6 +249,30 @@ impl PyDynamicKdTree {
         index::neighborhoods(&self.index, py, spec, options, exclude_self, threads)
     }
 
+    /// The live points inside closed axis-aligned boxes (`min[j] <= x[j] <= max[j]`; bounds may
+    /// be infinite; a NaN bound or `min > max` raises NbhdValueError), removed points are never inside. One box (1-D
+    /// `min`, `max`): the caller's indices, ascending. A batch ((m, d) arrays): `(offsets,
+    /// indices)`, box i's points being `indices[offsets[i]:offsets[i + 1]]`; identical for any
+    /// `threads`.
+    #[pyo3(signature = (min, max, *, threads = 0))]
+    fn in_box<'py>(
+        &self,
+        py: Python<'py>,
+        min: &Bound<'py, PyAny>,
+        max: &Bound<'py, PyAny>,
+        threads: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        index::in_box(&self.index, py, min, max, threads)
+    }
+
+    /// The spacing of the live points: a dict of `mean` (h, the mean distance of a point to its
+    /// nearest other point, the unit of every relative length), `median` and `points` (how many
+    /// it was taken over); the same bits for any `threads`. Fewer than two points raise.
+    #[pyo3(signature = (*, threads = 0))]
+    fn spacing<'py>(&self, py: Python<'py>, threads: usize) -> PyResult<Bound<'py, PyDict>> {
+        index::spacing(&self.index, py, threads)
+    }
+
     /// The tree in the saved dynamic-tree format (docs/tree-file-format.md) as `bytes`; what
     /// `pickle` stores and `DynamicKdTree.from_bytes` reads back.
     fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {

@@ -7,7 +7,7 @@ use nbhd::{with_index, with_table, NeighborIndex, NeighborhoodSpec, Query, Scala
 use nbhd::{Metric, Neighbor, QueryOptions, Scalar, TableOptions};
 use numpy::{Element, PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyTuple};
+use pyo3::types::{PyBytes, PyDict, PyTuple};
 
 use crate::arrays::{as_rows, float_array, vec1, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
@@ -147,4 +147,65 @@ pub(crate) fn to_bytes<'py>(index: &AnyIndex, py: Python<'py>) -> Bound<'py, PyB
 /// The index saved in `data` (a growing one with `growing`), of the dtype it was saved with.
 pub(crate) fn from_bytes(py: Python<'_>, data: &[u8], growing: bool) -> PyResult<AnyIndex> {
     py.detach(|| AnyIndex::from_bytes(data, growing)).or_raise()
+}
+
+/// The stored points inside closed axis-aligned boxes (`min[j] ≤ x[j] ≤ max[j]`,
+/// `nbhd::NeighborIndex::in_boxes`), in parallel on `threads`. One box (1-D `min`, `max`): the
+/// caller's indices, ascending. A batch ((m, d) `min`, `max`): `(offsets, indices)`, row `i`
+/// being `indices[offsets[i]:offsets[i + 1]]`.
+pub(crate) fn in_box<'py>(
+    index: &AnyIndex,
+    py: Python<'py>,
+    min: &Bound<'py, PyAny>,
+    max: &Bound<'py, PyAny>,
+    threads: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (lo, _) = float_array(min, Some(dtype(index)))?;
+    let (hi, _) = float_array(max, Some(dtype(index)))?;
+    let (lo, single) = as_rows(&lo, "min")?;
+    let (hi, _) = as_rows(&hi, "max")?;
+    let (lo_shape, hi_shape): (Vec<usize>, Vec<usize>) = (
+        lo.getattr("shape")?.extract()?,
+        hi.getattr("shape")?.extract()?,
+    );
+    if lo_shape != hi_shape {
+        return Err(value_err(format!(
+            "min and max must have the same shape, not {lo_shape:?} and {hi_shape:?}"
+        )));
+    }
+    let np = py.import("numpy")?;
+    let boxes = np.call_method1("concatenate", ((lo, hi), 1))?;
+    let rows = with_index!(index, _t, T => {
+        let pts = Points::<T>::new(&boxes)?;
+        let view = pts.view().or_raise()?;
+        py.detach(|| index.in_boxes(&view, threads)).or_raise()?
+    });
+    if single {
+        return Ok(vec1(py, rows.row(0).to_vec()).into_any());
+    }
+    let offsets: Vec<u64> = rows.offsets().iter().map(|&o| o as u64).collect();
+    let tuple = PyTuple::new(
+        py,
+        [
+            vec1(py, offsets).into_any(),
+            vec1(py, rows.indices().to_vec()).into_any(),
+        ],
+    )?;
+    Ok(tuple.into_any())
+}
+
+/// The mean spacing h of the stored points and its robust twin (`nbhd::NeighborIndex::spacing`):
+/// a dict of `mean` (h: the mean distance to the nearest other point, summed in index order),
+/// `median` and `points` (how many points it was taken over).
+pub(crate) fn spacing<'py>(
+    index: &AnyIndex,
+    py: Python<'py>,
+    threads: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = py.detach(|| index.spacing(threads)).or_raise()?;
+    let d = PyDict::new(py);
+    d.set_item("mean", s.mean)?;
+    d.set_item("median", s.median)?;
+    d.set_item("points", s.points)?;
+    Ok(d)
 }

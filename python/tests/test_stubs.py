@@ -88,6 +88,7 @@ def test_result_dicts_have_the_stubs_keys(tmp_path: pathlib.Path) -> None:
     nbhd.write(path, pts)
     cloud = nbhd.read(path)
     assert set(cloud) == fields["CloudFile"]
+    assert set(nbhd.KdTree(pts).spacing()) == fields["Spacing"]
     positions: npt.NDArray[np.float64] = cloud["positions"]
     assert positions.shape == pts.shape
     normals, variation, flags = nbhd.normals(pts, k=12)
