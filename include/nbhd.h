@@ -1736,6 +1736,20 @@ nbhd_status nbhd_tree_in_box(const nbhd_tree *tree,
                              size_t *count);
 
 /**
+ * All live points of the growing tree inside the closed box `min[j] <= x[j] <= max[j]`; as
+ * nbhd_tree_in_box (removed points are never inside).
+ *
+ * # Safety
+ * As nbhd_tree_in_box, with `tree` a live dynamic tree not being changed by another thread.
+ */
+nbhd_status nbhd_dynamic_in_box(const nbhd_dynamic_tree *tree,
+                                const void *min,
+                                const void *max,
+                                uint32_t *indices,
+                                size_t capacity,
+                                size_t *count);
+
+/**
  * The default box options: the shared thread pool.
  */
 nbhd_box_options nbhd_box_options_default(void);
@@ -1774,6 +1788,21 @@ nbhd_status nbhd_tree_in_boxes(const nbhd_tree *tree,
                                size_t *total);
 
 /**
+ * The live points of the growing tree inside each box of a batch; as nbhd_tree_in_boxes.
+ *
+ * # Safety
+ * As nbhd_tree_in_boxes, with `tree` a live dynamic tree not being changed by another thread.
+ */
+nbhd_status nbhd_dynamic_in_boxes(const nbhd_dynamic_tree *tree,
+                                  const void *boxes,
+                                  size_t n_boxes,
+                                  const nbhd_box_options *options,
+                                  size_t *offsets,
+                                  uint32_t *indices,
+                                  size_t capacity,
+                                  size_t *total);
+
+/**
  * The default spacing options: the shared thread pool.
  */
 nbhd_spacing_options nbhd_spacing_options_default(void);
@@ -1792,6 +1821,16 @@ nbhd_spacing_options nbhd_spacing_options_default(void);
 nbhd_status nbhd_tree_spacing(const nbhd_tree *tree,
                               const nbhd_spacing_options *options,
                               nbhd_spacing *out);
+
+/**
+ * The spacing of the growing tree's live points; as nbhd_tree_spacing.
+ *
+ * # Safety
+ * As nbhd_tree_spacing, with `tree` a live dynamic tree not being changed by another thread.
+ */
+nbhd_status nbhd_dynamic_spacing(const nbhd_dynamic_tree *tree,
+                                 const nbhd_spacing_options *options,
+                                 nbhd_spacing *out);
 
 /**
  * The default statistical outlier options: PCL's tutorial values k = 50, std_ratio = 1,

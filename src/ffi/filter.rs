@@ -2,9 +2,10 @@
 //! of `src/filter/`, over a built tree.
 
 use super::args::{check_optional, check_ptr, deref, init_out};
+use super::dynamic::nbhd_dynamic_tree;
 use super::fields::{c_field, CStruct};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::tree::nbhd_tree;
+use super::tree::{nbhd_tree, IndexHandle};
 use super::types::{nbhd_points, PointsArg};
 use crate::error::NbhdError;
 use crate::filter::{
@@ -69,12 +70,40 @@ pub unsafe extern "C" fn nbhd_tree_spacing(
     options: *const nbhd_spacing_options,
     out: *mut nbhd_spacing,
 ) -> nbhd_status {
-    guard("nbhd_tree_spacing", || {
+    // SAFETY: the caller's contract is the one `spacing_of` requires.
+    unsafe { spacing_of("nbhd_tree_spacing", tree, options, out) }
+}
+
+/// The spacing of the growing tree's live points; as nbhd_tree_spacing.
+///
+/// # Safety
+/// As nbhd_tree_spacing, with `tree` a live dynamic tree not being changed by another thread.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_spacing(
+    tree: *const nbhd_dynamic_tree,
+    options: *const nbhd_spacing_options,
+    out: *mut nbhd_spacing,
+) -> nbhd_status {
+    // SAFETY: the caller's contract is the one `spacing_of` requires.
+    unsafe { spacing_of("nbhd_dynamic_spacing", tree, options, out) }
+}
+
+/// The body of nbhd_tree_spacing and nbhd_dynamic_spacing, for either handle.
+///
+/// # Safety
+/// As nbhd_tree_spacing, `tree` NULL or a live handle of kind `H`.
+unsafe fn spacing_of<H: IndexHandle>(
+    name: &str,
+    tree: *const H,
+    options: *const nbhd_spacing_options,
+    out: *mut nbhd_spacing,
+) -> nbhd_status {
+    guard(name, || {
         // SAFETY: `out` is NULL or writable (caller).
         let out = unsafe { init_out(out, "out", nbhd_spacing::default()) }?;
         // SAFETY: `tree` is NULL or a live handle; `options` NULL or readable (caller).
         let (tree, threads) = unsafe { (deref(tree, "tree")?, read_spacing_threads(options)?) };
-        let s = tree.inner.spacing(threads)?;
+        let s = tree.index().spacing(threads)?;
         // SAFETY: `out` is non-NULL, aligned and writable (checked by init_out).
         unsafe {
             out.write(nbhd_spacing {

@@ -5,9 +5,10 @@
 use std::ffi::c_void;
 
 use super::args::{check_aligned, check_optional, check_ptr, deref, init_out};
+use super::dynamic::nbhd_dynamic_tree;
 use super::fields::{c_field, CStruct};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
-use super::tree::nbhd_tree;
+use super::tree::{nbhd_tree, IndexHandle};
 use crate::error::NbhdError;
 use crate::index::NeighborIndex;
 use crate::scalar::Scalar;
@@ -90,14 +91,59 @@ pub unsafe extern "C" fn nbhd_tree_in_box(
     capacity: usize,
     count: *mut usize,
 ) -> nbhd_status {
-    guard("nbhd_tree_in_box", || {
+    // SAFETY: the caller's contract is the one `in_box_of` requires.
+    unsafe { in_box_of("nbhd_tree_in_box", tree, min, max, indices, capacity, count) }
+}
+
+/// All live points of the growing tree inside the closed box `min[j] <= x[j] <= max[j]`; as
+/// nbhd_tree_in_box (removed points are never inside).
+///
+/// # Safety
+/// As nbhd_tree_in_box, with `tree` a live dynamic tree not being changed by another thread.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_in_box(
+    tree: *const nbhd_dynamic_tree,
+    min: *const c_void,
+    max: *const c_void,
+    indices: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    // SAFETY: the caller's contract is the one `in_box_of` requires.
+    unsafe {
+        in_box_of(
+            "nbhd_dynamic_in_box",
+            tree,
+            min,
+            max,
+            indices,
+            capacity,
+            count,
+        )
+    }
+}
+
+/// The body of nbhd_tree_in_box and nbhd_dynamic_in_box, for either handle.
+///
+/// # Safety
+/// As nbhd_tree_in_box, `tree` NULL or a live handle of kind `H`.
+unsafe fn in_box_of<H: IndexHandle>(
+    name: &str,
+    tree: *const H,
+    min: *const c_void,
+    max: *const c_void,
+    indices: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+) -> nbhd_status {
+    guard(name, || {
         // SAFETY: `count` is NULL or writable (caller).
         let count = unsafe { init_out(count, "count", 0) }?;
         // SAFETY: `tree` is NULL or a live handle (caller).
         let tree = unsafe { deref(tree, "tree") }?;
         check_optional(indices.cast_const(), "indices")?;
         // SAFETY: the pointers are as the caller describes (contract above).
-        with_index!(&tree.inner, t, _T => unsafe { one_box(t, min, max, indices, capacity, count) })
+        with_index!(tree.index(), t, _T => unsafe { one_box(t, min, max, indices, capacity, count) })
     })
 }
 
@@ -199,21 +245,64 @@ pub unsafe extern "C" fn nbhd_tree_in_boxes(
     capacity: usize,
     total: *mut usize,
 ) -> nbhd_status {
-    guard("nbhd_tree_in_boxes", || {
+    let out = BatchOut {
+        offsets,
+        indices,
+        capacity,
+        total,
+    };
+    // SAFETY: the caller's contract is the one `in_boxes_of` requires.
+    unsafe { in_boxes_of("nbhd_tree_in_boxes", tree, boxes, n_boxes, options, out) }
+}
+
+/// The live points of the growing tree inside each box of a batch; as nbhd_tree_in_boxes.
+///
+/// # Safety
+/// As nbhd_tree_in_boxes, with `tree` a live dynamic tree not being changed by another thread.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn nbhd_dynamic_in_boxes(
+    tree: *const nbhd_dynamic_tree,
+    boxes: *const c_void,
+    n_boxes: usize,
+    options: *const nbhd_box_options,
+    offsets: *mut usize,
+    indices: *mut u32,
+    capacity: usize,
+    total: *mut usize,
+) -> nbhd_status {
+    let out = BatchOut {
+        offsets,
+        indices,
+        capacity,
+        total,
+    };
+    // SAFETY: the caller's contract is the one `in_boxes_of` requires.
+    unsafe { in_boxes_of("nbhd_dynamic_in_boxes", tree, boxes, n_boxes, options, out) }
+}
+
+/// The body of nbhd_tree_in_boxes and nbhd_dynamic_in_boxes, for either handle.
+///
+/// # Safety
+/// As nbhd_tree_in_boxes, `tree` NULL or a live handle of kind `H`.
+unsafe fn in_boxes_of<H: IndexHandle>(
+    name: &str,
+    tree: *const H,
+    boxes: *const c_void,
+    n_boxes: usize,
+    options: *const nbhd_box_options,
+    out: BatchOut,
+) -> nbhd_status {
+    guard(name, || {
         // SAFETY: `total` is NULL or writable (caller).
-        let total = unsafe { init_out(total, "total", 0) }?;
+        let total = unsafe { init_out(out.total, "total", 0) }?;
         // SAFETY: `tree` is NULL or a live handle; `options` NULL or readable (caller).
         let (tree, threads) = unsafe { (deref(tree, "tree")?, read_box_threads(options)?) };
-        check_ptr(offsets.cast_const(), "offsets")?;
-        check_optional(indices.cast_const(), "indices")?;
-        let out = BatchOut {
-            offsets,
-            indices,
-            capacity,
-            total,
-        };
+        check_ptr(out.offsets.cast_const(), "offsets")?;
+        check_optional(out.indices.cast_const(), "indices")?;
+        let out = BatchOut { total, ..out };
         // SAFETY: the pointers are as the caller describes (contract above).
-        with_index!(&tree.inner, t, _T => unsafe { many_boxes(t, boxes, n_boxes, threads, out) })
+        with_index!(tree.index(), t, _T => unsafe { many_boxes(t, boxes, n_boxes, threads, out) })
     })
 }
 

@@ -212,6 +212,40 @@ static void compare(const nbhd_dynamic_tree *dyn, int f32) {
         nbhd_neighborhoods_free(a);
         nbhd_neighborhoods_free(b);
     }
+    { /* boxes (one and a batch) and the spacing: the live points, as the static tree's */
+        double bd[3 * 2 * DIM];
+        float bf[3 * 2 * DIM];
+        const void *boxes = f32 ? (const void *)bf : (const void *)bd;
+        size_t oa[4], ob[4], ta = 0, tb = 0, b, j;
+        nbhd_box_options two = nbhd_box_options_default();
+        nbhd_spacing_options one = nbhd_spacing_options_default();
+        nbhd_spacing sa, sb;
+        nbhd_status xa, xb;
+        for (b = 0; b < 3; b++)
+            for (j = 0; j < DIM; j++) {
+                double lo = 0.125 * (double)below(8);
+                bd[b * 2 * DIM + j] = lo;
+                bd[b * 2 * DIM + DIM + j] = lo + 0.25 * (double)below(4);
+            }
+        for (j = 0; j < 3 * 2 * DIM; j++) bf[j] = (float)bd[j];
+        xa = nbhd_dynamic_in_box(dyn, boxes, (const char *)boxes + DIM * (f32 ? 4 : 8), ia, CAP,
+                                 &ca);
+        xb = nbhd_tree_in_box(st, boxes, (const char *)boxes + DIM * (f32 ? 4 : 8), ib, CAP, &cb);
+        CHECK(xa == NBHD_STATUS_OK && xb == NBHD_STATUS_OK && ca == cb);
+        CHECK(ca == cb && memcmp(ia, ib, ca * sizeof ia[0]) == 0);
+        two.threads = 2;
+        xa = nbhd_dynamic_in_boxes(dyn, boxes, 3, &two, oa, ia, CAP, &ta);
+        xb = nbhd_tree_in_boxes(st, boxes, 3, NULL, ob, ib, CAP, &tb);
+        CHECK(xa == NBHD_STATUS_OK && xb == NBHD_STATUS_OK && ta == tb);
+        CHECK(ta == tb && memcmp(oa, ob, sizeof oa) == 0 && memcmp(ia, ib, ta * sizeof ia[0]) == 0);
+        one.threads = 1;
+        xa = nbhd_dynamic_spacing(dyn, &one, &sa);
+        xb = nbhd_tree_spacing(st, NULL, &sb);
+        CHECK(xa == xb);
+        CHECK(xa != NBHD_STATUS_OK ||
+              (memcmp(&sa.mean, &sb.mean, sizeof sa.mean) == 0 &&
+               memcmp(&sa.median, &sb.median, sizeof sa.median) == 0 && sa.points == sb.points));
+    }
     nbhd_tree_free(st);
 }
 
