@@ -355,6 +355,12 @@ typedef enum {
      * coordinate.
      */
     NBHD_STATUS_INVALID_BOX = 26,
+    /**
+     * A point lies outside the box of a periodic tree (nbhd_tree_build_periodic,
+     * nbhd_dynamic_new_periodic): on a periodic axis of size L its coordinate is below 0 or
+     * not below L. The message names the point, the coordinate, its value and L.
+     */
+    NBHD_STATUS_OUTSIDE_PERIOD = 27,
 } nbhd_status;
 
 /**
@@ -2297,6 +2303,81 @@ nbhd_status nbhd_dynamic_neighborhoods_of(const nbhd_dynamic_tree *tree,
                                           const nbhd_neighborhood_spec *spec,
                                           const nbhd_table_options *options,
                                           nbhd_neighborhoods **out_table);
+
+/**
+ * Builds a periodic k-d tree (a torus, as scipy's `cKDTree(data, boxsize=...)`) over
+ * `*points` and stores a new handle in `*out_tree`. `boxsize[0 .. boxsize_count]` holds the
+ * box size L of every axis (`boxsize_count` = the dimension) or one size for every axis
+ * (`boxsize_count` = 1); 0 or +infinity makes an axis open (not periodic). On a periodic axis
+ * every point must lie in [0, L) (points are not wrapped; scipy refuses them too); every query
+ * of the tree is wrapped into [0, L) and measures each axis difference t at its nearest image,
+ * min(t, L - t), under any metric, so each point counts once, even for a radius beyond L/2.
+ * With no periodic axis this is nbhd_tree_build. Box queries (nbhd_tree_in_box) are not
+ * periodic: they take the box in the tree's coordinates.
+ *
+ * Errors: those of nbhd_tree_build; NULL_POINTER / MISALIGNED_POINTER (`boxsize` with a
+ * count above 0); INVALID_OPTION (a size negative, NaN or rounding to 0 in the tree's scalar
+ * type, or `boxsize_count` neither 1 nor the dimension); OUTSIDE_PERIOD (a point outside the
+ * box: the message names the smallest such index, the coordinate, its value and L).
+ *
+ * Ownership: as nbhd_tree_build (free with nbhd_tree_free); `boxsize` may be freed once this
+ * returns.
+ *
+ * # Safety
+ * As nbhd_tree_build; `boxsize` NULL or readable for `boxsize_count` doubles.
+ */
+nbhd_status nbhd_tree_build_periodic(const nbhd_points *points,
+                                     const nbhd_build_options *options,
+                                     const double *boxsize,
+                                     size_t boxsize_count,
+                                     nbhd_tree **out_tree);
+
+/**
+ * Makes an empty periodic dynamic tree (as nbhd_dynamic_create) over the box
+ * `boxsize[0 .. boxsize_count]` (as nbhd_tree_build_periodic): every inserted point must lie
+ * in the box (nbhd_dynamic_insert refuses a batch holding one outside with OUTSIDE_PERIOD,
+ * naming its position in the batch), and every query is wrapped into it.
+ *
+ * Errors: those of nbhd_dynamic_create; NULL_POINTER / MISALIGNED_POINTER (`boxsize`);
+ * INVALID_OPTION (the box, as nbhd_tree_build_periodic).
+ *
+ * # Safety
+ * As nbhd_dynamic_create; `boxsize` NULL or readable for `boxsize_count` doubles.
+ */
+nbhd_status nbhd_dynamic_create_periodic(size_t dim,
+                                         nbhd_scalar_type scalar_type,
+                                         const nbhd_build_options *options,
+                                         const double *boxsize,
+                                         size_t boxsize_count,
+                                         nbhd_dynamic_tree **out_tree);
+
+/**
+ * Writes the box sizes of `tree` to `out_boxsize[0 .. dim]` (0 for an open axis; all 0 for a
+ * tree that is not periodic) and returns whether it is periodic in `*out_periodic` (may be
+ * NULL).
+ *
+ * Errors: NULL_POINTER (`tree`, `out_boxsize`), MISALIGNED_POINTER, BUFFER_TOO_SMALL
+ * (`capacity` below the dimension; nothing written).
+ *
+ * # Safety
+ * `tree` NULL or a live handle; `out_boxsize` NULL or writable for `capacity` doubles;
+ * `out_periodic` NULL or writable.
+ */
+nbhd_status nbhd_tree_boxsize(const nbhd_tree *tree,
+                              double *out_boxsize,
+                              size_t capacity,
+                              bool *out_periodic);
+
+/**
+ * Writes the box sizes of a dynamic tree; as nbhd_tree_boxsize.
+ *
+ * # Safety
+ * As nbhd_tree_boxsize, with `tree` a live dynamic tree.
+ */
+nbhd_status nbhd_dynamic_boxsize(const nbhd_dynamic_tree *tree,
+                                 double *out_boxsize,
+                                 size_t capacity,
+                                 bool *out_periodic);
 
 /**
  * The default smoothing options: the thesis' anisotropic flow with g_sharp at λ = 0.2/h on

@@ -33,6 +33,19 @@ pub enum NbhdError {
         /// Which coordinate of it.
         coordinate: usize,
     },
+    /// A point lies outside the box of a periodic tree: a coordinate below 0 or not below the
+    /// box size `L` on a periodic axis (points must lie in `[0, L)`; queries are wrapped).
+    OutsidePeriod {
+        /// Caller's index of the first offending point (its position in the batch for an
+        /// insertion into a growing tree).
+        index: usize,
+        /// Which coordinate of it.
+        coordinate: usize,
+        /// The coordinate's value.
+        value: f64,
+        /// The box size of that axis.
+        size: f64,
+    },
     /// A query point has a NaN or infinite coordinate.
     NonFiniteQuery {
         /// Which query of a batch (`None` for a single query).
@@ -313,6 +326,16 @@ impl fmt::Display for NbhdError {
             NonFinite { index, coordinate } => write!(
                 f,
                 "point {index} has a NaN or infinite coordinate (coordinate {coordinate})"
+            ),
+            OutsidePeriod {
+                index,
+                coordinate,
+                value,
+                size,
+            } => write!(
+                f,
+                "point {index} lies outside the periodic box: coordinate {coordinate} is \
+                 {value}, outside [0, {size})"
             ),
             NonFiniteQuery { query, coordinate } => write!(
                 f,

@@ -170,6 +170,45 @@ impl AnyIndex {
         })
     }
 
+    /// A periodic static tree over `points` ([`KdTree::build_periodic`]).
+    pub fn build_periodic(
+        points: &PointsView<'_>,
+        options: &BuildOptions,
+        boxsize: &[f64],
+    ) -> Result<Self> {
+        Ok(match points.scalar_type() {
+            ScalarType::F32 => {
+                AnyIndex::StaticF32(KdTree::build_periodic(points, options, boxsize)?)
+            }
+            ScalarType::F64 => {
+                AnyIndex::StaticF64(KdTree::build_periodic(points, options, boxsize)?)
+            }
+        })
+    }
+
+    /// An empty periodic growing tree ([`DynamicKdTree::new_periodic`]).
+    pub fn growing_periodic(
+        dim: usize,
+        scalar: ScalarType,
+        options: &BuildOptions,
+        boxsize: &[f64],
+    ) -> Result<Self> {
+        Ok(match scalar {
+            ScalarType::F32 => {
+                AnyIndex::GrowingF32(DynamicKdTree::new_periodic(dim, options, boxsize)?)
+            }
+            ScalarType::F64 => {
+                AnyIndex::GrowingF64(DynamicKdTree::new_periodic(dim, options, boxsize)?)
+            }
+        })
+    }
+
+    /// The box sizes of a periodic index per axis (0 for an open axis), `None` for an index
+    /// without a period ([`Period::sizes`](crate::metric::Period::sizes)).
+    pub fn boxsize(&self) -> Option<Vec<f64>> {
+        with_index!(self, t, _T => NeighborIndex::period(t).map(|p| p.sizes()))
+    }
+
     /// The index saved in `bytes`, of the scalar type it was saved with: a static tree, or
     /// with `growing` a growing one (the other kind is [`NbhdError::SavedTree`], naming it).
     pub fn from_bytes(bytes: &[u8], growing: bool) -> Result<Self> {

@@ -329,6 +329,135 @@ impl<T: Scalar, N: Norm<T>> Norm<T> for Scaled<N, T> {
     }
 }
 
+/// A periodic box (a torus, scipy's `boxsize`): on a periodic axis of size `L` the points lie in
+/// `[0, L)`, a query is wrapped into it, and the difference `t = |x_j − q_j|` counts as its
+/// nearest image, `min(t, L − t)` — every point once, at its image nearest to the query, even
+/// for radii beyond `L / 2`. An axis of size 0 or +∞ is open (not periodic); open axes are held
+/// as +∞, so that one formula serves every axis (`min(t, ∞ − t) = t`).
+///
+/// ```
+/// use nbhd::metric::Period;
+///
+/// let period = Period::<f64>::new(&[1.0, 0.0], 2)?.expect("one periodic axis");
+/// assert_eq!(period.sizes(), [1.0, 0.0]);
+/// let mut q = [0.0; 2];
+/// period.wrap(&[-0.25, -0.25], &mut q); // the open axis is left as it is
+/// assert_eq!(q, [0.75, -0.25]);
+/// assert!(Period::<f64>::new(&[0.0, f64::INFINITY], 2)?.is_none()); // no periodic axis
+/// assert!(Period::<f64>::new(&[-1.0], 1).is_err());
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Period<T> {
+    /// Per axis the box size, +∞ on an open axis.
+    sizes: Vec<T>,
+}
+
+impl<T: Scalar> Period<T> {
+    /// The box of the sizes `boxsize` (one per axis, or one for every axis), converted to `T`;
+    /// `None` if no axis is periodic (every size 0 or +∞).
+    ///
+    /// Errors ([`NbhdError::InvalidOption`]): a size negative or NaN, or a positive size that
+    /// `T` rounds to 0; a slice whose length is neither 1 nor `dim`.
+    pub fn new(boxsize: &[f64], dim: usize) -> Result<Option<Self>> {
+        let invalid = |reason: String| NbhdError::InvalidOption {
+            name: "boxsize",
+            reason,
+        };
+        if boxsize.len() != dim && boxsize.len() != 1 {
+            return Err(invalid(format!(
+                "{} sizes given for points of dimension {dim} (give 1 or {dim})",
+                boxsize.len()
+            )));
+        }
+        let mut sizes = Vec::with_capacity(dim);
+        for j in 0..dim {
+            let l = boxsize[j.min(boxsize.len() - 1)];
+            let t = T::from_f64(l);
+            if l.is_nan() || l < 0.0 || (l > 0.0 && t == T::ZERO) {
+                return Err(invalid(format!(
+                    "the size of axis {j} must be 0 (open), positive or +inf (open), got {l}"
+                )));
+            }
+            sizes.push(if l == 0.0 { T::INFINITY } else { t });
+        }
+        Ok(sizes
+            .iter()
+            .any(|l| l.is_finite())
+            .then_some(Self { sizes }))
+    }
+
+    /// The box sizes per axis, 0 for an open axis (the form [`Period::new`] takes).
+    pub fn sizes(&self) -> Vec<f64> {
+        let open = |l: T| if l.is_finite() { l.to_f64() } else { 0.0 };
+        self.sizes.iter().map(|&l| open(l)).collect()
+    }
+
+    /// The first axis of `p` outside the box: a coordinate below 0 or not below `L` on a
+    /// periodic axis (scipy refuses such data too; queries, unlike data, are wrapped).
+    pub fn outside(&self, p: &[T]) -> Option<usize> {
+        (0..p.len()).find(|&j| {
+            let l = self.sizes[j];
+            l.is_finite() && !(p[j] >= T::ZERO && p[j] < l)
+        })
+    }
+
+    /// Writes `q` wrapped into the box to `out`: `q mod L` in `[0, L)` on every periodic axis
+    /// (a remainder that rounds up to `L` is 0, its nearest value in the box), `q` itself on
+    /// an open one. `q` finite.
+    pub fn wrap(&self, q: &[T], out: &mut [T]) {
+        for ((o, &x), &l) in out.iter_mut().zip(q).zip(&self.sizes) {
+            *o = if !l.is_finite() || (x >= T::ZERO && x < l) {
+                x
+            } else {
+                // `%` is exact (IEEE remainder of truncation); a negative one moves up by L
+                let r = x % l;
+                let r = if r < T::ZERO { r + l } else { r };
+                if r < l {
+                    r
+                } else {
+                    T::ZERO
+                }
+            };
+        }
+    }
+
+    /// The key (under `norm`) from the wrapped `q` to `p` (in the box): each axis difference
+    /// `t = |q_j − p_j|` taken at its nearest image, `min(t, L − t)`, folded in axis order.
+    #[inline(always)]
+    pub(crate) fn key<N: Norm<T>>(&self, norm: N, q: &[T], p: &[T]) -> T {
+        let mut s = T::ZERO;
+        for j in 0..q.len() {
+            let t = (q[j] - p[j]).abs();
+            s = norm.fold(s, norm.term(t.min_of(self.sizes[j] - t)));
+        }
+        s
+    }
+
+    /// A lower bound (under `norm`, through its `lower`) of the key from the wrapped `q` to
+    /// any point of the box `[lo, hi]` (inside the periodic box): per axis the gap to the
+    /// nearer of the interval and its image, `min(lo − q, L − (hi − q))` below it and
+    /// `min(q − hi, L − (q − lo))` above it. Each is a rounding of a value no larger than the
+    /// same expression for a point of the interval (rounding is monotone), and the terms are
+    /// folded in the order of [`Period::key`], so the bound never exceeds a point's key.
+    #[inline]
+    pub(crate) fn box_key<N: Norm<T>>(&self, norm: N, q: &[T], lo: &[T], hi: &[T]) -> T {
+        let mut s = T::ZERO;
+        for j in 0..q.len() {
+            let l = self.sizes[j];
+            let gap = if q[j] < lo[j] {
+                (lo[j] - q[j]).min_of(l - (hi[j] - q[j]))
+            } else if q[j] > hi[j] {
+                (q[j] - hi[j]).min_of(l - (q[j] - lo[j]))
+            } else {
+                T::ZERO
+            };
+            s = norm.fold(s, norm.term(gap));
+        }
+        norm.lower(s)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

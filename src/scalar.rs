@@ -1,7 +1,7 @@
 //! The coordinate types nbhd computes in: `f32` and `f64`, both first-class.
 
 use std::fmt::{Debug, Display};
-use std::ops::{Add, Mul, Sub};
+use std::ops::{Add, Mul, Rem, Sub};
 
 /// The run-time tag of a coordinate type, used where the type is only known from a buffer
 /// description (the C ABI, files).
@@ -37,6 +37,7 @@ pub trait Scalar:
     + Add<Output = Self>
     + Sub<Output = Self>
     + Mul<Output = Self>
+    + Rem<Output = Self>
     + sealed::Sealed
     + 'static
 {

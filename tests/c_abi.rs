@@ -410,6 +410,22 @@ fn c_metric_queries_are_clean_under_valgrind() {
 }
 
 #[test]
+fn c_periodic_queries_match_brute_force() {
+    run(
+        Command::new(compiled("periodic_test")),
+        "tests/c/periodic_test",
+    );
+}
+
+#[test]
+fn c_periodic_queries_are_clean_under_valgrind() {
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(compiled("periodic_test"));
+        run(cmd, "valgrind tests/c/periodic_test");
+    }
+}
+
+#[test]
 fn c_smoothing_checks_against_a_sphere() {
     run(Command::new(compiled("smooth_test")), "tests/c/smooth_test");
 }

@@ -330,7 +330,8 @@ fn nbhd_without_a_command_runs_the_demo_and_prints_the_summary() {
 // ---- neighbourhoods against brute force -----------------------------------------------------
 
 use nbhd::{
-    BruteForce, NeighborSearch, Neighborhood, NonFinitePolicy, PointsView, Query, QueryOptions,
+    BruteForce, BuildOptions, KdTree, NeighborSearch, Neighborhood, NonFinitePolicy, PointsView,
+    Query, QueryOptions, TableOptions,
 };
 
 /// 400 points of a noisy sphere, 40 of them duplicates, one NaN point (index 17); written as
@@ -465,6 +466,65 @@ fn knn_radius_and_neighbors_equal_brute_force_for_every_tree_variant() {
             }
         }
     }
+}
+
+/// `--boxsize`: the rows of the library's periodic tree (every point at its nearest image), on
+/// a grid of step 1/4 in a unit box periodic in x and y and open in z; points outside the box
+/// are refused by name.
+#[test]
+fn periodic_boxes_give_the_periodic_trees_rows() {
+    let mut pts = Vec::new();
+    for i in 0..120u32 {
+        let c = |s: u32| f64::from((i.wrapping_mul(2_654_435_761) >> s) % 4) * 0.25;
+        pts.push([c(3), c(11), c(19) * 3.0]);
+    }
+    let path = tmp("periodic-grid.xyz");
+    let cloud = nbhd::io::PointCloud::from_positions(pts.clone());
+    nbhd::io::write(&path, &cloud, &nbhd::io::WriteOptions::ascii()).unwrap();
+    let view = PointsView::from_rows(&pts).unwrap();
+    let tree = KdTree::build_periodic(&view, &BuildOptions::default(), &[1.0, 1.0, 0.0]).unwrap();
+    for (args, nb) in [
+        (&["knn", "-k", "6"][..], Neighborhood::Knn { k: 6 }),
+        (
+            &["radius", "-r", "0.6"][..],
+            Neighborhood::Radius {
+                radius: 0.6,
+                sorted: true,
+            },
+        ),
+    ] {
+        let mut a = vec!["--json"];
+        a.extend(args);
+        a.extend([
+            path.as_str(),
+            "--boxsize",
+            "1,1,0",
+            "--metric",
+            "l1",
+            "--exclude-self",
+        ]);
+        let v = json_of(&nbhd(&a));
+        assert_eq!(v["boxsize"], serde_json::json!([1.0, 1.0, 0.0]));
+        let options = TableOptions {
+            exclude_self: true,
+            query: QueryOptions::with_p(1.0).unwrap(),
+            ..TableOptions::default()
+        };
+        let want = tree.neighborhoods(nb, &options).unwrap();
+        let got = rows(&v);
+        assert_eq!(got.len(), pts.len());
+        for (i, (idx, d)) in got.iter().enumerate() {
+            assert_eq!(idx.as_slice(), want.indices_of(i), "{a:?} row {i}");
+            assert_eq!(d.as_slice(), want.sq_dists_of(i), "{a:?} row {i}");
+        }
+    }
+    let o = nbhd(&["knn", "-k", "2", &path, "--boxsize", "0.5"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("outside the periodic box"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// `--metric`, `--strict` and `--eps`: the library's answers under those query options.

@@ -50,6 +50,7 @@ use std::any::Any;
 use std::sync::{Arc, OnceLock};
 
 use crate::error::{NbhdError, Result};
+use crate::metric::Period;
 use crate::packed::NonFinitePolicy;
 use crate::points::{point_bytes, PointsView};
 use crate::scalar::Scalar;
@@ -132,6 +133,8 @@ pub struct DynamicKdTree<T> {
     live: usize,
     /// Neighbouring trees merge while the older holds fewer than `growth` times the newer.
     growth: usize,
+    /// The periodic box every tree of the forest shares ([`DynamicKdTree::new_periodic`]).
+    period: Option<Period<T>>,
 }
 
 #[inline(always)]
@@ -173,7 +176,37 @@ impl<T: Scalar> DynamicKdTree<T> {
             parts: Vec::new(),
             live: 0,
             growth: GROWTH,
+            period: None,
         })
+    }
+
+    /// An empty periodic tree (a torus, as [`KdTree::build_periodic`]): `boxsize` holds the box
+    /// size of every axis (or one for all), 0 or +∞ for an open axis; every inserted point
+    /// must lie in `[0, L)` on the periodic axes, and queries are wrapped into the box.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, DynamicKdTree, NeighborIndex, Query};
+    ///
+    /// let mut tree = DynamicKdTree::<f64>::new_periodic(1, &BuildOptions::default(), &[1.0])?;
+    /// tree.insert_flat(&[0.05, 0.5])?;
+    /// tree.insert_flat(&[0.97])?;
+    /// let mut out = Vec::new();
+    /// tree.knn(Query::point(&[1.0]), 2, &mut out)?; // 1.0 wraps to 0
+    /// assert_eq!(out.iter().map(|n| n.index).collect::<Vec<_>>(), [2, 0]);
+    /// assert!(tree.insert_flat(&[1.0]).is_err()); // outside [0, 1)
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of [`DynamicKdTree::new`] and of the box ([`Period::new`]).
+    pub fn new_periodic(dim: usize, options: &BuildOptions, boxsize: &[f64]) -> Result<Self> {
+        let mut tree = Self::new(dim, options)?;
+        tree.period = Period::new(boxsize, dim)?;
+        Ok(tree)
+    }
+
+    /// The periodic box of the tree, if it has one ([`DynamicKdTree::new_periodic`]).
+    pub fn period(&self) -> Option<&Period<T>> {
+        self.period.as_ref()
     }
 
     /// Sets the growth factor (at least 2; [`GROWTH`] by default): from the next insertion or
@@ -283,7 +316,8 @@ impl<T: Scalar> DynamicKdTree<T> {
     ///
     /// Errors, with nothing inserted: [`NbhdError::DimensionMismatch`];
     /// [`NbhdError::NonFinite`] naming the position in the batch of the first non-finite
-    /// point (under [`NonFinitePolicy::Reject`]); [`NbhdError::TooManyPoints`] if the indices
+    /// point (under [`NonFinitePolicy::Reject`]); [`NbhdError::OutsidePeriod`] naming the
+    /// position of the first point outside the box of a periodic tree; [`NbhdError::TooManyPoints`] if the indices
     /// would pass `u32::MAX - 1`; [`NbhdError::OutOfMemory`]; [`NbhdError::ThreadPool`].
     ///
     /// ```
@@ -339,6 +373,13 @@ impl<T: Scalar> DynamicKdTree<T> {
                 }
                 p.fill(T::from_f64(f64::NAN));
                 skipped.push(first + i as u32);
+            } else if let Some(j) = self.period.as_ref().and_then(|b| b.outside(p)) {
+                return Err(NbhdError::OutsidePeriod {
+                    index: i,
+                    coordinate: j,
+                    value: p[j].to_f64(),
+                    size: self.period.as_ref().map_or(0.0, |b| b.sizes()[j]),
+                });
             }
         }
         // Commit the points, then build; undone if a build fails.
@@ -449,7 +490,10 @@ impl<T: Scalar> DynamicKdTree<T> {
             non_finite: NonFinitePolicy::Skip,
             ..self.options
         };
-        let tree = KdTree::build(&view, &options)?;
+        let mut tree = KdTree::build(&view, &options)?;
+        if let Some(period) = &self.period {
+            tree = tree.with_period(period.clone())?;
+        }
         let live = tree.len();
         Ok(Part::new(tree, lo, hi, live))
     }

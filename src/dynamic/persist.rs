@@ -295,6 +295,7 @@ impl<T: Scalar> SavedFormat for DynamicKdTree<T> {
             parts,
             live: info.live,
             growth: info.growth,
+            period: None,
         })
     }
 }

@@ -6,7 +6,7 @@
 use super::{bit, DynamicKdTree};
 use crate::error::Result;
 use crate::index::{self, NeighborIndex, StoredPoints};
-use crate::metric::{Measure, Norm, NormUser, L2};
+use crate::metric::{Measure, Norm, NormUser, Period, L2};
 use crate::query::result_set::ResultSet;
 use crate::query::{order, resolve_query, Neighbor, NeighborSearch, Neighborhood, Query};
 use crate::scalar::Scalar;
@@ -122,7 +122,11 @@ impl<T: Scalar> DynamicKdTree<T> {
         set: &mut C,
     ) {
         for part in &self.parts {
-            if box_key(norm, q, &part.bbox_lo, &part.bbox_hi) > set.bound() {
+            let key = match &self.period {
+                None => box_key(norm, q, &part.bbox_lo, &part.bbox_hi),
+                Some(period) => period.box_key(norm, q, &part.bbox_lo, &part.bbox_hi),
+            };
+            if key > set.bound() {
                 continue;
             }
             let local = exclude
@@ -221,6 +225,10 @@ impl<T: Scalar> NeighborIndex<T> for DynamicKdTree<T> {
             exclude,
             set,
         });
+    }
+
+    fn period(&self) -> Option<&Period<T>> {
+        self.period.as_ref()
     }
 
     fn visit_box(&self, min: &[T], max: &[T], scratch: &mut Vec<T>, out: &mut Vec<u32>) {

@@ -48,6 +48,8 @@ pub mod table;
 
 pub mod dynamic;
 
+pub mod periodic;
+
 pub mod smoothing_io;
 
 pub mod smooth;
@@ -67,6 +69,7 @@ pub use enums::*;
 pub use filter::*;
 pub use in_box::*;
 pub use normals::*;
+pub use periodic::*;
 pub use persist::*;
 pub use prepared::*;
 pub use query::*;

@@ -90,10 +90,14 @@ pub enum nbhd_status {
     /// min <= x <= max; infinite bounds are allowed). The message names the box and the
     /// coordinate.
     InvalidBox = 26,
+    /// A point lies outside the box of a periodic tree (nbhd_tree_build_periodic,
+    /// nbhd_dynamic_new_periodic): on a periodic axis of size L its coordinate is below 0 or
+    /// not below L. The message names the point, the coordinate, its value and L.
+    OutsidePeriod = 27,
 }
 
 impl nbhd_status {
-    const ALL: [nbhd_status; 27] = [
+    const ALL: [nbhd_status; 28] = [
         nbhd_status::Ok,
         nbhd_status::NullPointer,
         nbhd_status::MisalignedPointer,
@@ -121,6 +125,7 @@ impl nbhd_status {
         nbhd_status::CorruptData,
         nbhd_status::RemovedPoint,
         nbhd_status::InvalidBox,
+        nbhd_status::OutsidePeriod,
     ];
 
     /// A short, static description.
@@ -154,6 +159,7 @@ impl nbhd_status {
             CorruptData => c"the saved tree is damaged (truncated or corrupted)",
             RemovedPoint => c"the point was removed from the dynamic tree",
             InvalidBox => c"a query box has a NaN bound or min > max",
+            OutsidePeriod => c"a point lies outside the periodic box",
         }
     }
 }
@@ -227,6 +233,7 @@ impl FfiError {
                     | SavedTreeError::Invalid(_) => S::CorruptData,
                 },
                 NbhdError::InvalidBox { .. } => S::InvalidBox,
+                NbhdError::OutsidePeriod { .. } => S::OutsidePeriod,
             },
         }
     }

@@ -26,9 +26,11 @@
 //! traversal ([`NeighborIndex::visit_with`], the default Euclidean queries keeping
 //! [`NeighborIndex::visit`] and its fast paths), so each query picks them up here rather than in
 //! each flavour ([`NeighborIndex::search_with`], and tables through
-//! [`TableOptions::query`](crate::TableOptions::query)). The seams for what comes next: a
-//! topology (a periodic box) joins the measure; a new kind of result (pairs, counts) is a new
-//! result set (`src/query/result_set.rs`) filled by the same traversal.
+//! [`TableOptions::query`](crate::TableOptions::query)). A periodic index (a torus,
+//! [`NeighborIndex::period`]) answers every query that way too, the query wrapped into its box
+//! first (`search.rs`), its traversal measuring nearest images. The seam for what comes next: a
+//! new kind of result (pairs, counts) is a new result set (`src/query/result_set.rs`) filled by
+//! the same traversal.
 
 mod in_box;
 mod search;
@@ -41,7 +43,7 @@ pub(crate) use spacing::{check_spacing, mean_distance};
 pub use spacing::{Length, Spacing, Units};
 
 use crate::error::Result;
-use crate::metric::Measure;
+use crate::metric::{Measure, Period};
 use crate::points::PointsView;
 use crate::query::result_set::ResultSet;
 use crate::query::{Neighbor, NeighborSearch, Neighborhood, Query, QueryOptions};
@@ -117,6 +119,12 @@ pub trait NeighborIndex<T: Scalar>: NeighborSearch<T> + Sized {
         measure: &Measure,
         set: &mut C,
     );
+
+    /// The periodic box of the index, if it has one: its queries are then wrapped into the box
+    /// and answered by [`NeighborIndex::visit_with`] (nearest images), never by the plain
+    /// traversal or the grouped paths.
+    #[doc(hidden)]
+    fn period(&self) -> Option<&Period<T>>;
 
     /// Appends to `out`, in no particular order, the caller indices of the held points in the
     /// closed box `min ≤ x ≤ max` (checked); `scratch` is the traversal's to reuse.

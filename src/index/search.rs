@@ -25,8 +25,9 @@ pub(crate) fn search_with<T: Scalar, I: NeighborIndex<T>>(
 }
 
 /// The search proper under a plan ([`QueryOptions`] resolved): the plain queries' paths for the
-/// default options, else a heap (k nearest) or a list (radius) filled by the flavour's
-/// traversal under the plan's measure ([`NeighborIndex::visit_with`]).
+/// default options on an index without a period, else a heap (k nearest) or a list (radius)
+/// filled by the flavour's traversal under the plan's measure ([`NeighborIndex::visit_with`]),
+/// the query wrapped into the index's box first if it has one.
 #[inline]
 pub(crate) fn answer_with<T: Scalar, I: NeighborIndex<T>>(
     index: &I,
@@ -35,9 +36,34 @@ pub(crate) fn answer_with<T: Scalar, I: NeighborIndex<T>>(
     plan: &Plan<T>,
     out: &mut Vec<Neighbor<T>>,
 ) {
-    if plan.plain {
+    let period = index.period();
+    if plan.plain && period.is_none() {
         return answer(index, q, exclude, plan.nbhd, out);
     }
+    match period {
+        None => measured(index, q, exclude, plan, out),
+        Some(period) if q.len() <= 8 => {
+            let mut w = [T::ZERO; 8];
+            period.wrap(q, &mut w[..q.len()]);
+            measured(index, &w[..q.len()], exclude, plan, out)
+        }
+        Some(period) => {
+            let mut w = vec![T::ZERO; q.len()];
+            period.wrap(q, &mut w);
+            measured(index, &w, exclude, plan, out)
+        }
+    }
+}
+
+/// A heap (k nearest) or a list (radius) filled by the flavour's traversal under the plan's
+/// measure, for `q` (wrapped into the index's box if it has one).
+fn measured<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    q: &[T],
+    exclude: Option<u32>,
+    plan: &Plan<T>,
+    out: &mut Vec<Neighbor<T>>,
+) {
     if plan.k == usize::MAX {
         out.clear();
         let mut within = WithinRadius {
@@ -64,6 +90,9 @@ pub(crate) fn search<T: Scalar, I: NeighborIndex<T>>(
     nbhd: Neighborhood<T>,
     out: &mut Vec<Neighbor<T>>,
 ) -> Result<()> {
+    if index.period().is_some() {
+        return search_with(index, query, nbhd, &QueryOptions::DEFAULT, out);
+    }
     nbhd.validate()?;
     let (q, exclude) = index.resolve(query)?;
     answer(index, q, exclude, nbhd, out);

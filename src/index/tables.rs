@@ -4,7 +4,8 @@
 //! answers where it has one ([`NeighborIndex::grouped_table`],
 //! [`NeighborIndex::grouped_batch`]); otherwise each row is one single search, the rows the
 //! grouped searches give too. Under non-default [`QueryOptions`](crate::QueryOptions)
-//! (another metric, eps, a strict radius) every row is a single search under them.
+//! (another metric, eps, a strict radius), and on a periodic index, every row is a single
+//! search under them.
 
 use rayon::prelude::*;
 
@@ -26,7 +27,7 @@ pub(super) fn neighborhoods<T: Scalar, I: NeighborIndex<T>>(
     let plan = options.query.plan(nbhd)?;
     check_knn_total(index.len(), index.len(), nbhd, options.exclude_self)?;
     with_threads(options.threads, || {
-        if plan.plain {
+        if plan.plain && index.period().is_none() {
             if let Some(table) = index.grouped_table(nbhd, options.exclude_self) {
                 return table;
             }
@@ -98,7 +99,7 @@ pub(super) fn neighborhoods_of<T: Scalar, I: NeighborIndex<T>>(
     let n = queries.len();
     with_threads(options.threads, || {
         let (order, keys) = region_order(index, &packed);
-        if plan.plain {
+        if plan.plain && index.period().is_none() {
             if let Some(table) = index.grouped_batch(&packed, &order, &keys, nbhd) {
                 return table;
             }

@@ -137,6 +137,7 @@ impl<T: Scalar> KdTree<T> {
             source_len: view.len(),
             options: *options,
             position_of: OnceLock::new(),
+            periodic: None,
         };
         tree.derive(options.threads)?;
         Ok(tree)

@@ -17,6 +17,7 @@
 //! - `boxes.rs`: the descent of a box query (Algorithms 2 and 3);
 //! - `exact_knn.rs`: the fast exact k-nearest table of 3-D `f64` points, searched in `f32`
 //!   and proven exact in `f64` ([`exact_knn_table`]);
+//! - `periodic.rs`: periodic trees (a torus) and their descent;
 //! - `part.rs`: what a forest reads of one of its trees;
 //! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
 
@@ -33,6 +34,7 @@ mod neighborhoods;
 mod node;
 pub mod options;
 mod part;
+mod periodic;
 mod persist;
 mod presorted;
 mod search;
@@ -42,7 +44,7 @@ use std::sync::OnceLock;
 
 use crate::error::Result;
 use crate::index::{self, NeighborIndex, StoredPoints};
-use crate::metric::Measure;
+use crate::metric::{Measure, Period};
 use crate::parallel::with_threads;
 use crate::query::resolve_query;
 use crate::query::result_set::ResultSet;
@@ -106,6 +108,8 @@ pub struct KdTree<T> {
     options: BuildOptions,
     /// Tree position of every caller index (`u32::MAX` for skipped points), made on first use.
     position_of: OnceLock<Vec<u32>>,
+    /// The periodic box and the points' bounding box, for a periodic tree (`periodic.rs`).
+    periodic: Option<Box<periodic::Periodic<T>>>,
 }
 
 impl<T: Scalar> KdTree<T> {
@@ -285,6 +289,10 @@ impl<T: Scalar> NeighborIndex<T> for KdTree<T> {
         if !self.ids.is_empty() {
             self.search_measured(q, exclude, measure, set);
         }
+    }
+
+    fn period(&self) -> Option<&Period<T>> {
+        KdTree::period(self)
     }
 
     fn visit_box(&self, min: &[T], max: &[T], scratch: &mut Vec<T>, out: &mut Vec<u32>) {

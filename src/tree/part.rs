@@ -12,7 +12,8 @@ use crate::query::result_set::ResultSet;
 use crate::scalar::Scalar;
 
 impl<T: Scalar> KdTree<T> {
-    /// Runs the exact search of `src/tree/search.rs` under the norm `norm` (`src/metric.rs`;
+    /// Runs the exact search of `src/tree/search.rs` (of `periodic.rs` for a periodic tree,
+    /// `q` then wrapped into its box) under the norm `norm` (`src/metric.rs`;
     /// [`L2`](crate::metric::L2) for the plain Euclidean search) for the point `q` (of the
     /// tree's dimension, finite), offering every point of every visited leaf except the caller
     /// index `exclude` to `out`; the cells visited depend only on `out`'s bound.
@@ -23,7 +24,12 @@ impl<T: Scalar> KdTree<T> {
         norm: N,
         out: &mut C,
     ) {
-        search::search_norm(&self.view(), q, exclude, norm, out);
+        match &self.periodic {
+            Some(periodic) => {
+                super::periodic::search_periodic(&self.view(), periodic, q, exclude, norm, out)
+            }
+            None => search::search_norm(&self.view(), q, exclude, norm, out),
+        }
     }
 
     /// The single search under `measure` (the preorder descent, the compact one being

@@ -326,6 +326,7 @@ impl<T: Scalar> SavedFormat for KdTree<T> {
             source_len: info.source_len,
             options: info.options,
             position_of: OnceLock::new(),
+            periodic: None,
         };
         tree.check_points(bitmap_bytes)?;
         tree.check_nodes()?;

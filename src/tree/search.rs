@@ -148,7 +148,12 @@ fn key_at<T: Scalar, N: Norm<T>, const D: usize>(
 /// candidate that enters `out`: `(dist, min_id)` precedes the worst admissible key. The index
 /// is read only on a tie in distance.
 #[inline(always)]
-fn may_enter<T: Scalar, C: ResultSet<T>>(out: &C, dist: T, min_id: &[u32], node: u32) -> bool {
+pub(super) fn may_enter<T: Scalar, C: ResultSet<T>>(
+    out: &C,
+    dist: T,
+    min_id: &[u32],
+    node: u32,
+) -> bool {
     let (wd, wi) = out.worst_key();
     dist < wd || (dist == wd && min_id[node as usize] < wi)
 }

@@ -72,6 +72,13 @@ pub struct Common {
     #[arg(long)]
     pub strict: bool,
 
+    /// A periodic box (a torus, as scipy's boxsize): the box size L of every axis, comma
+    /// separated (x,y,z), or one for all; 0 leaves an axis open. Every point must lie in
+    /// [0, L) on a periodic axis; queries are wrapped into the box and each axis difference
+    /// counts at its nearest image
+    #[arg(long, value_name = "L[,L...]", value_parser = parse_boxsize)]
+    pub boxsize: Option<BoxSize>,
+
     // The input file and its format: here, so that --from is listed after --queries.
     #[command(flatten)]
     pub input: InputArgs,
@@ -138,6 +145,17 @@ pub fn run_neighbors(a: NeighborsArgs, out: &Output) -> Result<()> {
     run(a.common, Kind::KnnRadius(a.k, a.radius), out)
 }
 
+/// The sizes of `--boxsize`.
+#[derive(Clone, Debug)]
+pub struct BoxSize(Vec<f64>);
+
+fn parse_boxsize(s: &str) -> std::result::Result<BoxSize, String> {
+    s.split(',')
+        .map(|v| v.trim().parse::<f64>().map_err(|e| format!("{v:?}: {e}")))
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map(BoxSize)
+}
+
 fn parse_metric(s: &str) -> std::result::Result<Metric, String> {
     s.parse().map_err(|e: nbhd::NbhdError| e.to_string())
 }
@@ -173,6 +191,8 @@ struct Facts {
     radius: Option<f64>,
     nbhd: Neighborhood<f64>,
     query: QueryOptions,
+    /// The periodic box's sizes per axis (0 for open), if the tree has one.
+    boxsize: Option<Vec<f64>>,
     exclude_self: bool,
     points: usize,
     tree: BuildOptions,
@@ -204,9 +224,15 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
         None => None,
     };
     let name = c.input.input.display().to_string();
+    let boxsize = c.boxsize.as_ref().map(|b| b.0.as_slice());
     let (tree, build_ms) = match &c.tree_file {
+        Some(_) if boxsize.is_some() => {
+            return Err(
+                "--boxsize builds a periodic tree; a saved tree (--tree) keeps no box".into(),
+            )
+        }
         Some(file) => load_tree(file, &cloud, &name)?,
-        None => build_tree(&cloud, &c.tree.options(), &name, out)?,
+        None => build_tree(&cloud, &c.tree.options(), boxsize, &name, out)?,
     };
     let opts = *tree.options();
     let length = match kind {
@@ -247,6 +273,7 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
         radius,
         nbhd,
         query,
+        boxsize: tree.period().map(|p| p.sizes()),
         exclude_self: c.exclude_self,
         points: cloud.len(),
         tree: opts,
@@ -259,10 +286,12 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
     write_result(c.output.as_deref(), &facts, out)
 }
 
-/// Builds the k-d tree of `cloud` under a spinner; returns it and the milliseconds taken.
+/// Builds the k-d tree of `cloud` (periodic over `boxsize` if given) under a spinner; returns
+/// it and the milliseconds taken.
 fn build_tree(
     cloud: &PointCloud,
     opts: &BuildOptions,
+    boxsize: Option<&[f64]>,
     name: &str,
     out: &Output,
 ) -> Result<(KdTree<f64>, f64)> {
@@ -273,7 +302,10 @@ fn build_tree(
             out,
             format!("building the k-d tree of {} points", cloud.len()),
         );
-        KdTree::<f64>::build(&view, opts).context(name)?
+        match boxsize {
+            Some(boxsize) => KdTree::<f64>::build_periodic(&view, opts, boxsize).context(name)?,
+            None => KdTree::<f64>::build(&view, opts).context(name)?,
+        }
     };
     Ok((tree, ms(t)))
 }
@@ -363,6 +395,7 @@ impl Facts {
             "metric": self.query.metric.to_string(),
             "eps": num(self.query.eps),
             "strict": self.query.strict,
+            "boxsize": self.boxsize,
             "exclude_self": self.exclude_self,
             "points": self.points,
             "skipped_non_finite": self.points - self.stats.points,
