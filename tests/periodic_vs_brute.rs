@@ -422,3 +422,22 @@ fn each_point_counts_once_at_its_nearest_image() {
     let got: Vec<(u32, f64)> = out.iter().map(|n| (n.index, n.sq_dist)).collect();
     assert_eq!(got, [(0, 0.0), (1, 0.0625), (3, 0.0625), (2, 0.25)]);
 }
+
+/// A saved periodic tree is refused on loading, naming why, rather than loaded without its box
+/// (the format does not keep the box yet); a growing one likewise.
+#[test]
+fn saved_periodic_trees_are_refused_on_loading() {
+    use nbhd::Persist;
+    let view = PointsView::from_flat(&[0.1f64, 0.2, 0.9], 1).unwrap();
+    let tree = KdTree::<f64>::build_periodic(&view, &BuildOptions::default(), &[1.0]).unwrap();
+    let err = KdTree::<f64>::from_bytes(&tree.to_bytes()).unwrap_err();
+    assert!(err.to_string().contains("periodic"), "{err}");
+    let mut growing =
+        DynamicKdTree::<f64>::new_periodic(1, &BuildOptions::default(), &[1.0]).unwrap();
+    growing.insert_flat(&[0.5]).unwrap();
+    let err = DynamicKdTree::<f64>::from_bytes(&growing.to_bytes()).unwrap_err();
+    assert!(err.to_string().contains("periodic"), "{err}");
+    // an open box is a plain tree and saves as one
+    let open = KdTree::<f64>::build_periodic(&view, &BuildOptions::default(), &[0.0]).unwrap();
+    assert!(KdTree::<f64>::from_bytes(&open.to_bytes()).is_ok());
+}

@@ -61,7 +61,8 @@ class Table:
     def row(self, i: int) -> tuple[U32, Floats]: ...
     def row_lengths(self) -> npt.NDArray[np.uint64]: ...
     def to_csr(self, *, distances: bool = False) -> Any:
-        """A ``scipy.sparse.csr_matrix`` (rows, n_points) of squared distances (or distances)."""
+        """A ``scipy.sparse.csr_matrix`` (rows, n_points) of the keys (squared distances for
+        p = 2), or with ``distances=True`` the distances in the query's metric."""
 
 @final
 class KdTree:
@@ -76,6 +77,7 @@ class KdTree:
         leaf_size: int = ...,  # nbhd::tree::DEFAULT_LEAF_SIZE (12)
         non_finite: NonFinite = "reject",
         threads: int = 0,
+        boxsize: Union[float, Sequence[float], None] = None,
     ) -> KdTree: ...
     @property
     def size(self) -> int:
@@ -88,6 +90,9 @@ class KdTree:
         """Dimension."""
     @property
     def dtype_name(self) -> Literal["float32", "float64"]: ...
+    @property
+    def boxsize(self) -> Optional[list[float]]:
+        """The periodic box per axis (0 for an open axis), None if not periodic."""
     @property
     def tree_order(self) -> U32: ...
     def stats(self) -> dict[str, int]: ...
@@ -159,6 +164,7 @@ class DynamicKdTree:
         non_finite: NonFinite = "reject",
         threads: int = 0,
         growth: int = ...,  # nbhd::dynamic::GROWTH (4)
+        boxsize: Union[float, Sequence[float], None] = None,
     ) -> DynamicKdTree: ...
     def insert(self, points: ArrayLike) -> int:
         """Inserts a batch; returns the index of its first point."""
@@ -175,6 +181,8 @@ class DynamicKdTree:
     def next_index(self) -> int: ...
     @property
     def m(self) -> int: ...
+    @property
+    def boxsize(self) -> Optional[list[float]]: ...
     @property
     def dtype_name(self) -> Literal["float32", "float64"]: ...
     def is_live(self, index: int) -> bool: ...

@@ -62,10 +62,12 @@ impl PyDynamicKdTree {
     /// nothing of the batch, "skip" gives it its index but leaves it out. `growth` (≥ 2): a
     /// tree is merged into the next older one while that holds fewer than `growth` times its
     /// points — larger keeps fewer trees (faster queries) for more rebuilding.
+    /// `boxsize` makes the tree periodic, as in `KdTree` (inserted points must lie in the box).
     #[new]
     #[pyo3(signature = (dim, *, dtype = "float32", pivot = "sliding-midpoint",
                         median = "floyd-rivest", leaf_size = nbhd::tree::DEFAULT_LEAF_SIZE,
-                        non_finite = "reject", threads = 0, growth = nbhd::dynamic::GROWTH))]
+                        non_finite = "reject", threads = 0, growth = nbhd::dynamic::GROWTH,
+                        boxsize = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         dim: usize,
@@ -76,6 +78,7 @@ impl PyDynamicKdTree {
         non_finite: &str,
         threads: usize,
         growth: usize,
+        boxsize: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let options = options::build(pivot, median, leaf_size, non_finite, threads)?;
         let scalar = match dtype {
@@ -87,7 +90,11 @@ impl PyDynamicKdTree {
                 )))
             }
         };
-        let mut index = AnyIndex::growing(dim, scalar, &options).or_raise()?;
+        let mut index = match options::boxsize(boxsize)? {
+            Some(b) => AnyIndex::growing_periodic(dim, scalar, &options, &b),
+            None => AnyIndex::growing(dim, scalar, &options),
+        }
+        .or_raise()?;
         index.set_growth(growth).or_raise()?;
         Ok(Self { index })
     }
@@ -139,6 +146,12 @@ impl PyDynamicKdTree {
     #[getter]
     fn m(&self) -> usize {
         self.index.dim()
+    }
+
+    /// The periodic box per axis (0 for an open axis), or None for a tree without one.
+    #[getter]
+    fn boxsize(&self) -> Option<Vec<f64>> {
+        self.index.boxsize()
     }
 
     /// The tree's scalar type: "float32" or "float64".

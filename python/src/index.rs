@@ -56,8 +56,13 @@ pub(crate) fn pair<'py, T: Scalar + Element>(
 }
 
 /// A table of the index as a Python `Table` (`n_points` columns: the index's rows).
-pub(crate) fn table(py: Python<'_>, table: AnyTable, n_points: usize) -> PyResult<PyTable> {
-    with_table!(table, t => PyTable::new(py, t, n_points))
+pub(crate) fn table(
+    py: Python<'_>,
+    table: AnyTable,
+    n_points: usize,
+    options: &QueryOptions,
+) -> PyResult<PyTable> {
+    with_table!(table, t => PyTable::new(py, t, n_points, options.metric))
 }
 
 /// What a query returns: one point's `(indices, sq_dists)` or a batch's table.
@@ -115,7 +120,7 @@ pub(crate) fn query<'py>(
             let view = pts.view().or_raise()?;
             let opts = TableOptions { exclude_self: false, threads, query: options };
             let rows = py.detach(|| index.neighborhoods_of(&view, spec, &opts)).or_raise()?;
-            Ok(Answer::Many(table(py, rows, index.source_len())?))
+            Ok(Answer::Many(table(py, rows, index.source_len(), &options)?))
         }
     })
 }
@@ -135,7 +140,7 @@ pub(crate) fn neighborhoods(
         query: options,
     };
     let rows = py.detach(|| index.neighborhoods(spec, &opts)).or_raise()?;
-    table(py, rows, index.source_len())
+    table(py, rows, index.source_len(), &options)
 }
 
 /// The index in its saved format as `bytes`.

@@ -19,6 +19,20 @@ fn unknown(what: &str, got: &str, names: &[&str]) -> PyErr {
     ))
 }
 
+/// The sizes of a periodic box as Python passes them (`boxsize=`: None, one number for every
+/// axis, or one per axis, scipy's form); checked by the library when the tree is made.
+pub fn boxsize(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<f64>>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(l) = obj.extract::<f64>() {
+        return Ok(Some(vec![l]));
+    }
+    obj.extract::<Vec<f64>>()
+        .map(Some)
+        .map_err(|_| value_err("boxsize: a number or a sequence of numbers, one per axis"))
+}
+
 /// A pivot policy by name (`cyclic-median`, `spread-median`, `closest-to-middle`,
 /// `sliding-midpoint`; `_` may stand for `-`).
 pub fn pivot(name: &str) -> PyResult<PivotPolicy> {

@@ -37,10 +37,15 @@ impl PyKdTree {
     /// non_finite: "reject" (NaN/Inf points raise) or "skip" (left out; the others keep
     /// their indices).
     /// threads: 0 for a thread per core, n ≥ 1 for n threads; the tree is the same for any.
+    /// boxsize: a periodic box (a torus, scipy's `boxsize`): one size L for every axis or one
+    /// per axis, 0 (or inf) for an open axis. Points must lie in [0, L) on the periodic axes
+    /// (else `NbhdValueError`); every query is wrapped into the box and measures each axis
+    /// difference at its nearest image, under any `p`.
     #[new]
     #[pyo3(signature = (points, *, pivot = "sliding-midpoint", median = "floyd-rivest",
                         leaf_size = nbhd::tree::DEFAULT_LEAF_SIZE, non_finite = "reject",
-                        threads = 0))]
+                        threads = 0, boxsize = None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         points: &Bound<'_, PyAny>,
@@ -49,20 +54,26 @@ impl PyKdTree {
         leaf_size: usize,
         non_finite: &str,
         threads: usize,
+        boxsize: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let options = options::build(pivot, median, leaf_size, non_finite, threads)?;
+        let boxsize = options::boxsize(boxsize)?;
+        let build = |view: &nbhd::PointsView<'_>| match &boxsize {
+            Some(b) => AnyIndex::build_periodic(view, &options, b),
+            None => AnyIndex::build(view, &options),
+        };
         let (arr, dtype) = float_array(points, None)?;
         check_rows(&arr, "d")?;
         let index = match dtype {
             Dtype::F32 => {
                 let pts = Points::<f32>::new(&arr)?;
                 let view = pts.view().or_raise()?;
-                py.detach(|| AnyIndex::build(&view, &options)).or_raise()?
+                py.detach(|| build(&view)).or_raise()?
             }
             Dtype::F64 => {
                 let pts = Points::<f64>::new(&arr)?;
                 let view = pts.view().or_raise()?;
-                py.detach(|| AnyIndex::build(&view, &options)).or_raise()?
+                py.detach(|| build(&view)).or_raise()?
             }
         };
         Ok(Self { index })
@@ -90,6 +101,12 @@ impl PyKdTree {
     #[getter]
     fn dtype_name(&self) -> &'static str {
         dtype(&self.index).numpy_name()
+    }
+
+    /// The periodic box per axis (0 for an open axis), or None for a tree without one.
+    #[getter]
+    fn boxsize(&self) -> Option<Vec<f64>> {
+        self.index.boxsize()
     }
 
     /// Caller indices in tree order (the points of one leaf are adjacent).
@@ -314,6 +331,8 @@ pub struct PyTable {
     rows: usize,
     /// Row starts, kept for `row()`.
     starts: Vec<usize>,
+    /// The metric the rows were measured in: `sq_dists` hold its keys (`to_csr`).
+    metric: nbhd::Metric,
 }
 
 impl PyTable {
@@ -321,6 +340,7 @@ impl PyTable {
         py: Python<'_>,
         table: NeighborTable<T>,
         n_points: usize,
+        metric: nbhd::Metric,
     ) -> PyResult<Self> {
         let rows = table.len();
         let (offsets, indices, sq_dists) = table.into_parts();
@@ -332,6 +352,7 @@ impl PyTable {
             n_points,
             rows,
             starts,
+            metric,
         })
     }
 
@@ -388,7 +409,12 @@ impl PyTable {
         let sparse = py.import("scipy.sparse")?;
         let mut data = self.sq_dists.bind(py).clone();
         if distances {
-            data = np.call_method1("sqrt", (data,))?;
+            // the keys' distances, as `nbhd::Metric::distance_of` (and scipy) computes them
+            data = match self.metric {
+                nbhd::Metric::Euclidean => np.call_method1("sqrt", (data,))?,
+                nbhd::Metric::Manhattan | nbhd::Metric::Chebyshev => data.call_method0("copy")?,
+                nbhd::Metric::Minkowski(p) => np.call_method1("power", (data, 1.0 / p))?,
+            };
         }
         let index_type = if self.n_points <= i32::MAX as usize
             && *self.starts.last().unwrap_or(&0) <= i32::MAX as usize

@@ -23,8 +23,8 @@ use crate::points::point_bytes;
 use crate::query::NeighborSearch;
 use crate::scalar::{Scalar, ScalarType};
 use crate::tree::{
-    check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size, u32_at,
-    u64_at, write_saved, written_by, Kind, DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
+    check_flags, check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size,
+    u32_at, u64_at, write_saved, written_by, Kind, DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
 };
 use crate::tree::{
     saved_header, BuildOptions, KdTree, LoadOptions, Persist, SavedFormat, HEADER_LEN, MAGIC,
@@ -85,6 +85,7 @@ impl SavedDynamicInfo {
         let h = check_start(bytes, &DYNAMIC)?;
         let version = u32_at(h, 12);
         let written_by = written_by(h);
+        check_flags(h)?;
         if u32_at(h, 28) != 0 || h[108..120].iter().any(|&b| b != 0) || u32_at(h, 124) != 0 {
             return Err(invalid("a reserved header field is not zero"));
         }
@@ -221,7 +222,15 @@ impl<T: Scalar> SavedFormat for DynamicKdTree<T> {
             o.threads as u64,
             payload_len,
         ];
-        header(&DYNAMIC, T::TYPE, o, &fields, 104, payload_crc)
+        header(
+            &DYNAMIC,
+            T::TYPE,
+            o,
+            self.period.is_some(),
+            &fields,
+            104,
+            payload_crc,
+        )
     }
 
     /// The table of static trees, the two bitmaps, the kept coordinates, then every static

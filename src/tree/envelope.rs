@@ -287,13 +287,14 @@ pub(crate) fn read_up_to<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<
 }
 
 /// The header of a saved index: `kind`'s magic and version, this machine's byte order, this
-/// library's version, the scalar type and build options (bytes 0 to 27), then `fields` as
-/// 64-bit values from byte 32, the payload's CRC-32 at `payload_crc_at`, and the header's own
-/// CRC-32 at byte 120.
+/// library's version, the scalar type and build options (bytes 0 to 27), [`PERIODIC`] at byte
+/// 28 for a periodic index, then `fields` as 64-bit values from byte 32, the payload's CRC-32
+/// at `payload_crc_at`, and the header's own CRC-32 at byte 120.
 pub(crate) fn header(
     kind: &Kind,
     scalar: ScalarType,
     options: &BuildOptions,
+    periodic: bool,
     fields: &[u64],
     payload_crc_at: usize,
     payload_crc: u32,
@@ -308,6 +309,9 @@ pub(crate) fn header(
     h[25] = pivot_code(options.pivot);
     h[26] = median_code(options.median);
     h[27] = non_finite_code(options.non_finite);
+    if periodic {
+        h[28..32].copy_from_slice(&PERIODIC.to_ne_bytes());
+    }
     for (i, v) in fields.iter().enumerate() {
         h[32 + 8 * i..40 + 8 * i].copy_from_slice(&v.to_ne_bytes());
     }
@@ -315,6 +319,22 @@ pub(crate) fn header(
     let crc = crc32fast::hash(&h[..HEADER_CRC_AT]);
     h[HEADER_CRC_AT..HEADER_CRC_AT + 4].copy_from_slice(&crc.to_ne_bytes());
     h
+}
+
+/// The word at byte 28 of a saved periodic index (0, reserved, otherwise). This format version
+/// does not hold the box: such a file is refused on loading ([`check_flags`]), rather than
+/// loaded as an index that is not periodic.
+pub(crate) const PERIODIC: u32 = 1;
+
+/// Refuses the header `h` of a periodic index (byte 28, [`PERIODIC`]), naming why.
+pub(crate) fn check_flags(h: &[u8]) -> Result<()> {
+    if u32_at(h, 28) == PERIODIC {
+        return Err(invalid(
+            "the index is periodic (a torus); this format version does not keep the box, so \
+             it cannot be loaded (build it again with its box)",
+        ));
+    }
+    Ok(())
 }
 
 /// The scalar type and the policies a checked header (bytes 24 to 27) names; its leaf size

@@ -17,8 +17,8 @@ use std::sync::OnceLock;
 
 use super::envelope::saved_header;
 use super::envelope::{
-    check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size, u32_at,
-    u64_at, written_by, Kind, SavedFormat, FORMAT_VERSION, HEADER_LEN, MAGIC,
+    check_flags, check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size,
+    u32_at, u64_at, written_by, Kind, SavedFormat, FORMAT_VERSION, HEADER_LEN, MAGIC,
 };
 use super::envelope::{DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND};
 use super::node::{Node, LEAF};
@@ -107,6 +107,7 @@ impl SavedTreeInfo {
         let h = check_start(bytes, &STATIC)?;
         let version = u32_at(h, 12);
         let written_by = written_by(h);
+        check_flags(h)?;
         if u32_at(h, 28) != 0 || u32_at(h, 100) != 0 || u32_at(h, 124) != 0 {
             return Err(invalid("a reserved header field is not zero"));
         }
@@ -232,7 +233,15 @@ impl<T: Scalar> SavedFormat for KdTree<T> {
         let mut all = [0u64; 8];
         all[..7].copy_from_slice(&fields);
         all[7] = payload_len;
-        header(&STATIC, T::TYPE, o, &all, 96, payload_crc)
+        header(
+            &STATIC,
+            T::TYPE,
+            o,
+            self.periodic.is_some(),
+            &all,
+            96,
+            payload_crc,
+        )
     }
 
     /// The coordinates and caller indices in tree order, the nodes and the bitmap of the caller
