@@ -36,11 +36,24 @@ pub(crate) fn answer_with<T: Scalar, I: NeighborIndex<T>>(
     plan: &Plan<T>,
     out: &mut Vec<Neighbor<T>>,
 ) {
-    let period = index.period();
-    if plan.plain && period.is_none() {
+    if plan.plain && index.period().is_none() {
         return answer(index, q, exclude, plan.nbhd, out);
     }
-    match period {
+    answer_measured(index, q, exclude, plan, out);
+}
+
+/// The measured search of [`answer_with`], `q` wrapped into the index's box if it has one. Kept
+/// out of line: inlined, its body made `answer_with` too large to inline into the tables' row
+/// loops, which cost the default path a call per row (callgrind, docs/speed-log.md).
+#[inline(never)]
+fn answer_measured<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    q: &[T],
+    exclude: Option<u32>,
+    plan: &Plan<T>,
+    out: &mut Vec<Neighbor<T>>,
+) {
+    match index.period() {
         None => measured(index, q, exclude, plan, out),
         Some(period) if q.len() <= 8 => {
             let mut w = [T::ZERO; 8];
