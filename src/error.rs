@@ -332,11 +332,10 @@ impl fmt::Display for NbhdError {
                 coordinate,
                 value,
                 size,
-            } => write!(
-                f,
-                "point {index} lies outside the periodic box: coordinate {coordinate} is \
-                 {value}, outside [0, {size})"
-            ),
+            } => {
+                let at = format!("coordinate {coordinate} is {value}, outside [0, {size})");
+                write!(f, "point {index} lies outside the periodic box: {at}")
+            }
             NonFiniteQuery { query, coordinate } => write!(
                 f,
                 "query point{} has a NaN or infinite coordinate (coordinate {coordinate})",
