@@ -10,8 +10,10 @@ use std::path::{Path, PathBuf};
 
 /// The layers, lowest first. A module of layer `i` may use modules of layers `< i`.
 const LAYERS: &[&[&str]] = &[
+    // the one error type
+    &["error"],
     // vocabulary every part shares
-    &["scalar", "error", "linalg", "select", "prefetch", "simd"],
+    &["scalar", "linalg", "select", "sum", "prefetch", "simd"],
     &[
         "points", "parallel", "progress", "scatter", "names", "metric",
     ],
