@@ -17,6 +17,7 @@
 use std::hint::black_box;
 use std::time::Instant;
 
+use nbhd::shapes::Rng;
 use nbhd::{select_in_parts, ExactSum};
 
 fn env_list(name: &str, default: &str) -> Vec<usize> {
@@ -27,23 +28,15 @@ fn env_list(name: &str, default: &str) -> Vec<usize> {
         .collect()
 }
 
-/// `n` values from a xorshift64* stream: uniform in `[0, 1)`, or `|N(0, 1)|` by Box–Muller.
+/// `n` seeded values (`nbhd::shapes::Rng`): uniform in `[0, 1)`, or `|N(0, 1)|`.
 fn values(n: usize, seed: u64, normal: bool) -> Vec<f64> {
-    let mut s = seed.max(1);
-    let mut unit = move || {
-        s ^= s >> 12;
-        s ^= s << 25;
-        s ^= s >> 27;
-        (s.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = Rng::new(seed);
     (0..n)
         .map(|_| {
-            let u = unit();
             if normal {
-                let v = unit();
-                ((-2.0 * (1.0 - u).ln()).sqrt() * (std::f64::consts::TAU * v).cos()).abs()
+                rng.gaussian().abs()
             } else {
-                u
+                rng.unit()
             }
         })
         .collect()
