@@ -18,7 +18,7 @@ use crate::metric::Metric;
 use crate::scalar::ScalarType;
 use crate::smooth::{Curvature, FeatureCriterion, Length, Stage, Weighting};
 use crate::tree::{MedianAlgorithm, PivotPolicy};
-use crate::NonFinitePolicy;
+use crate::packed::NonFinitePolicy;
 
 /// A C enum of this ABI: its values and name, to check an integer read from C.
 pub(crate) trait CEnum: Copy + 'static {

@@ -12,7 +12,7 @@ use crate::error::NbhdError;
 use crate::index::NeighborIndex;
 use crate::query::{Neighbor, NeighborhoodSpec, Query, QueryOptions};
 use crate::with_index;
-use crate::Scalar;
+use crate::scalar::Scalar;
 
 /// Scalar types with a per-thread result vector, so that a loop of single queries does not
 /// allocate once the vector has grown.

@@ -6,7 +6,8 @@ use crate::error::{NbhdError, Result};
 use crate::index::NeighborIndex;
 use crate::query::Neighborhood;
 use crate::table::{NeighborTable, TableOptions};
-use crate::{BuildOptions, KdTree, PointsView};
+use crate::points::PointsView;
+use crate::tree::{BuildOptions, KdTree};
 use glam::DVec3;
 
 /// The neighbourhood of every point of `points` (row `i` for point `i`), with or without the

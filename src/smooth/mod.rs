@@ -27,7 +27,7 @@ use crate::geometry::normals::{
     local_frames, offsets_frame, offsets_normal, orient_with_progress, Orientation,
 };
 use crate::table::NeighborTable;
-use crate::NonFinitePolicy;
+use crate::packed::NonFinitePolicy;
 use glam::DVec3;
 use rayon::prelude::*;
 use source::knn_rows;
