@@ -4,9 +4,9 @@
 
 use crate::error::{NbhdError, Result};
 use crate::index::NeighborIndex;
+use crate::points::PointsView;
 use crate::query::Neighborhood;
 use crate::table::{NeighborTable, TableOptions};
-use crate::points::PointsView;
 use crate::tree::{BuildOptions, KdTree};
 use glam::DVec3;
 

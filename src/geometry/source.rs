@@ -8,14 +8,14 @@
 
 use crate::error::{NbhdError, Result};
 use crate::index::NeighborIndex;
-use crate::query::Neighborhood;
-use crate::table::{neighborhoods_of_all, NeighborTable};
 use crate::packed::NonFinitePolicy;
 use crate::points::PointsView;
 use crate::query::brute::BruteForce;
 use crate::query::pca_sweep::PcaSweep;
 use crate::query::NeighborSearch;
+use crate::query::Neighborhood;
 use crate::scalar::{Scalar, ScalarType};
+use crate::table::{neighborhoods_of_all, NeighborTable};
 use crate::tree::KdTree;
 use glam::DVec3;
 
