@@ -1870,6 +1870,30 @@ nbhd_status nbhd_remove_statistical_outliers(const nbhd_tree *tree,
                                              uint8_t *mask);
 
 /**
+ * Statistical outlier removal over the live points of a growing tree: the points kept are
+ * those the static tree built on the live points keeps (nbhd_remove_statistical_outliers),
+ * `k` must be below the number of live points, and m and s are taken over the live points.
+ *
+ * - `kept`: the caller indices of the kept live points, ascending (`*count` of them); the
+ *   number of live points always suffices as `capacity`.
+ * - `mask`: NULL, or one byte per index given so far (nbhd_dynamic_tree_stats' `next_index`
+ *   bytes): 1 for a kept point, 0 for a removed outlier and for every index not live
+ *   (removed with nbhd_dynamic_remove or skipped as non-finite when inserted).
+ *
+ * Errors as nbhd_remove_statistical_outliers (INVALID_OPTION for k >= the live points).
+ *
+ * # Safety
+ * As nbhd_remove_statistical_outliers, with `tree` a live dynamic tree not being changed by
+ * another thread and `mask` NULL or writable for `next_index` bytes.
+ */
+nbhd_status nbhd_dynamic_remove_statistical_outliers(const nbhd_dynamic_tree *tree,
+                                                     const nbhd_statistical_outlier_options *options,
+                                                     uint32_t *kept,
+                                                     size_t capacity,
+                                                     size_t *count,
+                                                     uint8_t *mask);
+
+/**
  * The default radius outlier options: at least 2 other points within the radius, the shared
  * thread pool.
  */
@@ -1894,6 +1918,26 @@ nbhd_status nbhd_remove_radius_outliers(const nbhd_tree *tree,
                                         size_t capacity,
                                         size_t *count,
                                         uint8_t *mask);
+
+/**
+ * Radius outlier removal over the live points of a growing tree: the points kept are those
+ * the static tree built on the live points keeps (nbhd_remove_radius_outliers); removed
+ * points are not counted as neighbours. `kept` and `mask` as in
+ * nbhd_dynamic_remove_statistical_outliers (the mask has `next_index` bytes, 0 for every
+ * index not live).
+ *
+ * Errors as nbhd_remove_radius_outliers.
+ *
+ * # Safety
+ * As nbhd_dynamic_remove_statistical_outliers.
+ */
+nbhd_status nbhd_dynamic_remove_radius_outliers(const nbhd_dynamic_tree *tree,
+                                                double radius,
+                                                const nbhd_radius_outlier_options *options,
+                                                uint32_t *kept,
+                                                size_t capacity,
+                                                size_t *count,
+                                                uint8_t *mask);
 
 /**
  * The default voxel-grid options: every occupied voxel kept, the shared thread pool.

@@ -341,7 +341,7 @@ impl AnyIndex {
             });
         }
         with_index!(self, t, T => {
-            let mut values = vec![<T as crate::Scalar>::ZERO; boxes.len() * boxes.dim()];
+            let mut values = vec![<T as crate::scalar::Scalar>::ZERO; boxes.len() * boxes.dim()];
             for (i, b) in values.chunks_exact_mut(boxes.dim()).enumerate() {
                 boxes.read_point(i, b);
             }

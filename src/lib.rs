@@ -37,6 +37,7 @@ pub(crate) mod select;
 pub mod shapes;
 pub mod simd;
 pub mod smooth;
+pub mod sum;
 pub mod table;
 pub mod tree;
 
@@ -51,6 +52,8 @@ pub use query::brute::BruteForce;
 pub use query::pca_sweep::PcaSweep;
 pub use query::{Neighbor, NeighborSearch, Neighborhood, NeighborhoodSpec, Query, QueryOptions};
 pub use scalar::{Scalar, ScalarType};
+pub use select::radix::{select_in_parts, DigitCounts, OrderKey, RankSearch, RankStep};
+pub use sum::ExactSum;
 pub use table::{NeighborTable, TableOptions};
 pub use tree::{BuildOptions, KdTree, MedianAlgorithm, Persist, PivotPolicy, TreeStats};
 

@@ -8,8 +8,8 @@
 //! for any other p (the forms scipy's `cKDTree` compares too). A radius becomes a key once per
 //! query ([`Metric::key_of`]); a key becomes a distance with [`Metric::distance_of`].
 //!
-//! Inside the traversals a metric is a [`Norm`]: how one axis difference contributes (`term`)
-//! and how contributions combine (`fold`), chosen once per call ([`Measure::apply`]) so that
+//! Inside the traversals a metric is a `Norm`: how one axis difference contributes (`term`)
+//! and how contributions combine (`fold`), chosen once per call (`Measure::apply`) so that
 //! each norm gets its own monomorphised search. Keys are folded over the axes in order,
 //! `fold(… fold(fold(0, term(t0)), term(t1)) …)`, by every searcher alike (tree, brute force),
 //! so every searcher gives the same bits.

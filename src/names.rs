@@ -78,7 +78,7 @@ macro_rules! named_option {
         }
 
         impl ::std::str::FromStr for $ty {
-            type Err = $crate::NbhdError;
+            type Err = $crate::error::NbhdError;
             fn from_str(s: &str) -> ::std::result::Result<Self, Self::Err> {
                 $crate::names::parse_name(s)
             }

@@ -461,7 +461,7 @@ pub fn neighborhoods_of_all<T: Scalar, S: NeighborSearch<T> + ?Sized>(
                 exclude_self,
             };
             match searcher.search(query, nbhd, row) {
-                Err(crate::NbhdError::SkippedPoint { .. }) => {
+                Err(NbhdError::SkippedPoint { .. }) => {
                     row.clear();
                     Ok(())
                 }
@@ -475,11 +475,11 @@ pub fn neighborhoods_of_all<T: Scalar, S: NeighborSearch<T> + ?Sized>(
 /// The neighbourhoods of the points of `queries` (row `i` for query `i`), in parallel.
 pub fn neighborhoods_of_points<T: Scalar, S: NeighborSearch<T> + ?Sized>(
     searcher: &S,
-    queries: &crate::PointsView<'_>,
+    queries: &crate::points::PointsView<'_>,
     nbhd: Neighborhood<T>,
 ) -> Result<NeighborTable<T>> {
     if queries.dim() != searcher.dim() {
-        return Err(crate::NbhdError::DimensionMismatch {
+        return Err(NbhdError::DimensionMismatch {
             expected: searcher.dim(),
             got: queries.dim(),
         });

@@ -10,8 +10,10 @@ use std::path::{Path, PathBuf};
 
 /// The layers, lowest first. A module of layer `i` may use modules of layers `< i`.
 const LAYERS: &[&[&str]] = &[
+    // the one error type
+    &["error"],
     // vocabulary every part shares
-    &["scalar", "error", "linalg", "select", "prefetch", "simd"],
+    &["scalar", "linalg", "select", "sum", "prefetch", "simd"],
     &[
         "points", "parallel", "progress", "scatter", "names", "metric",
     ],
@@ -399,6 +401,54 @@ fn the_index_has_two_flavours_and_each_concept_one_definition() {
         assert!(
             !(front_door && holds_tree),
             "{rel} holds typed trees in an enum of its own: use nbhd::handle::AnyIndex"
+        );
+    }
+}
+
+/// The methods `KdTree` and `DynamicKdTree` share at the Python door: written once, in the
+/// `index_pymethods!` block of `python/src/index.rs` that both classes' blocks are made of.
+const PYTHON_SHARED_METHODS: &[&str] = &[
+    "size",
+    "m",
+    "dtype_name",
+    "knn",
+    "radius",
+    "knn_radius",
+    "neighborhoods",
+    "in_box",
+    "spacing",
+    "remove_statistical_outliers",
+    "remove_radius_outliers",
+    "to_bytes",
+    "from_bytes",
+    "__reduce__",
+];
+
+#[test]
+fn python_classes_share_one_definition_of_each_query() {
+    let python = Path::new(env!("CARGO_MANIFEST_DIR")).join("python/src");
+    let files = production_files(&python);
+    for (rel, text) in &files {
+        if rel == "index.rs" {
+            assert!(
+                text.contains("macro_rules! index_pymethods"),
+                "python/src/index.rs lost the shared #[pymethods] block"
+            );
+            continue;
+        }
+        let twice = defined_fns(text, PYTHON_SHARED_METHODS);
+        assert!(
+            twice.is_empty(),
+            "python/src/{rel} defines {twice:?} of its own: write a method both classes have \
+             once, in index_pymethods! (python/src/index.rs)"
+        );
+    }
+    for (file, class) in [("tree.rs", "PyKdTree"), ("dynamic.rs", "PyDynamicKdTree")] {
+        let text = &files.iter().find(|(r, _)| r == file).expect(file).1;
+        assert!(
+            text.contains(&format!("index_pymethods!(\n    {class},"))
+                && !text.contains(&format!("#[pymethods]\nimpl {class} {{")),
+            "python/src/{file}: the methods of {class} are one index_pymethods! block"
         );
     }
 }

@@ -29,6 +29,7 @@ from ._nbhd import (
     read,
     smooth,
     smooth_robust,
+    voxel_grid,
     write,
 )
 
@@ -40,6 +41,7 @@ __all__ = [
     "curvatures",
     "smooth",
     "smooth_robust",
+    "voxel_grid",
     "read",
     "write",
     "MAX_THREADS",

@@ -26,6 +26,12 @@ class Spacing(TypedDict):
     median: float
     points: int
 
+class VoxelGrid(TypedDict):
+    centroids: Floats
+    nearest: U32
+    offsets: npt.NDArray[np.uint64]
+    members: U32
+
 __all__ = [
     "KdTree",
     "Table",
@@ -34,6 +40,7 @@ __all__ = [
     "curvatures",
     "smooth",
     "smooth_robust",
+    "voxel_grid",
     "read",
     "write",
     "_reads_in_place",
@@ -139,6 +146,14 @@ class KdTree:
     ) -> Union[U32, tuple[npt.NDArray[np.uint64], U32]]:
         """1-D bounds: the indices inside the closed box; 2-D: (offsets, indices)."""
     def spacing(self, *, threads: int = 0) -> Spacing: ...
+    def remove_statistical_outliers(
+        self, *, k: int = 50, std_ratio: float = 1.0, threads: int = 0
+    ) -> U32:
+        """Indices kept (ascending) by statistical outlier removal (PCL, Open3D's ``ind``)."""
+    def remove_radius_outliers(
+        self, radius: float, *, min_neighbors: int = 2, threads: int = 0
+    ) -> U32:
+        """Indices of the points with at least ``min_neighbors`` others within ``radius``."""
     def to_bytes(self) -> bytes:
         """The saved-tree format (docs/tree-file-format.md); what pickle stores."""
     @classmethod
@@ -223,6 +238,14 @@ class DynamicKdTree:
     ) -> Union[U32, tuple[npt.NDArray[np.uint64], U32]]:
         """1-D bounds: the indices inside the closed box; 2-D: (offsets, indices)."""
     def spacing(self, *, threads: int = 0) -> Spacing: ...
+    def remove_statistical_outliers(
+        self, *, k: int = 50, std_ratio: float = 1.0, threads: int = 0
+    ) -> U32:
+        """Indices kept (ascending) by statistical outlier removal (PCL, Open3D's ``ind``)."""
+    def remove_radius_outliers(
+        self, radius: float, *, min_neighbors: int = 2, threads: int = 0
+    ) -> U32:
+        """Indices of the points with at least ``min_neighbors`` others within ``radius``."""
     def to_bytes(self) -> bytes: ...
     @classmethod
     def from_bytes(cls, data: bytes) -> DynamicKdTree: ...
@@ -345,6 +368,15 @@ class CloudFile(TypedDict):
     format: Literal["PLY", "PCD", "OBJ", "LAS", "XYZ"]
     source_precision: Optional[Literal["single", "double"]]
     text_columns: Optional[list[str]]
+
+def voxel_grid(
+    points: ArrayLike,
+    leaf: Union[float, Sequence[float]],
+    *,
+    min_points_per_voxel: int = 0,
+    threads: int = 0,
+) -> VoxelGrid:
+    """The occupied voxels: centroids, each one's row nearest its centroid, and its rows."""
 
 def read(path: Path, *, format: Optional[str] = None, columns: Optional[str] = None) -> CloudFile: ...
 def write(

@@ -5,13 +5,12 @@
 use nbhd::handle::AnyIndex;
 use nbhd::{with_index, NeighborIndex, Query, ScalarType};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict, PyType};
+use pyo3::types::PyDict;
 
 use crate::arrays::{check_rows, float_array, vec1, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
-use crate::index::{self, dtype};
+use crate::index::{dtype, index_pymethods};
 use crate::options;
-use crate::tree::PyTable;
 
 /// A k-d tree that accepts insertions and removals (`nbhd::DynamicKdTree`): a forest of static
 /// trees of growing sizes with removed points as tombstones. Every query answers exactly what
@@ -54,262 +53,124 @@ impl PyDynamicKdTree {
     }
 }
 
-#[pymethods]
-impl PyDynamicKdTree {
-    /// An empty tree for points of dimension `dim`, computing in `dtype` ("float32" or
-    /// "float64"). The build options shape every static tree of the forest (as in `KdTree`);
-    /// `non_finite` decides what inserting a NaN/Inf point does: "reject" raises and inserts
-    /// nothing of the batch, "skip" gives it its index but leaves it out. `growth` (≥ 2): a
-    /// tree is merged into the next older one while that holds fewer than `growth` times its
-    /// points — larger keeps fewer trees (faster queries) for more rebuilding.
-    #[new]
-    #[pyo3(signature = (dim, *, dtype = "float32", pivot = "sliding-midpoint",
+index_pymethods!(
+    PyDynamicKdTree,
+    name = "DynamicKdTree",
+    held = "live points",
+    absent = "removed and skipped points",
+    len = "tree.next_index",
+    growing = true,
+    {
+        /// An empty tree for points of dimension `dim`, computing in `dtype` ("float32" or
+        /// "float64"). The build options shape every static tree of the forest (as in `KdTree`);
+        /// `non_finite` decides what inserting a NaN/Inf point does: "reject" raises and inserts
+        /// nothing of the batch, "skip" gives it its index but leaves it out. `growth` (≥ 2): a
+        /// tree is merged into the next older one while that holds fewer than `growth` times its
+        /// points — larger keeps fewer trees (faster queries) for more rebuilding.
+        #[new]
+        #[pyo3(signature = (dim, *, dtype = "float32", pivot = "sliding-midpoint",
                         median = "floyd-rivest", leaf_size = nbhd::tree::DEFAULT_LEAF_SIZE,
                         non_finite = "reject", threads = 0, growth = nbhd::dynamic::GROWTH))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        dim: usize,
-        dtype: &str,
-        pivot: &str,
-        median: &str,
-        leaf_size: usize,
-        non_finite: &str,
-        threads: usize,
-        growth: usize,
-    ) -> PyResult<Self> {
-        let options = options::build(pivot, median, leaf_size, non_finite, threads)?;
-        let scalar = match dtype {
-            "float32" => ScalarType::F32,
-            "float64" => ScalarType::F64,
-            other => {
-                return Err(value_err(format!(
-                    "dtype {other:?}: \"float32\" or \"float64\""
-                )))
-            }
-        };
-        let mut index = AnyIndex::growing(dim, scalar, &options).or_raise()?;
-        index.set_growth(growth).or_raise()?;
-        Ok(Self { index })
-    }
+        #[allow(clippy::too_many_arguments)]
+        fn new(
+            dim: usize,
+            dtype: &str,
+            pivot: &str,
+            median: &str,
+            leaf_size: usize,
+            non_finite: &str,
+            threads: usize,
+            growth: usize,
+        ) -> PyResult<Self> {
+            let options = options::build(pivot, median, leaf_size, non_finite, threads)?;
+            let scalar = match dtype {
+                "float32" => ScalarType::F32,
+                "float64" => ScalarType::F64,
+                other => {
+                    return Err(value_err(format!(
+                        "dtype {other:?}: \"float32\" or \"float64\""
+                    )))
+                }
+            };
+            let mut index = AnyIndex::growing(dim, scalar, &options).or_raise()?;
+            index.set_growth(growth).or_raise()?;
+            Ok(Self { index })
+        }
 
-    /// Inserts the rows of `points` (an (n, dim) array, converted to the tree's dtype) as one
-    /// batch and returns the index of the first: the batch gets `first .. first + n`.
-    fn insert(&mut self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<u32> {
-        let (arr, _) = float_array(points, Some(dtype(&self.index)))?;
-        check_rows(&arr, "d")?;
-        match dtype(&self.index) {
-            Dtype::F32 => insert_rows::<f32>(&mut self.index, py, &arr),
-            Dtype::F64 => insert_rows::<f64>(&mut self.index, py, &arr),
+        /// Inserts the rows of `points` (an (n, dim) array, converted to the tree's dtype) as one
+        /// batch and returns the index of the first: the batch gets `first .. first + n`.
+        fn insert(&mut self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<u32> {
+            let (arr, _) = float_array(points, Some(dtype(&self.index)))?;
+            check_rows(&arr, "d")?;
+            match dtype(&self.index) {
+                Dtype::F32 => insert_rows::<f32>(&mut self.index, py, &arr),
+                Dtype::F64 => insert_rows::<f64>(&mut self.index, py, &arr),
+            }
+        }
+
+        /// Removes the live points `indices` (any order; all or nothing). Their indices are never
+        /// given again.
+        fn remove(&mut self, py: Python<'_>, indices: Vec<u32>) -> PyResult<()> {
+            let index = &mut self.index;
+            py.detach(|| index.remove(&indices)).or_raise()
+        }
+
+        /// Worker threads of the builds that `insert` and `remove` run: 0 a thread per core, 1
+        /// serially, n a pool of n (at most 1024). A tree read by `from_bytes` (or unpickled)
+        /// starts at 0 whatever the bytes say: saved data is untrusted input.
+        #[getter]
+        fn threads(&self) -> usize {
+            self.index.options().threads
+        }
+
+        #[setter]
+        fn set_threads(&mut self, threads: usize) -> PyResult<()> {
+            self.index.set_threads(threads).or_raise()
+        }
+
+        /// Indices given so far (live, removed and skipped): the rows of `neighborhoods`.
+        #[getter]
+        fn next_index(&self) -> usize {
+            self.next()
+        }
+
+        /// Whether `index` names a live point.
+        fn is_live(&self, index: u32) -> bool {
+            self.index.is_live(index)
+        }
+
+        /// `live`, `next_index` and `trees`: a list of (live, removed) points per static tree,
+        /// oldest first.
+        fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+            let s = self.growing();
+            let d = PyDict::new(py);
+            d.set_item("live", s.live)?;
+            d.set_item("next_index", s.next_index)?;
+            d.set_item("trees", s.trees)?;
+            Ok(d)
+        }
+
+        /// The coordinates of the live point `index` (raises if removed, skipped or not given).
+        fn point<'py>(&self, py: Python<'py>, index: u32) -> PyResult<Bound<'py, PyAny>> {
+            with_index!(&self.index, t, _T => {
+                // the library's error for an index out of range, removed or skipped
+                let (p, _) = t.resolve(Query::stored(index)).or_raise()?;
+                Ok(vec1(py, p.to_vec()).into_any())
+            })
+        }
+
+        fn __len__(&self) -> usize {
+            self.index.len()
+        }
+
+        fn __repr__(&self) -> String {
+            format!(
+                "DynamicKdTree(live={}, next_index={}, m={}, dtype={})",
+                self.size(),
+                self.next(),
+                self.m(),
+                dtype(&self.index).numpy_name()
+            )
         }
     }
-
-    /// Removes the live points `indices` (any order; all or nothing). Their indices are never
-    /// given again.
-    fn remove(&mut self, py: Python<'_>, indices: Vec<u32>) -> PyResult<()> {
-        let index = &mut self.index;
-        py.detach(|| index.remove(&indices)).or_raise()
-    }
-
-    /// Worker threads of the builds that `insert` and `remove` run: 0 a thread per core, 1
-    /// serially, n a pool of n (at most 1024). A tree read by `from_bytes` (or unpickled)
-    /// starts at 0 whatever the bytes say: saved data is untrusted input.
-    #[getter]
-    fn threads(&self) -> usize {
-        self.index.options().threads
-    }
-
-    #[setter]
-    fn set_threads(&mut self, threads: usize) -> PyResult<()> {
-        self.index.set_threads(threads).or_raise()
-    }
-
-    /// Live points.
-    #[getter]
-    fn size(&self) -> usize {
-        self.index.len()
-    }
-
-    /// Indices given so far (live, removed and skipped): the rows of `neighborhoods`.
-    #[getter]
-    fn next_index(&self) -> usize {
-        self.next()
-    }
-
-    /// Dimension of the points.
-    #[getter]
-    fn m(&self) -> usize {
-        self.index.dim()
-    }
-
-    /// The tree's scalar type: "float32" or "float64".
-    #[getter]
-    fn dtype_name(&self) -> &'static str {
-        dtype(&self.index).numpy_name()
-    }
-
-    /// Whether `index` names a live point.
-    fn is_live(&self, index: u32) -> bool {
-        self.index.is_live(index)
-    }
-
-    /// `live`, `next_index` and `trees`: a list of (live, removed) points per static tree,
-    /// oldest first.
-    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = self.growing();
-        let d = PyDict::new(py);
-        d.set_item("live", s.live)?;
-        d.set_item("next_index", s.next_index)?;
-        d.set_item("trees", s.trees)?;
-        Ok(d)
-    }
-
-    /// The coordinates of the live point `index` (raises if removed, skipped or not given).
-    fn point<'py>(&self, py: Python<'py>, index: u32) -> PyResult<Bound<'py, PyAny>> {
-        with_index!(&self.index, t, _T => {
-            // the library's error for an index out of range, removed or skipped
-            let (p, _) = t.resolve(Query::stored(index)).or_raise()?;
-            Ok(vec1(py, p.to_vec()).into_any())
-        })
-    }
-
-    /// The `k` nearest live points of `x`; as `KdTree.knn`.
-    #[pyo3(signature = (x, k, *, p = 2.0, eps = 0.0, threads = 0))]
-    fn knn<'py>(
-        &self,
-        py: Python<'py>,
-        x: &Bound<'py, PyAny>,
-        k: usize,
-        p: f64,
-        eps: f64,
-        threads: usize,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let spec = index::spec(Some(k), None, true)?;
-        let options = index::options(p, eps, false)?;
-        index::query(&self.index, py, x, spec, options, threads)?.dense(py, k.min(self.size()))
-    }
-
-    /// All live points within `radius` of `x`; as `KdTree.radius`.
-    #[pyo3(signature = (x, radius, *, sorted = true, p = 2.0, eps = 0.0, strict = false,
-                        threads = 0))]
-    #[allow(clippy::too_many_arguments)]
-    fn radius<'py>(
-        &self,
-        py: Python<'py>,
-        x: &Bound<'py, PyAny>,
-        radius: f64,
-        sorted: bool,
-        p: f64,
-        eps: f64,
-        strict: bool,
-        threads: usize,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let spec = index::spec(None, Some(radius), sorted)?;
-        let options = index::options(p, eps, strict)?;
-        index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
-    }
-
-    /// The `k` nearest among the live points within `radius` of `x`; as `KdTree.knn_radius`.
-    #[pyo3(signature = (x, k, radius, *, p = 2.0, eps = 0.0, strict = false, threads = 0))]
-    #[allow(clippy::too_many_arguments)]
-    fn knn_radius<'py>(
-        &self,
-        py: Python<'py>,
-        x: &Bound<'py, PyAny>,
-        k: usize,
-        radius: f64,
-        p: f64,
-        eps: f64,
-        strict: bool,
-        threads: usize,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let spec = index::spec(Some(k), Some(radius), true)?;
-        let options = index::options(p, eps, strict)?;
-        index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
-    }
-
-    /// The neighbourhood of every live point as a `Table` with a row per index given (empty
-    /// for points not live); as `KdTree.neighborhoods`.
-    #[pyo3(signature = (*, k = None, radius = None, exclude_self = true, sorted = true,
-                        p = 2.0, eps = 0.0, strict = false, threads = 0))]
-    #[allow(clippy::too_many_arguments)]
-    fn neighborhoods(
-        &self,
-        py: Python<'_>,
-        k: Option<usize>,
-        radius: Option<f64>,
-        exclude_self: bool,
-        sorted: bool,
-        p: f64,
-        eps: f64,
-        strict: bool,
-        threads: usize,
-    ) -> PyResult<PyTable> {
-        let spec = index::spec(k, radius, sorted)?;
-        let options = index::options(p, eps, strict)?;
-        index::neighborhoods(&self.index, py, spec, options, exclude_self, threads)
-    }
-
-    /// The live points inside closed axis-aligned boxes (`min[j] <= x[j] <= max[j]`; bounds may
-    /// be infinite; a NaN bound or `min > max` raises NbhdValueError), removed points are never inside. One box (1-D
-    /// `min`, `max`): the caller's indices, ascending. A batch ((m, d) arrays): `(offsets,
-    /// indices)`, box i's points being `indices[offsets[i]:offsets[i + 1]]`; identical for any
-    /// `threads`.
-    #[pyo3(signature = (min, max, *, threads = 0))]
-    fn in_box<'py>(
-        &self,
-        py: Python<'py>,
-        min: &Bound<'py, PyAny>,
-        max: &Bound<'py, PyAny>,
-        threads: usize,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        index::in_box(&self.index, py, min, max, threads)
-    }
-
-    /// The spacing of the live points: a dict of `mean` (h, the mean distance of a point to its
-    /// nearest other point, the unit of every relative length), `median` and `points` (how many
-    /// it was taken over); the same bits for any `threads`. Fewer than two points raise.
-    #[pyo3(signature = (*, threads = 0))]
-    fn spacing<'py>(&self, py: Python<'py>, threads: usize) -> PyResult<Bound<'py, PyDict>> {
-        index::spacing(&self.index, py, threads)
-    }
-
-    /// The tree in the saved dynamic-tree format (docs/tree-file-format.md) as `bytes`; what
-    /// `pickle` stores and `DynamicKdTree.from_bytes` reads back.
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        index::to_bytes(&self.index, py)
-    }
-
-    /// The dynamic tree saved in `data`, of the dtype it was saved with: it answers every
-    /// query exactly as the saved one did and continues its indices. Damaged, truncated or
-    /// foreign bytes (a saved static `KdTree` included) raise `NbhdValueError` naming what
-    /// differs.
-    #[classmethod]
-    fn from_bytes(cls: &Bound<'_, PyType>, data: &[u8]) -> PyResult<Self> {
-        Ok(Self {
-            index: index::from_bytes(cls.py(), data, true)?,
-        })
-    }
-
-    /// Pickling: `DynamicKdTree.from_bytes(tree.to_bytes())`.
-    fn __reduce__<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let from = slf.get_type().getattr("from_bytes")?;
-        let bytes = slf.borrow().to_bytes(slf.py());
-        Ok((from, (bytes,)))
-    }
-
-    fn __len__(&self) -> usize {
-        self.index.len()
-    }
-
-    fn __repr__(&self) -> String {
-        format!(
-            "DynamicKdTree(live={}, next_index={}, m={}, dtype={})",
-            self.size(),
-            self.next(),
-            self.m(),
-            dtype(&self.index).numpy_name()
-        )
-    }
-}
+);

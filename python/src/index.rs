@@ -2,6 +2,7 @@
 //! (`nbhd::handle::AnyIndex`), and each of their queries is one call of a function here over
 //! it, so a query is bound once for both classes.
 
+use nbhd::filter::{RadiusOutlierOptions, StatisticalOutlierOptions};
 use nbhd::handle::{AnyIndex, AnyTable};
 use nbhd::{with_index, with_table, NeighborIndex, NeighborhoodSpec, Query, ScalarType};
 use nbhd::{Metric, Neighbor, QueryOptions, Scalar, TableOptions};
@@ -209,3 +210,299 @@ pub(crate) fn spacing<'py>(
     d.set_item("points", s.points)?;
     Ok(d)
 }
+
+/// The caller's indices a filter kept, ascending (uint32).
+fn kept(py: Python<'_>, kept: nbhd::filter::Kept) -> Bound<'_, PyArray1<u32>> {
+    vec1(py, kept.indices)
+}
+
+/// Statistical outlier removal over the index's points
+/// (`nbhd::filter::statistical_outlier_removal`): the caller's indices of the points kept,
+/// ascending.
+pub(crate) fn remove_statistical_outliers<'py>(
+    index: &AnyIndex,
+    py: Python<'py>,
+    k: usize,
+    std_ratio: f64,
+    threads: usize,
+) -> PyResult<Bound<'py, PyArray1<u32>>> {
+    let options = StatisticalOutlierOptions {
+        k,
+        std_ratio,
+        threads,
+    };
+    let result = py.detach(|| index.statistical_outlier_removal(&options));
+    Ok(kept(py, result.or_raise()?))
+}
+
+/// Radius outlier removal over the index's points (`nbhd::filter::radius_outlier_removal`): the
+/// caller's indices of the points kept, ascending.
+pub(crate) fn remove_radius_outliers<'py>(
+    index: &AnyIndex,
+    py: Python<'py>,
+    radius: f64,
+    min_neighbors: usize,
+    threads: usize,
+) -> PyResult<Bound<'py, PyArray1<u32>>> {
+    let options = RadiusOutlierOptions {
+        radius,
+        min_neighbors,
+        threads,
+    };
+    let result = py.detach(|| index.radius_outlier_removal(&options));
+    Ok(kept(py, result.or_raise()?))
+}
+
+/// Emits the one `#[pymethods]` block of a Python index class (`KdTree`, `DynamicKdTree`): the
+/// class's own methods (`own`) and every method the two classes share, each a call of a
+/// function of this module over the class's `index: AnyIndex`. PyO3 takes one `#[pymethods]`
+/// block per class (unless its `multiple-pymethods` feature, which costs the `inventory`
+/// crate), so the shared methods — signatures, defaults and docstrings — are written here once
+/// and spliced into both blocks. `held` names the points a query sees, `absent` those it
+/// never sees, `len` the attribute that counts the indices given, `growing` whether the class
+/// holds a growing tree.
+macro_rules! index_pymethods {
+    ($class:ident, name = $name:literal, held = $held:literal, absent = $absent:literal,
+     len = $len:literal, growing = $growing:literal, { $($own:tt)* }) => {
+        #[::pyo3::pymethods]
+        impl $class {
+            $($own)*
+
+            #[doc = concat!("Number of ", $held, " (", $absent, " not counted).")]
+            #[getter]
+            fn size(&self) -> usize {
+                self.index.len()
+            }
+
+            /// Dimension of the points.
+            #[getter]
+            fn m(&self) -> usize {
+                self.index.dim()
+            }
+
+            /// The tree's scalar type: "float32" or "float64" (queries are converted to it).
+            #[getter]
+            fn dtype_name(&self) -> &'static str {
+                $crate::index::dtype(&self.index).numpy_name()
+            }
+
+            #[doc = concat!("The `k` nearest ", $held, " of `x`, ordered by (sq_dist, index).")]
+            ///
+            /// One point (1-D `x` of length d): `(indices, sq_dists)`, each of length
+            /// min(k, size). A batch (2-D `x`, m × d): `(indices, sq_dists)` of shape
+            /// (m, min(k, size)), answered in parallel (`threads`), identical for any thread
+            /// count. Distances are squared.
+            ///
+            /// Every query takes `p`, the Minkowski p-norm it measures by (1 ≤ p ≤ ∞; default
+            /// 2, Euclidean): `sq_dists` then hold the metric's key — squared for p = 2, the
+            /// distance for p = 1 and ∞, Σ|x_j − q_j|^p otherwise (`d = key ** (1 / p)`) — and
+            /// a radius is a distance in it. `eps > 0` makes the search approximate (scipy's
+            /// rule: the i-th neighbour within `1 + eps` times the true i-th; a radius result
+            /// holds every point within `radius / (1 + eps)` and none beyond
+            /// `radius * (1 + eps)`); `strict=True` makes a radius exclusive (scipy's
+            /// `distance_upper_bound`).
+            #[pyo3(signature = (x, k, *, p = 2.0, eps = 0.0, threads = 0))]
+            fn knn<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+                x: &::pyo3::Bound<'py, ::pyo3::PyAny>,
+                k: usize,
+                p: f64,
+                eps: f64,
+                threads: usize,
+            ) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::PyAny>> {
+                let spec = $crate::index::spec(Some(k), None, true)?;
+                let options = $crate::index::options(p, eps, false)?;
+                let answer = $crate::index::query(&self.index, py, x, spec, options, threads)?;
+                answer.dense(py, k.min(self.index.len()))
+            }
+
+            #[doc = concat!("All ", $held, " within `radius` of `x` (plain radius, inclusive:")]
+            /// ‖p − x‖ ≤ radius, exclusive with `strict=True`), ordered by (sq_dist, index)
+            /// unless `sorted=False`. `p`, `eps`: as `knn`.
+            ///
+            /// One point: `(indices, sq_dists)`. A batch (2-D `x`): a `Table` of rows, one per
+            /// query.
+            #[pyo3(signature = (x, radius, *, sorted = true, p = 2.0, eps = 0.0, strict = false,
+                                threads = 0))]
+            #[allow(clippy::too_many_arguments)]
+            fn radius<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+                x: &::pyo3::Bound<'py, ::pyo3::PyAny>,
+                radius: f64,
+                sorted: bool,
+                p: f64,
+                eps: f64,
+                strict: bool,
+                threads: usize,
+            ) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::PyAny>> {
+                let spec = $crate::index::spec(None, Some(radius), sorted)?;
+                let options = $crate::index::options(p, eps, strict)?;
+                $crate::index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
+            }
+
+            #[doc = concat!("The ε-k-neighbourhood of `x`: the `k` nearest among the ", $held,
+                            " within")]
+            /// `radius` (thesis Section 2.1.1). One point: `(indices, sq_dists)`; a batch: a
+            /// `Table`. `p`, `eps`, `strict`: as `knn` and `radius`.
+            #[pyo3(signature = (x, k, radius, *, p = 2.0, eps = 0.0, strict = false,
+                                threads = 0))]
+            #[allow(clippy::too_many_arguments)]
+            fn knn_radius<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+                x: &::pyo3::Bound<'py, ::pyo3::PyAny>,
+                k: usize,
+                radius: f64,
+                p: f64,
+                eps: f64,
+                strict: bool,
+                threads: usize,
+            ) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::PyAny>> {
+                let spec = $crate::index::spec(Some(k), Some(radius), true)?;
+                let options = $crate::index::options(p, eps, strict)?;
+                $crate::index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
+            }
+
+            #[doc = concat!("The neighbourhood of each of the ", $held, " as a `Table`: a row")]
+            #[doc = concat!("per index (row i for the caller's point i; ", $absent,
+                            " get empty rows):")]
+            /// the `k` nearest (`k` alone), all within `radius` (`radius` alone) or the
+            /// ε-k-neighbourhood (both). `exclude_self` leaves each point out of its own row
+            /// (its duplicates at distance 0 stay). Computed in parallel, one tree descent per
+            /// group of neighbouring points; identical bytes for any `threads`. `p`, `eps`,
+            /// `strict`: as `knn` and `radius` (each row then one search).
+            #[pyo3(signature = (*, k = None, radius = None, exclude_self = true, sorted = true,
+                                p = 2.0, eps = 0.0, strict = false, threads = 0))]
+            #[allow(clippy::too_many_arguments)]
+            fn neighborhoods(
+                &self,
+                py: ::pyo3::Python<'_>,
+                k: Option<usize>,
+                radius: Option<f64>,
+                exclude_self: bool,
+                sorted: bool,
+                p: f64,
+                eps: f64,
+                strict: bool,
+                threads: usize,
+            ) -> ::pyo3::PyResult<$crate::tree::PyTable> {
+                let spec = $crate::index::spec(k, radius, sorted)?;
+                let options = $crate::index::options(p, eps, strict)?;
+                $crate::index::neighborhoods(&self.index, py, spec, options, exclude_self, threads)
+            }
+
+            #[doc = concat!("The ", $held, " inside closed axis-aligned boxes")]
+            /// (`min[j] <= x[j] <= max[j]`; bounds may be infinite; a NaN bound or `min > max`
+            #[doc = concat!("raises NbhdValueError; ", $absent, " are never inside). One box")]
+            /// (1-D `min`, `max`): the caller's indices, ascending. A batch ((m, d) arrays):
+            /// `(offsets, indices)`, box i's points being `indices[offsets[i]:offsets[i + 1]]`;
+            /// identical for any `threads`.
+            #[pyo3(signature = (min, max, *, threads = 0))]
+            fn in_box<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+                min: &::pyo3::Bound<'py, ::pyo3::PyAny>,
+                max: &::pyo3::Bound<'py, ::pyo3::PyAny>,
+                threads: usize,
+            ) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::PyAny>> {
+                $crate::index::in_box(&self.index, py, min, max, threads)
+            }
+
+            #[doc = concat!("The spacing of the ", $held, ": a dict of `mean` (h, the mean")]
+            /// distance of a point to its nearest other point, the unit of every relative
+            /// length), `median` and `points` (how many it was taken over); the same bits for
+            /// any `threads`. Fewer than two points raise.
+            #[pyo3(signature = (*, threads = 0))]
+            fn spacing<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+                threads: usize,
+            ) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::types::PyDict>> {
+                $crate::index::spacing(&self.index, py, threads)
+            }
+
+            #[doc = concat!("Statistical outlier removal over the ", $held, " (PCL's")]
+            /// StatisticalOutlierRemoval, Open3D's `remove_statistical_outlier`): for each point
+            /// its mean distance d_i to its `k` nearest other points (PCL's `setMeanK(k)`,
+            /// Open3D's `nb_neighbors`); over all points the mean m and the sample standard
+            /// deviation s; a point is kept when d_i <= m + std_ratio * s (`std_ratio` finite,
+            /// may be negative). `k` must be at least 1 and below `size`.
+            ///
+            /// Returns the caller's indices of the kept points, ascending (uint32; Open3D's
+            /// `ind`): `points[kept]` is the cleaned cloud, and `mask[kept] = True` on a
+            #[doc = concat!("`np.zeros(", $len, ", bool)` gives a mask; ", $absent,
+                            " are never kept.")]
+            #[pyo3(signature = (*, k = 50, std_ratio = 1.0, threads = 0))]
+            fn remove_statistical_outliers<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+                k: usize,
+                std_ratio: f64,
+                threads: usize,
+            ) -> ::pyo3::PyResult<::pyo3::Bound<'py, numpy::PyArray1<u32>>> {
+                $crate::index::remove_statistical_outliers(&self.index, py, k, std_ratio, threads)
+            }
+
+            #[doc = concat!("Radius outlier removal over the ", $held, " (PCL's")]
+            /// RadiusOutlierRemoval, Open3D's `remove_radius_outlier`): a point is kept when at
+            /// least `min_neighbors` *other* points lie within `radius` (plain Euclidean,
+            /// inclusive; duplicates count). PCL's `setMinNeighborsInRadius(m)` is the same m;
+            /// Open3D's `nb_points` counts the point itself (`nb_points = min_neighbors + 1`).
+            /// `min_neighbors = 0` keeps every point.
+            ///
+            /// Returns the caller's indices of the kept points, ascending (uint32), as
+            #[doc = concat!("`remove_statistical_outliers`; ", $absent, " are never kept.")]
+            #[pyo3(signature = (radius, *, min_neighbors = 2, threads = 0))]
+            fn remove_radius_outliers<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+                radius: f64,
+                min_neighbors: usize,
+                threads: usize,
+            ) -> ::pyo3::PyResult<::pyo3::Bound<'py, numpy::PyArray1<u32>>> {
+                let index = &self.index;
+                $crate::index::remove_radius_outliers(index, py, radius, min_neighbors, threads)
+            }
+
+            #[doc = concat!("The ", $name, " in its saved format (docs/tree-file-format.md) as")]
+            #[doc = concat!("`bytes`: what `pickle` stores and `", $name,
+                            ".from_bytes` reads back.")]
+            fn to_bytes<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+            ) -> ::pyo3::Bound<'py, ::pyo3::types::PyBytes> {
+                $crate::index::to_bytes(&self.index, py)
+            }
+
+            #[doc = concat!("The ", $name, " saved in `data` (by `to_bytes`, `pickle`, or the")]
+            /// Rust and C saves), of the dtype it was saved with, answering every query exactly
+            /// as the saved one did. Damaged, truncated or foreign bytes (another format version,
+            /// byte order, or a saved tree of the other class) raise `NbhdValueError` naming
+            /// what differs.
+            #[classmethod]
+            fn from_bytes(
+                cls: &::pyo3::Bound<'_, ::pyo3::types::PyType>,
+                data: &[u8],
+            ) -> ::pyo3::PyResult<Self> {
+                Ok(Self {
+                    index: $crate::index::from_bytes(cls.py(), data, $growing)?,
+                })
+            }
+
+            #[doc = concat!("Pickling: `", $name, ".from_bytes(tree.to_bytes())`.")]
+            fn __reduce__<'py>(
+                slf: &::pyo3::Bound<'py, Self>,
+            ) -> ::pyo3::PyResult<(
+                ::pyo3::Bound<'py, ::pyo3::PyAny>,
+                (::pyo3::Bound<'py, ::pyo3::types::PyBytes>,),
+            )> {
+                let from = slf.get_type().getattr("from_bytes")?;
+                let bytes = $crate::index::to_bytes(&slf.borrow().index, slf.py());
+                Ok((from, (bytes,)))
+            }
+        }
+    };
+}
+pub(crate) use index_pymethods;

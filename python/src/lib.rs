@@ -6,6 +6,7 @@
 mod arrays;
 mod dynamic;
 mod errors;
+mod filter;
 mod geometry;
 mod index;
 mod io;
@@ -34,6 +35,7 @@ fn _nbhd(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(geometry::curvatures, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::smooth, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::smooth_robust, m)?)?;
+    m.add_function(wrap_pyfunction!(filter::voxel_grid, m)?)?;
     m.add_function(wrap_pyfunction!(io::read, m)?)?;
     m.add_function(wrap_pyfunction!(io::write, m)?)?;
     m.add_function(wrap_pyfunction!(_reads_in_place, m)?)?;

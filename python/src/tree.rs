@@ -5,11 +5,11 @@ use nbhd::handle::AnyIndex;
 use nbhd::{NbhdError, NeighborTable, Scalar};
 use numpy::{Element, PyArray1};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict, PyTuple, PyType};
+use pyo3::types::{PyDict, PyTuple};
 
 use crate::arrays::{check_rows, float_array, vec1, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
-use crate::index::{self, dtype};
+use crate::index::{dtype, index_pymethods};
 use crate::options;
 
 /// A k-d tree over the rows of an (n, d) array (thesis Chapter 3; `nbhd::KdTree`).
@@ -23,277 +23,117 @@ pub struct PyKdTree {
     index: AnyIndex,
 }
 
-#[pymethods]
-impl PyKdTree {
-    /// Builds the tree over the rows of `points`, an (n, d) array of float32 or float64 (other
-    /// types are converted to float64). The array is read in place when its rows are (C order,
-    /// row slices, column prefixes of wider records) and copied otherwise.
-    ///
-    /// pivot: "sliding-midpoint" (default; ANN/FLANN), "cyclic-median" (the thesis' Algorithm
-    /// 4), "spread-median", "closest-to-middle".
-    /// median: "floyd-rivest" (default), "presorted" (Algorithm 6), "sort", "quickselect",
-    /// "median-of-medians" — the same tree for every one (thesis 8.1), at different speeds.
-    /// leaf_size: most points per leaf (1 is the thesis' tree shape).
-    /// non_finite: "reject" (NaN/Inf points raise) or "skip" (left out; the others keep
-    /// their indices).
-    /// threads: 0 for a thread per core, n ≥ 1 for n threads; the tree is the same for any.
-    #[new]
-    #[pyo3(signature = (points, *, pivot = "sliding-midpoint", median = "floyd-rivest",
+index_pymethods!(
+    PyKdTree,
+    name = "KdTree",
+    held = "stored points",
+    absent = "skipped non-finite points",
+    len = "tree.n",
+    growing = false,
+    {
+        /// Builds the tree over the rows of `points`, an (n, d) array of float32 or float64 (other
+        /// types are converted to float64). The array is read in place when its rows are (C order,
+        /// row slices, column prefixes of wider records) and copied otherwise.
+        ///
+        /// pivot: "sliding-midpoint" (default; ANN/FLANN), "cyclic-median" (the thesis' Algorithm
+        /// 4), "spread-median", "closest-to-middle".
+        /// median: "floyd-rivest" (default), "presorted" (Algorithm 6), "sort", "quickselect",
+        /// "median-of-medians" — the same tree for every one (thesis 8.1), at different speeds.
+        /// leaf_size: most points per leaf (1 is the thesis' tree shape).
+        /// non_finite: "reject" (NaN/Inf points raise) or "skip" (left out; the others keep
+        /// their indices).
+        /// threads: 0 for a thread per core, n ≥ 1 for n threads; the tree is the same for any.
+        #[new]
+        #[pyo3(signature = (points, *, pivot = "sliding-midpoint", median = "floyd-rivest",
                         leaf_size = nbhd::tree::DEFAULT_LEAF_SIZE, non_finite = "reject",
                         threads = 0))]
-    fn new(
-        py: Python<'_>,
-        points: &Bound<'_, PyAny>,
-        pivot: &str,
-        median: &str,
-        leaf_size: usize,
-        non_finite: &str,
-        threads: usize,
-    ) -> PyResult<Self> {
-        let options = options::build(pivot, median, leaf_size, non_finite, threads)?;
-        let (arr, dtype) = float_array(points, None)?;
-        check_rows(&arr, "d")?;
-        let index = match dtype {
-            Dtype::F32 => {
-                let pts = Points::<f32>::new(&arr)?;
-                let view = pts.view().or_raise()?;
-                py.detach(|| AnyIndex::build(&view, &options)).or_raise()?
-            }
-            Dtype::F64 => {
-                let pts = Points::<f64>::new(&arr)?;
-                let view = pts.view().or_raise()?;
-                py.detach(|| AnyIndex::build(&view, &options)).or_raise()?
-            }
-        };
-        Ok(Self { index })
-    }
+        fn new(
+            py: Python<'_>,
+            points: &Bound<'_, PyAny>,
+            pivot: &str,
+            median: &str,
+            leaf_size: usize,
+            non_finite: &str,
+            threads: usize,
+        ) -> PyResult<Self> {
+            let options = options::build(pivot, median, leaf_size, non_finite, threads)?;
+            let (arr, dtype) = float_array(points, None)?;
+            check_rows(&arr, "d")?;
+            let index = match dtype {
+                Dtype::F32 => {
+                    let pts = Points::<f32>::new(&arr)?;
+                    let view = pts.view().or_raise()?;
+                    py.detach(|| AnyIndex::build(&view, &options)).or_raise()?
+                }
+                Dtype::F64 => {
+                    let pts = Points::<f64>::new(&arr)?;
+                    let view = pts.view().or_raise()?;
+                    py.detach(|| AnyIndex::build(&view, &options)).or_raise()?
+                }
+            };
+            Ok(Self { index })
+        }
 
-    /// Number of points held (skipped non-finite points not counted).
-    #[getter]
-    fn size(&self) -> usize {
-        self.index.len()
-    }
+        /// Number of rows of the array the tree was built from (skipped points included).
+        #[getter]
+        fn n(&self) -> usize {
+            self.index.source_len()
+        }
 
-    /// Number of rows of the array the tree was built from (skipped points included).
-    #[getter]
-    fn n(&self) -> usize {
-        self.index.source_len()
-    }
+        /// Caller indices in tree order (the points of one leaf are adjacent).
+        #[getter]
+        fn tree_order<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+            let order = self
+                .index
+                .tree_order()
+                .expect("a KdTree holds a static tree");
+            vec1(py, order.to_vec())
+        }
 
-    /// Dimension of the points.
-    #[getter]
-    fn m(&self) -> usize {
-        self.index.dim()
-    }
+        /// Depth, node counts and memory: a dict of `points`, `dim`, `depth`, `nodes`, `leaves`,
+        /// `max_leaf_points`, `bytes`.
+        fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+            let s = self
+                .index
+                .tree_stats()
+                .expect("a KdTree holds a static tree");
+            let d = PyDict::new(py);
+            d.set_item("points", s.points)?;
+            d.set_item("dim", s.dim)?;
+            d.set_item("depth", s.depth)?;
+            d.set_item("nodes", s.nodes)?;
+            d.set_item("leaves", s.leaves)?;
+            d.set_item("max_leaf_points", s.max_leaf_points)?;
+            d.set_item("bytes", s.bytes)?;
+            Ok(d)
+        }
 
-    /// The tree's scalar type: "float32" or "float64" (queries are converted to it).
-    #[getter]
-    fn dtype_name(&self) -> &'static str {
-        dtype(&self.index).numpy_name()
-    }
+        /// The build options as a dict (`pivot`, `median`, `leaf_size`, `non_finite`).
+        fn options<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+            let o = *self.index.options();
+            let d = PyDict::new(py);
+            d.set_item("pivot", o.pivot.name())?;
+            d.set_item("median", o.median.name())?;
+            d.set_item("leaf_size", o.leaf_size)?;
+            d.set_item("non_finite", o.non_finite.name())?;
+            Ok(d)
+        }
 
-    /// Caller indices in tree order (the points of one leaf are adjacent).
-    #[getter]
-    fn tree_order<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        let order = self
-            .index
-            .tree_order()
-            .expect("a KdTree holds a static tree");
-        vec1(py, order.to_vec())
-    }
+        fn __len__(&self) -> usize {
+            self.index.source_len()
+        }
 
-    /// Depth, node counts and memory: a dict of `points`, `dim`, `depth`, `nodes`, `leaves`,
-    /// `max_leaf_points`, `bytes`.
-    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = self
-            .index
-            .tree_stats()
-            .expect("a KdTree holds a static tree");
-        let d = PyDict::new(py);
-        d.set_item("points", s.points)?;
-        d.set_item("dim", s.dim)?;
-        d.set_item("depth", s.depth)?;
-        d.set_item("nodes", s.nodes)?;
-        d.set_item("leaves", s.leaves)?;
-        d.set_item("max_leaf_points", s.max_leaf_points)?;
-        d.set_item("bytes", s.bytes)?;
-        Ok(d)
+        fn __repr__(&self) -> String {
+            format!(
+                "KdTree(n={}, m={}, dtype={}, pivot={})",
+                self.index.source_len(),
+                self.index.dim(),
+                dtype(&self.index).numpy_name(),
+                self.index.options().pivot.name()
+            )
+        }
     }
-
-    /// The build options as a dict (`pivot`, `median`, `leaf_size`, `non_finite`).
-    fn options<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let o = *self.index.options();
-        let d = PyDict::new(py);
-        d.set_item("pivot", o.pivot.name())?;
-        d.set_item("median", o.median.name())?;
-        d.set_item("leaf_size", o.leaf_size)?;
-        d.set_item("non_finite", o.non_finite.name())?;
-        Ok(d)
-    }
-
-    /// The `k` nearest stored points of `x`, ordered by (sq_dist, index).
-    ///
-    /// One point (1-D `x` of length d): `(indices, sq_dists)`, each of length min(k, size).
-    /// A batch (2-D `x`, m × d): `(indices, sq_dists)` of shape (m, min(k, size)), answered in
-    /// parallel (`threads`), identical for any thread count. Distances are squared.
-    ///
-    /// Every query takes `p`, the Minkowski p-norm it measures by (1 ≤ p ≤ ∞; default 2,
-    /// Euclidean): `sq_dists` then hold the metric's key — squared for p = 2, the distance for
-    /// p = 1 and ∞, Σ|x_j − q_j|^p otherwise (`d = key ** (1 / p)`) — and a radius is a
-    /// distance in it. `eps > 0` makes the search approximate (scipy's rule: the i-th neighbour
-    /// within `1 + eps` times the true i-th; a radius result holds every point within
-    /// `radius / (1 + eps)` and none beyond `radius * (1 + eps)`); `strict=True` makes a
-    /// radius exclusive (scipy's `distance_upper_bound`).
-    #[pyo3(signature = (x, k, *, p = 2.0, eps = 0.0, threads = 0))]
-    fn knn<'py>(
-        &self,
-        py: Python<'py>,
-        x: &Bound<'py, PyAny>,
-        k: usize,
-        p: f64,
-        eps: f64,
-        threads: usize,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let spec = index::spec(Some(k), None, true)?;
-        let options = index::options(p, eps, false)?;
-        index::query(&self.index, py, x, spec, options, threads)?.dense(py, k.min(self.size()))
-    }
-
-    /// All stored points within `radius` of `x` (plain radius, inclusive: ‖p − x‖ ≤ radius,
-    /// exclusive with `strict=True`), ordered by (sq_dist, index) unless `sorted=False`.
-    /// `p`, `eps`: as `knn`.
-    ///
-    /// One point: `(indices, sq_dists)`. A batch (2-D `x`): a `Table` of rows, one per query.
-    #[pyo3(signature = (x, radius, *, sorted = true, p = 2.0, eps = 0.0, strict = false,
-                        threads = 0))]
-    #[allow(clippy::too_many_arguments)]
-    fn radius<'py>(
-        &self,
-        py: Python<'py>,
-        x: &Bound<'py, PyAny>,
-        radius: f64,
-        sorted: bool,
-        p: f64,
-        eps: f64,
-        strict: bool,
-        threads: usize,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let spec = index::spec(None, Some(radius), sorted)?;
-        let options = index::options(p, eps, strict)?;
-        index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
-    }
-
-    /// The ε-k-neighbourhood of `x`: the `k` nearest among the stored points within `radius`
-    /// (thesis Section 2.1.1). One point: `(indices, sq_dists)`; a batch: a `Table`. `p`,
-    /// `eps`, `strict`: as `knn` and `radius`.
-    #[pyo3(signature = (x, k, radius, *, p = 2.0, eps = 0.0, strict = false, threads = 0))]
-    #[allow(clippy::too_many_arguments)]
-    fn knn_radius<'py>(
-        &self,
-        py: Python<'py>,
-        x: &Bound<'py, PyAny>,
-        k: usize,
-        radius: f64,
-        p: f64,
-        eps: f64,
-        strict: bool,
-        threads: usize,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let spec = index::spec(Some(k), Some(radius), true)?;
-        let options = index::options(p, eps, strict)?;
-        index::query(&self.index, py, x, spec, options, threads)?.into_py(py)
-    }
-
-    /// The neighbourhood of every stored point as a `Table` (row i for the caller's point i;
-    /// skipped points get empty rows): the `k` nearest (`k` alone), all within `radius`
-    /// (`radius` alone) or the ε-k-neighbourhood (both). `exclude_self` leaves each point out
-    /// of its own row (its duplicates at distance 0 stay). Computed in parallel, one tree
-    /// descent per group of neighbouring points; identical bytes for any `threads`. `p`, `eps`,
-    /// `strict`: as `knn` and `radius` (each row then one search).
-    #[pyo3(signature = (*, k = None, radius = None, exclude_self = true, sorted = true,
-                        p = 2.0, eps = 0.0, strict = false, threads = 0))]
-    #[allow(clippy::too_many_arguments)]
-    fn neighborhoods(
-        &self,
-        py: Python<'_>,
-        k: Option<usize>,
-        radius: Option<f64>,
-        exclude_self: bool,
-        sorted: bool,
-        p: f64,
-        eps: f64,
-        strict: bool,
-        threads: usize,
-    ) -> PyResult<PyTable> {
-        let spec = index::spec(k, radius, sorted)?;
-        let options = index::options(p, eps, strict)?;
-        index::neighborhoods(&self.index, py, spec, options, exclude_self, threads)
-    }
-
-    /// The stored points inside closed axis-aligned boxes (`min[j] <= x[j] <= max[j]`; bounds may
-    /// be infinite; a NaN bound or `min > max` raises NbhdValueError), skipped points are never inside. One box (1-D
-    /// `min`, `max`): the caller's indices, ascending. A batch ((m, d) arrays): `(offsets,
-    /// indices)`, box i's points being `indices[offsets[i]:offsets[i + 1]]`; identical for any
-    /// `threads`.
-    #[pyo3(signature = (min, max, *, threads = 0))]
-    fn in_box<'py>(
-        &self,
-        py: Python<'py>,
-        min: &Bound<'py, PyAny>,
-        max: &Bound<'py, PyAny>,
-        threads: usize,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        index::in_box(&self.index, py, min, max, threads)
-    }
-
-    /// The spacing of the stored points: a dict of `mean` (h, the mean distance of a point to its
-    /// nearest other point, the unit of every relative length), `median` and `points` (how many
-    /// it was taken over); the same bits for any `threads`. Fewer than two points raise.
-    #[pyo3(signature = (*, threads = 0))]
-    fn spacing<'py>(&self, py: Python<'py>, threads: usize) -> PyResult<Bound<'py, PyDict>> {
-        index::spacing(&self.index, py, threads)
-    }
-
-    /// The tree in the saved-tree format (docs/tree-file-format.md) as `bytes`: a versioned
-    /// header with checksums, then the tree as built. `KdTree.from_bytes` reads it back; it is
-    /// what `pickle` stores.
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        index::to_bytes(&self.index, py)
-    }
-
-    /// The tree saved in `data` (by `to_bytes`, `pickle`, or the Rust and C saves), of the
-    /// dtype it was saved with, answering every query exactly as the saved tree did. Damaged,
-    /// truncated or foreign bytes (another format version, byte order, or a saved
-    /// `DynamicKdTree`) raise `NbhdValueError` naming what differs.
-    #[classmethod]
-    fn from_bytes(cls: &Bound<'_, PyType>, data: &[u8]) -> PyResult<Self> {
-        Ok(Self {
-            index: index::from_bytes(cls.py(), data, false)?,
-        })
-    }
-
-    /// Pickling: `KdTree.from_bytes(tree.to_bytes())`.
-    fn __reduce__<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let from = slf.get_type().getattr("from_bytes")?;
-        Ok((from, (slf.get().to_bytes(slf.py()),)))
-    }
-
-    fn __len__(&self) -> usize {
-        self.index.source_len()
-    }
-
-    fn __repr__(&self) -> String {
-        format!(
-            "KdTree(n={}, m={}, dtype={}, pivot={})",
-            self.index.source_len(),
-            self.index.dim(),
-            dtype(&self.index).numpy_name(),
-            self.index.options().pivot.name()
-        )
-    }
-}
+);
 
 /// Neighbourhoods as compressed rows (`nbhd::NeighborTable`): row i holds
 /// `indices[offsets[i]:offsets[i+1]]` and their `sq_dists`, ordered by (sq_dist, index).

@@ -71,6 +71,9 @@ def test_queries_return_what_the_stubs_say() -> None:
     assert first == 0 and dyn.size == len(pts)
     back = nbhd.KdTree.from_bytes(tree.to_bytes())
     assert back.size == tree.size
+    kept: npt.NDArray[np.uint32] = tree.remove_statistical_outliers(k=8, std_ratio=2.0)
+    near: npt.NDArray[np.uint32] = dyn.remove_radius_outliers(0.2, min_neighbors=3)
+    assert kept.dtype == np.uint32 and near.dtype == np.uint32
 
 
 def test_result_dicts_have_the_stubs_keys(tmp_path: pathlib.Path) -> None:
@@ -89,6 +92,11 @@ def test_result_dicts_have_the_stubs_keys(tmp_path: pathlib.Path) -> None:
     cloud = nbhd.read(path)
     assert set(cloud) == fields["CloudFile"]
     assert set(nbhd.KdTree(pts).spacing()) == fields["Spacing"]
+    grid = nbhd.voxel_grid(pts, 0.25)
+    assert set(grid) == fields["VoxelGrid"]
+    members: npt.NDArray[np.uint32] = grid["members"]
+    voxel_rows: npt.NDArray[np.uint64] = grid["offsets"]
+    assert members.dtype == np.uint32 and voxel_rows[-1] == len(pts)
     positions: npt.NDArray[np.float64] = cloud["positions"]
     assert positions.shape == pts.shape
     normals, variation, flags = nbhd.normals(pts, k=12)

@@ -15,10 +15,10 @@ use super::status::FfiError;
 use crate::error::NbhdError;
 use crate::geometry::Orientation;
 use crate::metric::Metric;
+use crate::packed::NonFinitePolicy;
 use crate::scalar::ScalarType;
 use crate::smooth::{Curvature, FeatureCriterion, Length, Stage, Weighting};
 use crate::tree::{MedianAlgorithm, PivotPolicy};
-use crate::NonFinitePolicy;
 
 /// A C enum of this ABI: its values and name, to check an integer read from C.
 pub(crate) trait CEnum: Copy + 'static {

@@ -116,37 +116,44 @@ unsafe fn spacing_of<H: IndexHandle>(
     })
 }
 
-/// Writes a filter's result: the kept indices (if they fit) and the mask (if asked for).
-///
-/// # Safety
-/// `kept` NULL or writable for `capacity` values; `count` checked and writable; `mask` NULL
-/// or writable for `kept.source_len` bytes.
-unsafe fn write_kept(
-    kept: &crate::filter::Kept,
-    out: *mut u32,
+/// The caller's output buffers of a filter: the kept indices and the optional mask.
+struct KeptOut {
+    kept: *mut u32,
     capacity: usize,
     count: *mut usize,
     mask: *mut u8,
-) -> Result<(), FfiError> {
+}
+
+/// Writes a filter's result: the kept indices (if they fit) and the mask (if asked for).
+///
+/// # Safety
+/// `out.kept` NULL or writable for `out.capacity` values; `out.count` checked and writable;
+/// `out.mask` NULL or writable for `kept.source_len` bytes.
+unsafe fn write_kept(kept: &crate::filter::Kept, out: KeptOut) -> Result<(), FfiError> {
+    let n = kept.indices.len();
+    if n > 0 && n <= out.capacity {
+        // Before `*count` is written: on this error it stays 0.
+        check_ptr(out.kept.cast_const(), "kept")?;
+    }
     // SAFETY: `count` is non-NULL, aligned and writable (checked by the caller).
-    unsafe { count.write(kept.indices.len()) };
-    if kept.indices.len() > capacity {
+    unsafe { out.count.write(n) };
+    if n > out.capacity {
         return Err(NbhdError::BufferTooSmall {
             what: "kept (the size needed is in *count; the number of points always suffices)",
-            len: capacity,
-            needed: kept.indices.len(),
+            len: out.capacity,
+            needed: n,
         }
         .into());
     }
-    if !kept.indices.is_empty() {
-        check_ptr(out.cast_const(), "kept")?;
-        // SAFETY: non-NULL, aligned, writable for `capacity` >= len values (caller).
-        unsafe { std::ptr::copy_nonoverlapping(kept.indices.as_ptr(), out, kept.indices.len()) };
+    if n > 0 {
+        // SAFETY: non-NULL and aligned (checked above), writable for `capacity` >= n values
+        // (caller).
+        unsafe { std::ptr::copy_nonoverlapping(kept.indices.as_ptr(), out.kept, n) };
     }
-    if !mask.is_null() {
+    if !out.mask.is_null() {
         for (i, m) in kept.mask().into_iter().enumerate() {
             // SAFETY: `mask` is writable for `source_len` bytes (caller), i < source_len.
-            unsafe { mask.add(i).write(u8::from(m)) };
+            unsafe { out.mask.add(i).write(u8::from(m)) };
         }
     }
     Ok(())
@@ -238,15 +245,77 @@ pub unsafe extern "C" fn nbhd_remove_statistical_outliers(
     count: *mut usize,
     mask: *mut u8,
 ) -> nbhd_status {
-    guard("nbhd_remove_statistical_outliers", || {
+    let out = KeptOut {
+        kept,
+        capacity,
+        count,
+        mask,
+    };
+    // SAFETY: the caller's contract is the one `statistical_of` requires.
+    unsafe { statistical_of("nbhd_remove_statistical_outliers", tree, options, out) }
+}
+
+/// Statistical outlier removal over the live points of a growing tree: the points kept are
+/// those the static tree built on the live points keeps (nbhd_remove_statistical_outliers),
+/// `k` must be below the number of live points, and m and s are taken over the live points.
+///
+/// - `kept`: the caller indices of the kept live points, ascending (`*count` of them); the
+///   number of live points always suffices as `capacity`.
+/// - `mask`: NULL, or one byte per index given so far (nbhd_dynamic_tree_stats' `next_index`
+///   bytes): 1 for a kept point, 0 for a removed outlier and for every index not live
+///   (removed with nbhd_dynamic_remove or skipped as non-finite when inserted).
+///
+/// Errors as nbhd_remove_statistical_outliers (INVALID_OPTION for k >= the live points).
+///
+/// # Safety
+/// As nbhd_remove_statistical_outliers, with `tree` a live dynamic tree not being changed by
+/// another thread and `mask` NULL or writable for `next_index` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_remove_statistical_outliers(
+    tree: *const nbhd_dynamic_tree,
+    options: *const nbhd_statistical_outlier_options,
+    kept: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+    mask: *mut u8,
+) -> nbhd_status {
+    let out = KeptOut {
+        kept,
+        capacity,
+        count,
+        mask,
+    };
+    // SAFETY: the caller's contract is the one `statistical_of` requires.
+    unsafe {
+        statistical_of(
+            "nbhd_dynamic_remove_statistical_outliers",
+            tree,
+            options,
+            out,
+        )
+    }
+}
+
+/// The body of nbhd_remove_statistical_outliers and nbhd_dynamic_remove_statistical_outliers,
+/// for either handle.
+///
+/// # Safety
+/// As nbhd_remove_statistical_outliers, `tree` NULL or a live handle of kind `H`.
+unsafe fn statistical_of<H: IndexHandle>(
+    name: &str,
+    tree: *const H,
+    options: *const nbhd_statistical_outlier_options,
+    out: KeptOut,
+) -> nbhd_status {
+    guard(name, || {
         // SAFETY: `count` is NULL or writable (caller).
-        let count = unsafe { init_out(count, "count", 0) }?;
+        let count = unsafe { init_out(out.count, "count", 0) }?;
         // SAFETY: `tree` is NULL or a live handle; `options` NULL or readable (caller).
         let (tree, options) = unsafe { (deref(tree, "tree")?, read_statistical_options(options)?) };
-        check_optional(kept.cast_const(), "kept")?;
-        let result = tree.inner.statistical_outlier_removal(&options)?;
+        check_optional(out.kept.cast_const(), "kept")?;
+        let result = tree.index().statistical_outlier_removal(&options)?;
         // SAFETY: the buffers are as the caller describes (contract above).
-        unsafe { write_kept(&result, kept, capacity, count, mask) }
+        unsafe { write_kept(&result, KeptOut { count, ..out }) }
     })
 }
 
@@ -320,16 +389,76 @@ pub unsafe extern "C" fn nbhd_remove_radius_outliers(
     count: *mut usize,
     mask: *mut u8,
 ) -> nbhd_status {
-    guard("nbhd_remove_radius_outliers", || {
+    let out = KeptOut {
+        kept,
+        capacity,
+        count,
+        mask,
+    };
+    // SAFETY: the caller's contract is the one `radius_of` requires.
+    unsafe { radius_of("nbhd_remove_radius_outliers", tree, radius, options, out) }
+}
+
+/// Radius outlier removal over the live points of a growing tree: the points kept are those
+/// the static tree built on the live points keeps (nbhd_remove_radius_outliers); removed
+/// points are not counted as neighbours. `kept` and `mask` as in
+/// nbhd_dynamic_remove_statistical_outliers (the mask has `next_index` bytes, 0 for every
+/// index not live).
+///
+/// Errors as nbhd_remove_radius_outliers.
+///
+/// # Safety
+/// As nbhd_dynamic_remove_statistical_outliers.
+#[no_mangle]
+pub unsafe extern "C" fn nbhd_dynamic_remove_radius_outliers(
+    tree: *const nbhd_dynamic_tree,
+    radius: f64,
+    options: *const nbhd_radius_outlier_options,
+    kept: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+    mask: *mut u8,
+) -> nbhd_status {
+    let out = KeptOut {
+        kept,
+        capacity,
+        count,
+        mask,
+    };
+    // SAFETY: the caller's contract is the one `radius_of` requires.
+    unsafe {
+        radius_of(
+            "nbhd_dynamic_remove_radius_outliers",
+            tree,
+            radius,
+            options,
+            out,
+        )
+    }
+}
+
+/// The body of nbhd_remove_radius_outliers and nbhd_dynamic_remove_radius_outliers, for
+/// either handle.
+///
+/// # Safety
+/// As nbhd_remove_radius_outliers, `tree` NULL or a live handle of kind `H`.
+unsafe fn radius_of<H: IndexHandle>(
+    name: &str,
+    tree: *const H,
+    radius: f64,
+    options: *const nbhd_radius_outlier_options,
+    out: KeptOut,
+) -> nbhd_status {
+    guard(name, || {
         // SAFETY: `count` is NULL or writable (caller).
-        let count = unsafe { init_out(count, "count", 0) }?;
+        let count = unsafe { init_out(out.count, "count", 0) }?;
         // SAFETY: `tree` is NULL or a live handle; `options` NULL or readable (caller).
         let (tree, options) =
             unsafe { (deref(tree, "tree")?, read_radius_options(radius, options)?) };
-        check_optional(kept.cast_const(), "kept")?;
-        let result = tree.inner.radius_outlier_removal(&options)?;
+        check_optional(out.kept.cast_const(), "kept")?;
+        let result = tree.index().radius_outlier_removal(&options)?;
         // SAFETY: the buffers are as the caller describes (contract above).
-        unsafe { write_kept(&result, kept, capacity, count, mask) }
+        unsafe { write_kept(&result, KeptOut { count, ..out }) }
     })
 }
 

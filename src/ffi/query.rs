@@ -11,8 +11,8 @@ use super::types::{nbhd_neighborhood_spec, nbhd_query_options, read_query_option
 use crate::error::NbhdError;
 use crate::index::NeighborIndex;
 use crate::query::{Neighbor, NeighborhoodSpec, Query, QueryOptions};
+use crate::scalar::Scalar;
 use crate::with_index;
-use crate::Scalar;
 
 /// Scalar types with a per-thread result vector, so that a loop of single queries does not
 /// allocate once the vector has grown.

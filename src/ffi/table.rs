@@ -28,7 +28,7 @@ impl nbhd_neighborhoods {
     pub(super) fn rows_in_f64(
         &self,
         points: &[glam::DVec3],
-    ) -> crate::Result<std::borrow::Cow<'_, NeighborTable<f64>>> {
+    ) -> crate::error::Result<std::borrow::Cow<'_, NeighborTable<f64>>> {
         use crate::smooth::source::table_in_f64;
         Ok(match &self.table {
             AnyTable::F64(t) if t.len() == points.len() => std::borrow::Cow::Borrowed(t),

@@ -143,6 +143,22 @@ pub fn estimate_normals(points: &[DVec3], options: &NormalOptions) -> Result<Nor
 /// or a caller's table: see [`Neighbors`]) with a progress callback, called with the fraction
 /// done (0 to 1) and the stage on the thread that runs the computation; returning `false`
 /// stops the run with [`NbhdError::Cancelled`].
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::{estimate_normals_from, Neighbors, NormalOptions};
+///
+/// let points: Vec<DVec3> = (0..400)
+///     .map(|i| DVec3::new((i % 20) as f64, 0.0, (i / 20) as f64))
+///     .collect();
+/// let options = NormalOptions::default();
+/// let result = estimate_normals_from(&points, Neighbors::default(), &options, &mut |_, _| true)?;
+/// assert!(result.normals.iter().all(|e| e.normal.y.abs() > 1.0 - 1e-12));
+/// // a callback that answers false stops the run
+/// let stop = estimate_normals_from(&points, Neighbors::default(), &options, &mut |_, _| false);
+/// assert!(matches!(stop, Err(nbhd::NbhdError::Cancelled)));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn estimate_normals_from(
     points: &[DVec3],
     neighbors: Neighbors<'_>,

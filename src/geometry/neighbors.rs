@@ -4,9 +4,10 @@
 
 use crate::error::{NbhdError, Result};
 use crate::index::NeighborIndex;
+use crate::points::PointsView;
 use crate::query::Neighborhood;
 use crate::table::{NeighborTable, TableOptions};
-use crate::{BuildOptions, KdTree, PointsView};
+use crate::tree::{BuildOptions, KdTree};
 use glam::DVec3;
 
 /// The neighbourhood of every point of `points` (row `i` for point `i`), with or without the
@@ -86,6 +87,18 @@ pub fn mean_spacing(points: &[DVec3]) -> Result<f64> {
 
 /// Mean nearest-neighbour distance read off a table whose rows hold the nearest other point
 /// first (rows without neighbours are left out; 0 if no row has one).
+///
+/// ```
+/// use nbhd::geometry::neighbors::mean_spacing_of;
+/// use nbhd::{BuildOptions, KdTree, NeighborIndex, Neighborhood, PointsView, TableOptions};
+///
+/// // gaps of 1, 1 and 2: nearest distances 1, 1, 1, 2
+/// let pts = [0.0f64, 1.0, 2.0, 4.0];
+/// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 1)?, &BuildOptions::default())?;
+/// let table = tree.neighborhoods(Neighborhood::Knn { k: 1 }, &TableOptions::default())?;
+/// assert_eq!(mean_spacing_of(&table), 1.25);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn mean_spacing_of(table: &NeighborTable<f64>) -> f64 {
     mean_spacing_of_nearest((0..table.len()).map(|i| table.sq_dists_of(i).first().copied()))
 }

@@ -132,7 +132,7 @@ pub fn orient_with_progress(
 }
 
 /// [`orient_with_progress`] of bare unit normals (what normal estimation computes, see
-/// `src/smooth/normals.rs`): only their signs change, exactly as the frames' normals would.
+/// `src/geometry/estimate.rs`): only their signs change, exactly as the frames' normals would.
 pub fn orient_normals_with_progress(
     points: &[DVec3],
     table: &NeighborTable<f64>,

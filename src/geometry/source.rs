@@ -8,10 +8,15 @@
 
 use crate::error::{NbhdError, Result};
 use crate::index::NeighborIndex;
+use crate::packed::NonFinitePolicy;
+use crate::points::PointsView;
+use crate::query::brute::BruteForce;
+use crate::query::pca_sweep::PcaSweep;
+use crate::query::NeighborSearch;
 use crate::query::Neighborhood;
+use crate::scalar::{Scalar, ScalarType};
 use crate::table::{neighborhoods_of_all, NeighborTable};
-use crate::{BruteForce, KdTree, NeighborSearch, NonFinitePolicy, PcaSweep, PointsView};
-use crate::{Scalar, ScalarType};
+use crate::tree::KdTree;
 use glam::DVec3;
 
 /// The search a smoothing call runs itself.
@@ -215,7 +220,7 @@ pub fn tree_neighbors<T: Scalar>(
     }
     let rows = tree.neighborhoods(
         Neighborhood::Knn { k },
-        &crate::TableOptions {
+        &crate::table::TableOptions {
             exclude_self: true,
             threads: 0,
             ..Default::default()

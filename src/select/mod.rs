@@ -22,6 +22,9 @@
 //! standard library's in-place unstable sort), and nothing recurses except on samples that
 //! shrink geometrically; the side of a partition that holds rank `k` is handled by a loop.
 //!
+//! Across parts that are never gathered (tiles of a distributed run), [`radix`] selects exactly
+//! by counting digits of the values' order keys instead of moving the values.
+//!
 //! The order is given as a strict "less than" predicate. The algorithms are written for a
 //! strict total order, but stay correct (and fast) for a strict weak order, i.e. a comparator
 //! that declares many elements equivalent: then `v[k]` is equivalent to the element of rank `k`
@@ -31,6 +34,7 @@ mod floyd_rivest;
 mod median_of_medians;
 pub(crate) mod network;
 mod quickselect;
+pub mod radix;
 
 /// Which selection algorithm (thesis Chapter 6 / Section 3.3.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

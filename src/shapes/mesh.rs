@@ -16,9 +16,10 @@
 use super::Rng;
 use crate::error::{NbhdError, Result};
 use crate::index::NeighborIndex;
+use crate::points::PointsView;
 use crate::query::{Neighbor, Neighborhood, Query};
 use crate::table::TableOptions;
-use crate::{BuildOptions, KdTree, PointsView};
+use crate::tree::{BuildOptions, KdTree};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::collections::BinaryHeap;

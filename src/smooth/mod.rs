@@ -26,8 +26,8 @@ use crate::geometry::neighbors::mean_spacing_of;
 use crate::geometry::normals::{
     local_frames, offsets_frame, offsets_normal, orient_with_progress, Orientation,
 };
+use crate::packed::NonFinitePolicy;
 use crate::table::NeighborTable;
-use crate::NonFinitePolicy;
 use glam::DVec3;
 use rayon::prelude::*;
 use source::knn_rows;

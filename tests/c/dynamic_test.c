@@ -120,6 +120,38 @@ static int same_table(const nbhd_neighborhoods *a, const nbhd_neighborhoods *b, 
                   total * (f32 ? sizeof(float) : sizeof(double))) == 0;
 }
 
+/* The two outlier filters of `dyn` against those of `st`, the static tree over the live points:
+ * the same status, count, kept indices and mask bytes (one per index given, 0 where not live). */
+static void compare_filters(const nbhd_dynamic_tree *dyn, const nbhd_tree *st) {
+    static unsigned char ma[POOL], mb[POOL];
+    nbhd_statistical_outlier_options so = nbhd_statistical_outlier_options_default();
+    nbhd_radius_outlier_options ro = nbhd_radius_outlier_options_default();
+    double r = 0.25 * (double)below(4);
+    size_t ca = 7, cb = 7, i;
+    nbhd_status xa, xb;
+    so.k = 1 + below(8);
+    so.std_ratio = 0.25 * (double)below(8) - 0.5;
+    so.threads = below(3);
+    memset(ma, 2, sizeof ma);
+    memset(mb, 3, sizeof mb);
+    xa = nbhd_dynamic_remove_statistical_outliers(dyn, &so, ia, CAP, &ca, ma);
+    xb = nbhd_remove_statistical_outliers(st, &so, ib, CAP, &cb, mb);
+    CHECK(xa == xb && ca == cb);
+    CHECK(xa != NBHD_STATUS_OK ||
+          (memcmp(ia, ib, ca * sizeof ia[0]) == 0 && memcmp(ma, mb, given) == 0));
+    for (i = 0; xa == NBHD_STATUS_OK && i < given; i++) CHECK(ma[i] <= live[i]);
+    CHECK(ma[given] == 2); /* nothing written past next_index */
+    ro.min_neighbors = below(5);
+    ro.threads = below(3);
+    memset(ma, 2, sizeof ma);
+    memset(mb, 3, sizeof mb);
+    xa = nbhd_dynamic_remove_radius_outliers(dyn, r, &ro, ia, CAP, &ca, ma);
+    xb = nbhd_remove_radius_outliers(st, r, &ro, ib, CAP, &cb, mb);
+    CHECK(xa == NBHD_STATUS_OK && xb == NBHD_STATUS_OK && ca == cb);
+    CHECK(memcmp(ia, ib, ca * sizeof ia[0]) == 0 && memcmp(ma, mb, given) == 0);
+    for (i = 0; i < given; i++) CHECK(ma[i] <= live[i]);
+}
+
 /* Every query and table of `dyn` against the static tree over the live points. */
 static void compare(const nbhd_dynamic_tree *dyn, int f32) {
     nbhd_tree *st = static_tree(f32);
@@ -246,6 +278,7 @@ static void compare(const nbhd_dynamic_tree *dyn, int f32) {
               (memcmp(&sa.mean, &sb.mean, sizeof sa.mean) == 0 &&
                memcmp(&sa.median, &sb.median, sizeof sa.median) == 0 && sa.points == sb.points));
     }
+    compare_filters(dyn, st);
     nbhd_tree_free(st);
 }
 
@@ -552,6 +585,62 @@ static void test_errors(void) {
     CHECK(first == 6);
     CHECK_STATUS(nbhd_dynamic_knn(dyn, q, 3, ids, NULL, 3, &count), NBHD_STATUS_OK);
     CHECK(count == 3 && ids[0] == 0 && ids[1] == 2 && ids[2] == 4);
+
+    /* filters: NULL, k = 0, k >= the live points, NaN ratio, small buffers; the mask has
+     * next_index bytes, 0 for the removed index 1 */
+    {
+        nbhd_statistical_outlier_options so = nbhd_statistical_outlier_options_default();
+        nbhd_radius_outlier_options ro = nbhd_radius_outlier_options_default();
+        uint32_t kept[8];
+        unsigned char mask[9];
+        so.k = 2;
+        CHECK_STATUS(nbhd_dynamic_remove_statistical_outliers(NULL, &so, kept, 8, &count, NULL),
+                     NBHD_STATUS_NULL_POINTER);
+        CHECK_STATUS(nbhd_dynamic_remove_statistical_outliers(dyn, &so, kept, 8, NULL, NULL),
+                     NBHD_STATUS_NULL_POINTER);
+        CHECK_STATUS(nbhd_dynamic_remove_radius_outliers(NULL, 1.0, NULL, kept, 8, &count, NULL),
+                     NBHD_STATUS_NULL_POINTER);
+        CHECK_STATUS(nbhd_dynamic_remove_statistical_outliers(dyn, &so, NULL, 8, &count, NULL),
+                     NBHD_STATUS_NULL_POINTER);
+        CHECK(count == 0);
+        so.k = 0;
+        CHECK_STATUS(nbhd_dynamic_remove_statistical_outliers(dyn, &so, kept, 8, &count, NULL),
+                     NBHD_STATUS_INVALID_K);
+        so.k = 7; /* 7 live points of 8 given */
+        CHECK_STATUS(nbhd_dynamic_remove_statistical_outliers(dyn, &so, kept, 8, &count, NULL),
+                     NBHD_STATUS_INVALID_OPTION);
+        CHECK_MESSAGE("the tree holds 7");
+        so.k = 6;
+        so.std_ratio = NAN;
+        CHECK_STATUS(nbhd_dynamic_remove_statistical_outliers(dyn, &so, kept, 8, &count, NULL),
+                     NBHD_STATUS_INVALID_OPTION);
+        CHECK_MESSAGE("std_ratio");
+        so.std_ratio = 10.0;
+        count = 99;
+        CHECK_STATUS(nbhd_dynamic_remove_statistical_outliers(dyn, &so, kept, 6, &count, NULL),
+                     NBHD_STATUS_BUFFER_TOO_SMALL);
+        CHECK(count == 7);
+        memset(mask, 5, sizeof mask);
+        CHECK_STATUS(nbhd_dynamic_remove_statistical_outliers(dyn, &so, kept, 8, &count, mask),
+                     NBHD_STATUS_OK);
+        CHECK(count == 7 && kept[0] == 0 && kept[1] == 2 && kept[6] == 7);
+        CHECK(mask[0] == 1 && mask[1] == 0 && mask[2] == 1 && mask[7] == 1 && mask[8] == 5);
+        CHECK_STATUS(nbhd_dynamic_remove_radius_outliers(dyn, NAN, &ro, kept, 8, &count, NULL),
+                     NBHD_STATUS_INVALID_RADIUS);
+        CHECK(count == 0);
+        ro.threads = 100000;
+        CHECK_STATUS(nbhd_dynamic_remove_radius_outliers(dyn, 1.0, &ro, kept, 8, &count, NULL),
+                     NBHD_STATUS_INVALID_OPTION);
+        ro.threads = 0;
+        CHECK_STATUS(nbhd_dynamic_remove_radius_outliers(dyn, 0.0, &ro, kept, 1, &count, mask),
+                     NBHD_STATUS_BUFFER_TOO_SMALL);
+        CHECK(count == 7);
+        memset(mask, 5, sizeof mask);
+        CHECK_STATUS(nbhd_dynamic_remove_radius_outliers(dyn, 0.0, NULL, kept, 8, &count, mask),
+                     NBHD_STATUS_OK);
+        /* four copies of (0, 0, 0) and three of (1, 1, 1) live: at least 2 others each */
+        CHECK(count == 7 && mask[1] == 0 && mask[8] == 5);
+    }
 
     /* queries: NaN, k = 0, small buffers, NULL stats */
     q[1] = NAN;
