@@ -1,8 +1,8 @@
 //! Normals, curvatures and smoothing of what the caller already has: the points of a built
 //! tree, or points with a neighbourhood table, without a second build. Each export converts
-//! its arguments and calls `smooth::smooth_from` / `smooth::robust::smooth_robust_from` with
-//! `Neighbors::Table`; the results are those of nbhd_smooth / nbhd_smooth_robust /
-//! nbhd_estimate_curvatures on the same neighbourhoods.
+//! its arguments and calls `smooth::smooth_from`, `smooth::analyze_with_progress` (curvatures)
+//! or `smooth::robust::smooth_robust_from` with `Neighbors::Table`; the results are those of
+//! nbhd_smooth / nbhd_smooth_robust / nbhd_estimate_curvatures on the same neighbourhoods.
 
 use std::ffi::c_void;
 
@@ -19,7 +19,7 @@ use super::types::nbhd_points;
 use crate::handle::AnyIndex;
 use crate::smooth::robust::{smooth_robust_from, RobustOptions};
 use crate::smooth::source::tree_neighbors;
-use crate::smooth::{smooth_from, Neighbors, SmoothOptions, SmoothResult};
+use crate::smooth::{analyze_with_progress, smooth_from, Neighbors, SmoothOptions, SmoothResult};
 use crate::table::NeighborTable;
 
 /// Which smoothing a call runs, with its options pointer.
@@ -58,14 +58,13 @@ impl Method {
             Method::Faithful(o, analyze_only) => {
                 // SAFETY: forwarded from the caller.
                 let (core, mut progress) = unsafe { super::smooth::read_options(o) }?;
-                let opts = SmoothOptions {
-                    steps: if analyze_only { 0 } else { core.steps },
-                    outputs: outputs || analyze_only,
-                    ..core
-                };
-                Ok(smooth_from(points, rows, &opts, &mut |f, s| {
-                    progress.report(f, s)
-                })?)
+                let mut report = |f, s| progress.report(f, s);
+                Ok(if analyze_only {
+                    analyze_with_progress(points, rows, &core, &mut report)
+                } else {
+                    let opts = SmoothOptions { outputs, ..core };
+                    smooth_from(points, rows, &opts, &mut report)
+                }?)
             }
             Method::Robust(o) => {
                 // SAFETY: forwarded from the caller.

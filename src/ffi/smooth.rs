@@ -12,7 +12,7 @@ use super::smoothing_io::{nbhd_point_geometry, nbhd_progress_fn, nbhd_smooth_sum
 use super::smoothing_io::{read_points, Outputs, Progress};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
 use super::types::nbhd_points;
-use crate::smooth::{self, SmoothOptions};
+use crate::smooth::{self, Neighbors, SmoothOptions};
 
 /// The `interior_threshold` C shows while `constrain_interior` is off (the core has none
 /// then), so that switching it on alone gives a usable threshold.
@@ -238,12 +238,10 @@ pub unsafe extern "C" fn nbhd_estimate_curvatures(
         let out = Outputs::curvatures(out_geometry, out_summary)?;
         // SAFETY: forwarded from the caller.
         let (opts, mut progress) = unsafe { read_options(options) }?;
-        let opts = SmoothOptions {
-            steps: 0,
-            outputs: true,
-            ..opts
-        };
-        let result = smooth::smooth_with_progress(&pts, &opts, &mut |f, s| progress.report(f, s))?;
+        let result =
+            smooth::analyze_with_progress(&pts, Neighbors::default(), &opts, &mut |f, s| {
+                progress.report(f, s)
+            })?;
         // SAFETY: the outputs are writable for `count` elements / one element (caller).
         unsafe { out.write(&result, arg.scalar, arg.stride) };
         Ok(())

@@ -21,7 +21,5 @@ pub use estimate::{
     estimate_normals, estimate_normals_from, NormalEstimate, NormalOptions, NormalsResult,
 };
 pub use normals::{local_frame, local_frames, LocalFrame};
-pub use orientation::{
-    orient, orient_normals_with_progress, orient_with_progress, Orientation, OrientationKind,
-};
+pub use orientation::{orient, orient_with_progress, Orientation, OrientationKind};
 pub use source::{Neighbors, SearchMethod};

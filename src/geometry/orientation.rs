@@ -109,6 +109,29 @@ pub fn orient(
 /// orientation done (0 to 1); returning `false` stops with [`NbhdError::Cancelled`] (the
 /// frames are then left as they were). Only [`Orientation::Propagate`] takes long enough to
 /// report in between.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::geometry::neighbors::neighbor_table;
+/// use nbhd::geometry::{local_frames, orient_with_progress, Orientation};
+/// use nbhd::{NbhdError, Neighborhood};
+///
+/// let points: Vec<DVec3> = (0..100).map(|i| DVec3::new((i % 10) as f64, (i / 10) as f64, 0.0)).collect();
+/// let table = neighbor_table(&points, Neighborhood::Knn { k: 8 }, true)?;
+/// let mut frames = local_frames(&points, &table)?;
+/// let up = Orientation::TowardViewpoint(DVec3::new(0.0, 0.0, 10.0));
+/// // the first report is 0 and the last is 1
+/// let mut seen = Vec::new();
+/// orient_with_progress(&points, &table, &mut frames, up, &mut |f| { seen.push(f); true })?;
+/// assert_eq!((seen[0], *seen.last().unwrap()), (0.0, 1.0));
+/// assert!(frames.iter().all(|f| f.normal.z > 0.0));
+/// // a callback that says stop cancels the call and leaves the frames as they were
+/// let down = Orientation::TowardViewpoint(DVec3::new(0.0, 0.0, -10.0));
+/// let r = orient_with_progress(&points, &table, &mut frames, down, &mut |_| false);
+/// assert!(matches!(r, Err(NbhdError::Cancelled)));
+/// assert!(frames.iter().all(|f| f.normal.z > 0.0));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn orient_with_progress(
     points: &[DVec3],
     table: &NeighborTable<f64>,
@@ -133,7 +156,8 @@ pub fn orient_with_progress(
 
 /// [`orient_with_progress`] of bare unit normals (what normal estimation computes, see
 /// `src/geometry/estimate.rs`): only their signs change, exactly as the frames' normals would.
-pub fn orient_normals_with_progress(
+/// Crate-internal: users orient frames ([`orient_with_progress`]) or estimate oriented normals.
+pub(crate) fn orient_normals_with_progress(
     points: &[DVec3],
     table: &NeighborTable<f64>,
     normals: &mut [DVec3],

@@ -19,7 +19,7 @@ pub(crate) const LANES: usize = 4;
 /// `|u| < 1`; 0 from there on. A robust inlier weight: smooth, 1 on the plane, and exactly 0
 /// for outliers. It takes the ratio, so that a loop with one width multiplies by its inverse.
 #[inline]
-pub fn biweight(u: f64) -> f64 {
+pub(crate) fn biweight(u: f64) -> f64 {
     // branch-free (it runs in the innermost loops of the plane selection): for |u| ≥ 1,
     // 1 − u² ≤ 0 and the max gives 0; a NaN (d or width not finite, 0/0) gives 0 as well
     let v = (1.0 - u * u).max(0.0);

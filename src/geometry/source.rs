@@ -188,6 +188,23 @@ fn first_of_rows(table: &NeighborTable<f64>, k: usize) -> NeighborTable<f64> {
 /// tree's rows are re-measured in `f64` and re-ordered by `(sq_dist, index)`. A tree that
 /// skipped non-finite points is refused ([`NbhdError::InvalidOption`]): its skipped points have
 /// no coordinates to smooth.
+///
+/// ```
+/// use nbhd::smooth::source::tree_neighbors;
+/// use nbhd::{BuildOptions, KdTree, PointsView};
+///
+/// // four points on a line, 1 apart: each one's nearest other point is a neighbour on the line
+/// let rows = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0]];
+/// let tree = KdTree::<f32>::build(&PointsView::from_rows(&rows)?, &BuildOptions::default())?;
+/// let (points, table) = tree_neighbors(&tree, 1)?;
+/// assert_eq!(points[2].x, 2.0);
+/// assert_eq!(table.indices_of(0), &[1]);
+/// assert_eq!(table.indices_of(3), &[2]);
+/// // a tie (points 0 and 2 are both 1 from point 1) goes to the smaller index
+/// assert_eq!(table.indices_of(1), &[0]);
+/// assert_eq!(table.sq_dists_of(1), &[1.0]);
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn tree_neighbors<T: Scalar>(
     tree: &KdTree<T>,
     k: usize,
@@ -234,6 +251,25 @@ pub fn tree_neighbors<T: Scalar>(
 /// table's rows re-measured in `f64` on `points` and re-ordered by `(sq_dist, index)` (its
 /// neighbour sets kept). A table that does not fit `points` is refused
 /// ([`NbhdError::InvalidOption`]).
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::smooth::source::table_in_f64;
+/// use nbhd::NeighborTable;
+///
+/// let points = [DVec3::ZERO, DVec3::X, DVec3::new(3.0, 0.0, 0.0)];
+/// // an f32 table whose row 0 lists the far point first: re-measured and re-ordered
+/// let f32_table = NeighborTable::<f32>::from_parts(vec![0, 2, 3, 4], vec![2, 1, 0, 1], vec![0.0; 4])
+///     .unwrap();
+/// let table = table_in_f64(&points, &f32_table)?;
+/// assert_eq!(table.indices_of(0), &[1, 2]);
+/// assert_eq!(table.sq_dists_of(0), &[1.0, 9.0]);
+/// assert_eq!(table.sq_dists_of(2), &[4.0]);
+/// // a table naming a point that does not exist is refused
+/// let bad = NeighborTable::<f32>::from_parts(vec![0, 1, 1, 1], vec![7], vec![0.0]).unwrap();
+/// assert!(table_in_f64(&points, &bad).is_err());
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
 pub fn table_in_f64<T: Scalar>(
     points: &[DVec3],
     table: &NeighborTable<T>,

@@ -88,8 +88,8 @@ pub enum Neighborhood<T> {
 /// The error for a radius `r` (as the caller passed it) whose square overflows `T`.
 pub(crate) fn radius_out_of_range<T: Scalar>(r: f64) -> NbhdError {
     let (scalar, max) = match T::TYPE {
-        crate::ScalarType::F32 => ("f32", (f32::MAX as f64).sqrt()),
-        crate::ScalarType::F64 => ("f64", f64::MAX.sqrt()),
+        crate::scalar::ScalarType::F32 => ("f32", (f32::MAX as f64).sqrt()),
+        crate::scalar::ScalarType::F64 => ("f64", f64::MAX.sqrt()),
     };
     NbhdError::RadiusOutOfRange {
         radius: r,
@@ -219,8 +219,8 @@ impl NeighborhoodSpec {
                 Err(NbhdError::RadiusOutOfRange {
                     radius: r,
                     scalar: match T::TYPE {
-                        crate::ScalarType::F32 => "f32",
-                        crate::ScalarType::F64 => "f64",
+                        crate::scalar::ScalarType::F32 => "f32",
+                        crate::scalar::ScalarType::F64 => "f64",
                     },
                     max: metric.max_radius::<T>(),
                 })

@@ -672,12 +672,44 @@ pub fn analyze_from(
     neighbors: Neighbors<'_>,
     options: &SmoothOptions,
 ) -> Result<SmoothResult> {
+    analyze_with_progress(points, neighbors, options, &mut |_, _| true)
+}
+
+/// [`analyze_from`] with a progress callback (as [`smooth_with_progress`] calls it; returning
+/// `false` stops with [`NbhdError::Cancelled`]): the one place that turns `options` into an
+/// estimate of the geometry alone (no step, every output), which every front door calls.
+///
+/// ```
+/// use glam::DVec3;
+/// use nbhd::smooth::{analyze_with_progress, Neighbors, SmoothOptions, Stage};
+/// use nbhd::NbhdError;
+///
+/// let points: Vec<DVec3> = (0..400).map(|i| DVec3::new((i % 20) as f64, (i / 20) as f64, 0.0)).collect();
+/// let opts = SmoothOptions { steps: 5, outputs: false, ..SmoothOptions::default() };
+/// let mut last = (0.0, Stage::Neighbors);
+/// let result = analyze_with_progress(&points, Neighbors::default(), &opts, &mut |f, s| {
+///     last = (f, s);
+///     true
+/// })?;
+/// assert_eq!(result.points, points); // the steps of `opts` are not taken
+/// assert_eq!(result.outputs.len(), points.len()); // the outputs are always computed
+/// assert_eq!(last, (1.0, Stage::Done));
+/// let stop = analyze_with_progress(&points, Neighbors::default(), &opts, &mut |_, _| false);
+/// assert!(matches!(stop, Err(NbhdError::Cancelled)));
+/// # Ok::<(), nbhd::NbhdError>(())
+/// ```
+pub fn analyze_with_progress(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &SmoothOptions,
+    progress: &mut (dyn FnMut(f64, Stage) -> bool + Send),
+) -> Result<SmoothResult> {
     let opts = SmoothOptions {
         steps: 0,
         outputs: true,
         ..*options
     };
-    smooth_from(points, neighbors, &opts, &mut |_, _| true)
+    smooth_from(points, neighbors, &opts, progress)
 }
 
 /// The index rows of a neighbour table with the points stored in another order: row `s` holds

@@ -171,7 +171,7 @@ pub struct RobustOptions {
     pub outputs: bool,
     /// Points with a NaN or infinite coordinate: rejected, or skipped (left unmoved, NaN
     /// outputs and normals), as [`super::SmoothOptions::non_finite`].
-    pub non_finite: crate::NonFinitePolicy,
+    pub non_finite: crate::packed::NonFinitePolicy,
     /// Worker threads: 0 uses the current rayon pool, n ≥ 1 a pool of n threads; at most
     /// [`crate::MAX_THREADS`], as [`super::SmoothOptions::threads`]. The result is
     /// bit-identical for every value. Default 0.
@@ -192,7 +192,7 @@ impl Default for RobustOptions {
             noise_scale: true,
             orientation: Orientation::Unoriented,
             outputs: true,
-            non_finite: crate::NonFinitePolicy::Reject,
+            non_finite: crate::packed::NonFinitePolicy::Reject,
             threads: 0,
         }
     }

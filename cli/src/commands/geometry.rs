@@ -83,7 +83,7 @@ pub fn run(a: Args, what: What, out: &Output) -> Result<()> {
     let res: SmoothResult = {
         let bar = Progress::bar(out, 1000, label);
         let mut cb = bar.smoothing_callback(label);
-        nbhd::smooth::smooth_with_progress(&points, &SmoothOptions { steps: 0, ..opts }, &mut cb)
+        nbhd::smooth::analyze_with_progress(&points, Neighbors::default(), &opts, &mut cb)
             .context(input.display())?
     };
     let secs = t.elapsed().as_secs_f64();
