@@ -269,14 +269,14 @@ static void test_version_and_strings(void) {
                               NBHD_VERSION_PATCH);
     sprintf(expected, "%d.%d.%d", NBHD_VERSION_MAJOR, NBHD_VERSION_MINOR, NBHD_VERSION_PATCH);
     CHECK(strcmp(nbhd_version_string(), expected) == 0);
-    for (s = NBHD_STATUS_OK; s <= NBHD_STATUS_INVALID_BOX; s++) {
+    for (s = NBHD_STATUS_OK; s <= NBHD_STATUS_OUTSIDE_PERIOD; s++) { /* the last status */
         const char *text = nbhd_status_string((nbhd_status)s);
         CHECK(text != NULL && text[0] != '\0' && strcmp(text, "unknown status") != 0);
     }
     CHECK(strcmp(nbhd_status_string(NBHD_STATUS_INVALID_K), "k must be at least 1") == 0);
     CHECK(strcmp(nbhd_status_string((nbhd_status)-1), "unknown status") == 0);
-    CHECK(strcmp(nbhd_status_string((nbhd_status)(NBHD_STATUS_INVALID_BOX + 1)), "unknown status") ==
-          0);
+    CHECK(strcmp(nbhd_status_string((nbhd_status)(NBHD_STATUS_OUTSIDE_PERIOD + 1)),
+                 "unknown status") == 0);
     CHECK(strcmp(nbhd_status_string((nbhd_status)(1 << 30)), "unknown status") == 0);
     /* Before any failure the message is empty, never NULL. */
     CHECK(nbhd_last_error_message() != NULL && nbhd_last_error_message()[0] == '\0');
