@@ -22,7 +22,7 @@ static double key_d(const nbhd_query_options *o, const double *q, const double *
 static float key_f(const nbhd_query_options *o, const float *q, const float *x);
 
 /* The running key `s` with the axis difference `t` folded in, under the metric. */
-static double term_d(const nbhd_query_options *o, double s, double t) {
+static inline double term_d(const nbhd_query_options *o, double s, double t) {
     switch (o->metric) {
     case NBHD_METRIC_EUCLIDEAN: return s + t * t;
     case NBHD_METRIC_MANHATTAN: return s + t;
@@ -31,7 +31,7 @@ static double term_d(const nbhd_query_options *o, double s, double t) {
     }
 }
 
-static float term_f(const nbhd_query_options *o, float s, float t) {
+static inline float term_f(const nbhd_query_options *o, float s, float t) {
     switch (o->metric) {
     case NBHD_METRIC_EUCLIDEAN: return s + t * t;
     case NBHD_METRIC_MANHATTAN: return s + t;
@@ -41,7 +41,7 @@ static float term_f(const nbhd_query_options *o, float s, float t) {
 }
 
 /* The key of a radius r in the metric (in the tree's type for f32). */
-static double radius_key(const nbhd_query_options *o, double r, int f32) {
+static inline double radius_key(const nbhd_query_options *o, double r, int f32) {
     switch (o->metric) {
     case NBHD_METRIC_EUCLIDEAN: return f32 ? (double)((float)r * (float)r) : r * r;
     case NBHD_METRIC_MANHATTAN:
@@ -55,14 +55,14 @@ typedef struct {
     uint32_t index;
 } entry;
 
-static int by_key(const void *a, const void *b) {
+static inline int by_key(const void *a, const void *b) {
     const entry *x = a, *y = b;
     if (x->key != y->key) return x->key < y->key ? -1 : 1;
     return x->index < y->index ? -1 : (x->index > y->index);
 }
 
 /* The key from the query q to point j, in the tree's type. */
-static double key_between(const nbhd_query_options *o, int f32, const double *q, size_t j) {
+static inline double key_between(const nbhd_query_options *o, int f32, const double *q, size_t j) {
     float qf[DIM];
     size_t a;
     if (!f32) return key_d(o, q, pts + j * DIM);
@@ -72,7 +72,7 @@ static double key_between(const nbhd_query_options *o, int f32, const double *q,
 
 /* Brute force: the k (or all, k = 0) points with key within the radius's (below it if
  * strict; no radius if r < 0), by (key, index). */
-static size_t brute(const nbhd_query_options *o, int f32, const double *q, size_t k, double r,
+static inline size_t brute(const nbhd_query_options *o, int f32, const double *q, size_t k, double r,
                     entry *out) {
     size_t i, n = 0;
     double bound = r < 0 ? INFINITY : radius_key(o, r, f32);
@@ -88,7 +88,7 @@ static size_t brute(const nbhd_query_options *o, int f32, const double *q, size_
     return k > 0 && n > k ? k : n;
 }
 
-static nbhd_points points_of(int f32) {
+static inline nbhd_points points_of(int f32) {
     nbhd_points p;
     p.data = f32 ? (const void *)ptsf : (const void *)pts;
     p.count = N;
@@ -100,7 +100,7 @@ static nbhd_points points_of(int f32) {
 
 /* One search of either flavour (the static tree if not NULL, else the growing one), compared
  * with the brute force. */
-static void check_search(const nbhd_tree *tree, const nbhd_dynamic_tree *dyn, int f32,
+static inline void check_search(const nbhd_tree *tree, const nbhd_dynamic_tree *dyn, int f32,
                          const nbhd_query_options *o, const nbhd_neighborhood_spec *spec,
                          const double *q) {
     static entry want[N];
