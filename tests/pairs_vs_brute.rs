@@ -53,7 +53,13 @@ fn boxes(d: usize, which: usize) -> (Option<Vec<f64>>, Vec<f64>) {
         .collect();
     let sizes = given
         .iter()
-        .map(|&s| if which == 0 || s == 0.0 { f64::INFINITY } else { s })
+        .map(|&s| {
+            if which == 0 || s == 0.0 {
+                f64::INFINITY
+            } else {
+                s
+            }
+        })
         .collect();
     ((which > 0).then_some(given), sizes)
 }
@@ -186,7 +192,9 @@ fn check_counts<T: Scalar>(
         this: None,
         other: Some(&wb),
     };
-    let got = ta.weigh_pairs_with(tb, &mixed, one_side, true, &opts).unwrap();
+    let got = ta
+        .weigh_pairs_with(tb, &mixed, one_side, true, &opts)
+        .unwrap();
     let ones: f64 = keys.iter().flatten().map(|&(j, _)| wb[j as usize]).sum();
     assert_eq!(got[2], ones);
 }
@@ -206,8 +214,14 @@ fn check_eps<T: Scalar>(ta: &KdTree<T>, a: &[T], d: usize, sizes: &[T], metric: 
     let got = rows_of(&ta.pairs(r, &table(opts, 2)).unwrap());
     let must = brute(a, a, d, sizes, metric, inner, true);
     for (row, need) in got.iter().zip(&must) {
-        assert!(need.iter().all(|e| row.contains(e)), "eps: a near pair lost");
-        assert!(row.iter().all(|&(_, k)| k.to_f64() <= outer), "eps: a far pair");
+        assert!(
+            need.iter().all(|e| row.contains(e)),
+            "eps: a near pair lost"
+        );
+        assert!(
+            row.iter().all(|&(_, k)| k.to_f64() <= outer),
+            "eps: a far pair"
+        );
     }
 }
 
@@ -245,7 +259,8 @@ fn pairs_equal_the_brute_force_f32() {
 #[test]
 fn empty_indexes_have_no_pairs() {
     let opts = BuildOptions::default();
-    let empty = KdTree::<f64>::build(&PointsView::from_flat::<f64>(&[], 2).unwrap(), &opts).unwrap();
+    let empty =
+        KdTree::<f64>::build(&PointsView::from_flat::<f64>(&[], 2).unwrap(), &opts).unwrap();
     let some = KdTree::<f64>::from_flat(&[0.0, 0.0, 1.0, 1.0], 2, &opts).unwrap();
     let t = TableOptions::default();
     assert_eq!(empty.pairs(1.0, &t).unwrap().len(), 0);
@@ -253,8 +268,14 @@ fn empty_indexes_have_no_pairs() {
     assert_eq!((rows.len(), rows.total()), (2, 0));
     assert_eq!(empty.pairs_with(&some, 1.0, &t).unwrap().len(), 0);
     let radii = [1.0, f64::INFINITY];
-    assert_eq!(empty.count_pairs_with(&some, &radii, true, &t).unwrap(), [0, 0]);
-    assert_eq!(some.count_pairs_with(&empty, &radii, false, &t).unwrap(), [0, 0]);
+    assert_eq!(
+        empty.count_pairs_with(&some, &radii, true, &t).unwrap(),
+        [0, 0]
+    );
+    assert_eq!(
+        some.count_pairs_with(&empty, &radii, false, &t).unwrap(),
+        [0, 0]
+    );
     let none = some.weigh_pairs_with(&empty, &radii, PairWeights::default(), true, &t);
     assert_eq!(none.unwrap(), [0.0, 0.0]);
     assert_eq!(some.count_pairs_with(&some, &[], true, &t).unwrap(), []);
@@ -267,7 +288,10 @@ fn bad_radii_weights_and_options_are_refused() {
     let line = KdTree::<f64>::from_flat(&[0.0, 1.0], 1, &opts).unwrap();
     let t = TableOptions::default();
     for r in [-1.0, f64::NAN, f64::INFINITY] {
-        assert!(matches!(tree.pairs(r, &t), Err(NbhdError::InvalidRadius(_))));
+        assert!(matches!(
+            tree.pairs(r, &t),
+            Err(NbhdError::InvalidRadius(_))
+        ));
         assert!(tree.pairs_with(&tree, r, &t).is_err());
     }
     assert!(matches!(
@@ -320,5 +344,8 @@ fn bad_radii_weights_and_options_are_refused() {
     assert_eq!(tree.pairs(1.0, &t).unwrap().total(), 1);
     assert_eq!(tree.pairs(1.0, &strict).unwrap().total(), 0);
     assert_eq!(tree.count_pairs_with(&tree, &[1.0], true, &t).unwrap(), [5]);
-    assert_eq!(tree.count_pairs_with(&tree, &[1.0], true, &strict).unwrap(), [3]);
+    assert_eq!(
+        tree.count_pairs_with(&tree, &[1.0], true, &strict).unwrap(),
+        [3]
+    );
 }

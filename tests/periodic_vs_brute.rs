@@ -275,7 +275,8 @@ fn run<T: Scalar>(n: usize, seed: u64) {
                 };
                 check(&coords, &given, &sizes, &strict, seed);
                 // the plain methods are the default options
-                let (tree, _) = static_and_growing(&coords, d, Some(&given), PivotPolicy::SlidingMidpoint);
+                let (tree, _) =
+                    static_and_growing(&coords, d, Some(&given), PivotPolicy::SlidingMidpoint);
                 let mut plain = Vec::new();
                 let q = vec![T::from_f64(-0.1); d];
                 tree.knn(Query::point(&q), 3, &mut plain).unwrap();
