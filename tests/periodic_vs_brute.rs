@@ -16,7 +16,7 @@ use common::keys::key;
 use common::trees::static_and_growing;
 use common::Rng;
 use nbhd::{
-    BuildOptions, DynamicKdTree, KdTree, Metric, NbhdError, Neighbor, NeighborIndex, Neighborhood,
+    BuildOptions, DynamicKdTree, KdTree, NbhdError, Neighbor, NeighborIndex, Neighborhood,
     PivotPolicy, PointsView, Query, QueryOptions, Scalar, TableOptions,
 };
 
