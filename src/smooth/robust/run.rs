@@ -424,3 +424,188 @@ fn stop_tolerance(sigma: f64, noise: &[f64], started_wide: bool, options: &Robus
         options.tolerance
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::table::NeighborTable;
+
+    /// The reduced values of a round: `residual` a median plane distance, `ratio` a median
+    /// distance ratio, `moved` the squared displacements.
+    fn reduced(count: u64, residual: f64, ratio: f64, moved: &[f64]) -> Reduced {
+        Reduced {
+            count,
+            max_len: 48,
+            min_narrow: 24,
+            ratio: Some(ratio),
+            residual: Some(residual),
+            moved_sq: moved.iter().copied().collect(),
+        }
+    }
+
+    /// The distance ratio of the local dimension `d`: `4^(1/d)`.
+    fn ratio_of(d: f64) -> f64 {
+        4f64.powf(1.0 / d)
+    }
+
+    #[test]
+    fn a_surface_steps_until_sigma_stops_falling() {
+        let mut run = RobustRun::new(&RobustOptions::default(), 1.0, Neighbors::default()).unwrap();
+        assert_eq!(run.round(), Round::Start);
+        run.feed(&reduced(4, 0.0, ratio_of(2.0), &[])).unwrap();
+        let rows = RowSet::Plain;
+        assert_eq!(
+            run.round(),
+            Round::Measure {
+                generation: 0,
+                rows
+            }
+        );
+        run.feed(&reduced(4, 1.0, 0.0, &[])).unwrap();
+        let sigma = MAD_TO_SIGMA;
+        assert_eq!(
+            run.round(),
+            Round::Step {
+                generation: 0,
+                rows,
+                sigma,
+                k: 24
+            }
+        );
+        run.feed(&reduced(4, 0.0, 0.0, &[1.0, 1.0, 1.0, 1.0]))
+            .unwrap();
+        assert_eq!(
+            run.round(),
+            Round::Measure {
+                generation: 1,
+                rows
+            }
+        );
+        // σ̂ fell by half: the next step
+        run.feed(&reduced(4, 0.5, 0.0, &[])).unwrap();
+        assert!(matches!(run.round(), Round::Step { generation: 1, .. }));
+        run.feed(&reduced(4, 0.0, 0.0, &[0.25; 4])).unwrap();
+        // σ̂ fell by 4 % < 5 %: the run ends before the step, on generation 2
+        run.feed(&reduced(4, 0.48, 0.0, &[])).unwrap();
+        let Round::Finish {
+            generation, lambda, ..
+        } = run.round()
+        else {
+            panic!("{:?}", run.round());
+        };
+        assert_eq!(generation, 2);
+        assert_eq!(lambda, 2.0 * 5.0 * MAD_TO_SIGMA);
+        run.feed(&Reduced::default()).unwrap();
+        assert_eq!(run.round(), Round::Done);
+        assert!(run.feed(&Reduced::default()).is_err());
+        let r = run.report();
+        assert_eq!(r.noise, [1.0, 0.5, 0.48].map(|m| m * MAD_TO_SIGMA));
+        assert_eq!(r.moved, [1.0, 0.5]);
+        assert_eq!((r.dimension.len(), r.wide_iterations), (1, 0));
+        assert_eq!(r.result.min_neighbors, 24);
+    }
+
+    #[test]
+    fn the_shape_rule_and_a_step_that_moves_nothing_end_the_run() {
+        let options = RobustOptions::default();
+        let mut run = RobustRun::new(&options, 1.0, Neighbors::default()).unwrap();
+        run.feed(&reduced(2, 0.0, ratio_of(2.0), &[])).unwrap();
+        // σ̂ 1 → 0.8 → 0.62 (−22.5 % at iteration 2, more than 0.4 of the first left): the
+        // shape rule asks for 25 % from iteration 2 on
+        for (residual, moved) in [(1.0, 1.0), (0.8, 1.0)] {
+            run.feed(&reduced(2, residual, 0.0, &[])).unwrap();
+            run.feed(&reduced(2, 0.0, 0.0, &[moved])).unwrap();
+        }
+        run.feed(&reduced(2, 0.62, 0.0, &[])).unwrap();
+        assert!(matches!(run.round(), Round::Finish { generation: 2, .. }));
+        // a step that moved no point ends the run before measuring again
+        let mut run = RobustRun::new(&options, 1.0, Neighbors::default()).unwrap();
+        run.feed(&reduced(2, 0.0, ratio_of(2.0), &[])).unwrap();
+        run.feed(&reduced(2, 1.0, 0.0, &[])).unwrap();
+        run.feed(&reduced(2, 0.0, 0.0, &[0.0, 0.0])).unwrap();
+        assert!(matches!(run.round(), Round::Finish { generation: 1, .. }));
+        assert_eq!(run.report().moved, [0.0]);
+    }
+
+    #[test]
+    fn a_ball_of_noise_widens_then_shrinks_on_the_proxy() {
+        let options = RobustOptions::default();
+        let mut run = RobustRun::new(&options, 2.0, Neighbors::default()).unwrap();
+        run.feed(&reduced(3, 0.0, ratio_of(2.9), &[])).unwrap();
+        let wide = RowSet::Wide;
+        assert_eq!(
+            run.round(),
+            Round::Measure {
+                generation: 0,
+                rows: wide
+            }
+        );
+        run.feed(&reduced(3, 1.0, 0.0, &[])).unwrap();
+        assert!(matches!(
+            run.round(),
+            Round::Step {
+                k: 72,
+                rows: RowSet::Wide,
+                ..
+            }
+        ));
+        run.feed(&reduced(3, 0.0, 0.0, &[4.0; 3])).unwrap();
+        // still a ball (above KEEP_DIMENSION): wide again, σ̂ rising is no reason to stop
+        assert_eq!(run.round(), Round::Ratio { generation: 1 });
+        run.feed(&reduced(3, 0.0, ratio_of(2.6), &[])).unwrap();
+        run.feed(&reduced(3, 2.0, 0.0, &[])).unwrap();
+        run.feed(&reduced(3, 0.0, 0.0, &[4.0; 3])).unwrap();
+        // a surface now: shrunk on generation 2, and σ̂ is not compared with the wide ones
+        run.feed(&reduced(3, 0.0, ratio_of(2.3), &[])).unwrap();
+        let rows = RowSet::Shrunk { at: 2 };
+        assert_eq!(
+            run.round(),
+            Round::Measure {
+                generation: 2,
+                rows
+            }
+        );
+        run.feed(&reduced(3, 5.0, 0.0, &[])).unwrap();
+        assert!(matches!(
+            run.round(),
+            Round::Step {
+                k: 24,
+                generation: 2,
+                ..
+            }
+        ));
+        let r = run.report();
+        assert_eq!((r.wide_iterations, r.dimension.len()), (2, 3));
+        assert_eq!(r.moved, [1.0, 1.0]); // √(12/3) = 2 = h
+                                         // a caller's table is measured, never widened
+        let table = NeighborTable::default();
+        let mut run = RobustRun::new(&options, 1.0, Neighbors::Table(&table)).unwrap();
+        run.feed(&reduced(3, 0.0, ratio_of(2.9), &[])).unwrap();
+        assert_eq!(
+            run.round(),
+            Round::Measure {
+                generation: 0,
+                rows: RowSet::Plain
+            }
+        );
+    }
+
+    #[test]
+    fn rows_of_fewer_than_three_points_are_refused() {
+        let mut run = RobustRun::new(&RobustOptions::default(), 1.0, Neighbors::default()).unwrap();
+        let r = Reduced {
+            max_len: 1,
+            count: 5,
+            ..Reduced::default()
+        };
+        assert!(matches!(
+            run.feed(&r),
+            Err(NbhdError::Degenerate {
+                points: 5,
+                largest: 2,
+                ..
+            })
+        ));
+        assert!(RobustRun::new(&RobustOptions::default(), 0.0, Neighbors::default()).is_err());
+    }
+}
