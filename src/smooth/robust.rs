@@ -62,11 +62,7 @@
 //!    which is the angle θ to third order) *or* their chord is perpendicular to their
 //!    mean normal within a quarter of the inlier width (the biweight of `⟨m, x_j − p_i⟩`,
 //!    which holds on any smooth surface however curved, and fails for the blended normals
-//!    next to an edge); `a_ij` is the larger of the two. Where a point's neighbourhood reads as
-//!    the two sheets of a thin part (the residuals to its plane spread flat, averaged over its
-//!    wide neighbours: `sheet_sides` in `robust/planes.rs`), a neighbour on the other sheet
-//!    weighs 0 — the normal term of robust implicit MLS (Öztireli et al. 2009) with the side of
-//!    the barycentre for the orientation the normals lack.
+//!    next to an edge); `a_ij` is the larger of the two.
 //! 5. **Stopping rule**: stop as soon as an iteration lowered the noise estimate σ̂ by less than
 //!    the fraction `tolerance` (by less than a quarter while more than 0.4 of the first σ̂ is
 //!    left on a cloud that did not start as a ball of noise: that spread is mostly the
@@ -97,11 +93,9 @@
 //! on the order. The spacing h (a mean over the input's nearest distances, summed in caller
 //! order) is computed once. Everything else is per point. A point's row is its candidates (the
 //! `k_plane` nearest of the input, `WIDE`·`k_plane` = 3·`k_plane` while wide, not cut at ε),
-//! and one iteration reaches **four hops** along rows: the step reads the neighbours'
+//! and one iteration reaches **three hops** along rows: the step reads the neighbours'
 //! normals, a neighbour's normal is chosen among the covariance planes of its own row's
-//! farthest quarter, and each plane is fitted to that point's row; the neighbours' sides of a
-//! thin part add a fourth (a side averages the kurtosis of the neighbour's wide neighbours,
-//! each of which reads its own row, plane and normal). A hop is bounded by the
+//! farthest quarter, and each plane is fitted to that point's row. A hop is bounded by the
 //! input's distance to its `k_plane`-th (or wide) nearest, not by ε, so no radius bounds the
 //! reach next to outliers and holes: a tile checks per point whether its rows are the whole
 //! cloud's and how many hops of them it holds (`robust/reach.rs`). The points are stored in the

@@ -7,18 +7,14 @@
 //! later); the iterations re-sort and re-cut it on each proxy but never change its set of
 //! candidates. A round reads, for a point x:
 //! - the ratio, the plane distance and the outputs: x's row (one hop);
-//! - the step: the normals and the sides of a thin part of x's first `k`; the side of j
-//!   averages the kurtosis of j's row, each member l's read through l's own row, plane and
-//!   normal (`sheet_sides` in `robust/planes.rs`); the normal of l is chosen among the planes
-//!   of l's own row and of its farthest quarter; the plane of m is fitted to m's row (four
-//!   hops).
+//! - the step: the normals of x's first `k`; the normal of j is chosen among the planes of j's
+//!   own row and of its farthest quarter; the plane of l is fitted to l's row (three hops).
 //!
 //! So with `cand(x)` the candidate set and `cert(x)` "x's row is the cloud's" (below):
 //! `plane(x) ⇐ cert(x)`, `normal(x) ⇐ cert(x) ∧ ∀c ∈ cand(x): cert(c)` (which quarter is
-//! the farthest depends on the proxy, so every candidate counts), the kurtosis of x's row
-//! `⇐ normal(x)`, `side(x) ⇐ normal(x) ∧ ∀c ∈ cand(x): normal(c)`, and
-//! `step(x) ⇐ side(x) ∧ ∀c ∈ cand(x): side(c)`. These sets are fixed for a run's rows, so the
-//! flags are computed once per search. The positions a round reads are the proxy of its
+//! the farthest depends on the proxy, so every candidate counts), and
+//! `step(x) ⇐ normal(x) ∧ ∀c ∈ cand(x): normal(c)`. These sets are fixed for a run's rows, so
+//! the flags are computed once per search. The positions a round reads are the proxy of its
 //! generation, which the tile's driver gives it for every gathered point.
 //!
 //! `cert(x)`: the tile's search found the same row as a search of the whole cloud. The tile
@@ -75,7 +71,7 @@ impl Region {
 pub(super) struct Reach {
     /// `cert(x)`: the row is the whole cloud's.
     cert: Vec<bool>,
-    /// `step(x)`: the step's reach (four hops) is certified.
+    /// `step(x)`: the step's reach (three hops) is certified.
     step: Vec<bool>,
 }
 
@@ -97,8 +93,7 @@ impl Reach {
             })
             .collect();
         let normal = closure(&cert, rows);
-        let side = closure(&normal, rows);
-        let step = closure(&side, rows);
+        let step = closure(&normal, rows);
         Self { cert, step }
     }
 

@@ -15,9 +15,7 @@
 //! one-machine value whenever everything it reads is right in the tile, which
 //! `robust/reach.rs` decides per point ([`TilePart::valid`]).
 
-use super::planes::{
-    covariance_planes, plane_distance, plane_distances, selected_normals, sheet_sides, Plane,
-};
+use super::planes::{covariance_planes, plane_distance, plane_distances, selected_normals, Plane};
 use super::reach::{Reach, Region};
 use super::rows::Rows;
 use super::run::{median, Reduced, Round, RowSet};
@@ -423,9 +421,8 @@ impl<'a> RobustTile<'a> {
         };
         let width = options.inlier_width * sigma;
         st.normals = selected_normals(&st.cur, &st.rows, &planes, width);
-        let sides = sheet_sides(&st.cur, &st.rows, &planes, &st.normals);
         drop(planes);
-        let next = step(&st.cur, &st.rows, &st.normals, &sides, width, options);
+        let next = step(&st.cur, &st.rows, &st.normals, width, options);
         let mut moved_sq = ExactSum::new();
         match &st.owned_at {
             None => moved_sq.extend(
