@@ -458,7 +458,8 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::query::result_set::{Key32, KnnRow, RowEntry, WithinRadius};
+    use crate::query::order::PackedKey;
+    use crate::query::result_set::{KnnRow, WithinRadius};
     use crate::query::{Neighbor, NeighborHeap};
     use crate::tree::node::{Descent, Step};
     use crate::tree::{BuildOptions, KdTree, PivotPolicy};
@@ -537,7 +538,7 @@ mod tests {
                                 );
                                 // The single query's sorted row of packed keys (its first
                                 // leaf taken as one sorted block) keeps the same.
-                                let mut keys = vec![Key32::default(); k];
+                                let mut keys = vec![0u64; k];
                                 let mut row = KnnRow::new(&mut keys[..], r2);
                                 search_compact(&compact, &q, exclude, &mut row);
                                 let c: Vec<Neighbor<f32>> = row
@@ -551,6 +552,19 @@ mod tests {
                                     a, c,
                                     "row: dim {dim} {pivot:?} leaf {leaf_size} q {qi} k {k}"
                                 );
+                                // The `f64` queries' row of `u128` keys (its first block
+                                // sorted by rounded distances, then exactly) keeps the same.
+                                let mut keys = vec![0u128; k];
+                                let mut row = KnnRow::new(&mut keys[..], r2);
+                                search_compact(&compact, &q, exclude, &mut row);
+                                let c: Vec<Neighbor<f32>> = row
+                                    .held()
+                                    .map(|e| {
+                                        let (sq_dist, index) = e.pair();
+                                        Neighbor { index, sq_dist }
+                                    })
+                                    .collect();
+                                assert_eq!(a, c, "u128 row: dim {dim} {pivot:?} q {qi} k {k}");
                             }
                             let (mut a, mut b): (Vec<Neighbor<f32>>, Vec<Neighbor<f32>>) =
                                 (Vec::new(), Vec::new());
