@@ -94,14 +94,13 @@ fn analysis_options(
     Ok(SmoothOptions {
         k,
         epsilon: options::length(epsilon, epsilon_units)?,
-        steps: 0,
-        // the normals and curvatures do not read λ; absolute, it needs no spacing
+        // `analyze` sets no step and every output itself; the normals and curvatures do not
+        // read λ, and an absolute λ needs no spacing
         lambda: Curvature::Absolute(1.0),
         orientation: options::orientation(orientation, orientation_point)?,
         non_finite: options::non_finite(non_finite)?,
         density: options::density(density)?,
         formula: options::formula(formula)?,
-        outputs: true,
         threads,
         ..SmoothOptions::default()
     })
