@@ -5,6 +5,7 @@
 
 use super::NeighborIndex;
 use crate::error::Result;
+use crate::query::order::PackedKey;
 use crate::query::result_set::{KnnBuf, KnnRow, RowKey, WithinRadius};
 use crate::query::{Neighbor, NeighborHeap, Neighborhood, Plan, Query, QueryOptions};
 use crate::scalar::{Scalar, ScalarType};
@@ -142,20 +143,14 @@ pub(crate) fn answer<T: Scalar, I: NeighborIndex<T>>(
 
 /// Single kNN queries up to this `k` keep their candidates on the call stack, as packed keys
 /// (`src/query/order.rs`: `u64` for `f32`, `u128` for `f64`), sorted in a [`KnnRow`] up to
-/// [`KNN_ROW_MAX_K`], unsorted in a [`KnnBuf`] above; larger ones in a heap in the result
+/// [`RowKey::ROW_MAX_K`], unsorted in a [`KnnBuf`] above; larger ones in a heap in the result
 /// vector.
 const SORTED_MAX_K: usize = 32;
-
-/// Single kNN queries up to this `k` insert into a sorted row, larger ones append to a
-/// buffer selected when full: on the 77k torus (docs/speed-log.md, "Single queries, the floor,
-/// and copies of a point") the buffer took 0.87x the sorted row's time at k = 30 and 1.14x at
-/// k = 10 (`f32`).
-const KNN_ROW_MAX_K: usize = 16;
 
 /// A kNN search (`k ≤ SORTED_MAX_K`) into a [`KnnRow`] or a [`KnnBuf`] of packed keys `K` on
 /// the call stack, copied to `out` at the end: a candidate costs one-integer compares and a
 /// short shift or a store, and the result needs no sort.
-fn search_packed<T: Scalar, K: RowKey, I: NeighborIndex<T>>(
+fn search_packed<T: Scalar, K: RowKey + PackedKey<T>, I: NeighborIndex<T>>(
     index: &I,
     q: &[T],
     exclude: Option<u32>,
@@ -167,8 +162,8 @@ fn search_packed<T: Scalar, K: RowKey, I: NeighborIndex<T>>(
         let (sq_dist, index) = e.pair();
         Neighbor { index, sq_dist }
     };
-    if k <= KNN_ROW_MAX_K {
-        let mut buf = [K::default(); KNN_ROW_MAX_K];
+    if k <= K::ROW_MAX_K {
+        let mut buf = [K::default(); SORTED_MAX_K];
         let mut row = KnnRow::new(&mut buf[..k], sq_radius);
         index.visit(q, exclude, &mut row);
         out.clear();

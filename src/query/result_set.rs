@@ -182,8 +182,11 @@ pub(crate) struct KnnRow<'a, K> {
 
 impl<'a, K: RowKey> KnnRow<'a, K> {
     /// A set over `row` (its length is `k`, at least 1), every entry the sentinel.
-    pub(crate) fn new<T: Scalar>(row: &'a mut [K], sq_radius: T) -> Self {
-        row.fill(K::of(sq_radius, u32::MAX));
+    pub(crate) fn new<T: Scalar>(row: &'a mut [K], sq_radius: T) -> Self
+    where
+        K: PackedKey<T>,
+    {
+        row.fill(K::of(u32::MAX, sq_radius));
         Self { row }
     }
 
@@ -196,7 +199,7 @@ impl<'a, K: RowKey> KnnRow<'a, K> {
     }
 }
 
-impl<T: Scalar, K: RowKey> ResultSet<T> for KnnRow<'_, K> {
+impl<T: Scalar, K: RowKey + PackedKey<T>> ResultSet<T> for KnnRow<'_, K> {
     #[inline(always)]
     fn worst_key(&self) -> (T, u32) {
         self.row[self.row.len() - 1].pair()
@@ -204,7 +207,7 @@ impl<T: Scalar, K: RowKey> ResultSet<T> for KnnRow<'_, K> {
 
     #[inline(always)]
     fn insert(&mut self, index: u32, sq_dist: T) {
-        let cand = K::of(sq_dist, index);
+        let cand = K::of(index, sq_dist);
         let row = &mut *self.row;
         let mut j = row.len() - 1;
         while j > 0 && cand < row[j - 1] {
@@ -216,7 +219,7 @@ impl<T: Scalar, K: RowKey> ResultSet<T> for KnnRow<'_, K> {
 
     #[inline(always)]
     fn offer(&mut self, index: u32, sq_dist: T) {
-        if K::of(sq_dist, index) < self.row[self.row.len() - 1] {
+        if K::of(index, sq_dist) < self.row[self.row.len() - 1] {
             <Self as ResultSet<T>>::insert(self, index, sq_dist);
         }
     }
@@ -236,7 +239,12 @@ impl<T: Scalar, K: RowKey> ResultSet<T> for KnnRow<'_, K> {
 }
 
 /// A packed key of a [`KnnRow`], with the way an empty row takes a whole block.
-pub(crate) trait RowKey: PackedKey {
+pub(crate) trait RowKey: Copy + Ord + Default {
+    /// Single queries up to this `k` keep a [`KnnRow`], larger ones a [`KnnBuf`]
+    /// (`src/index/search.rs`).
+    const ROW_MAX_K: usize;
+    /// The index of a key.
+    fn index(self) -> u32;
     /// Writes into `row` the `min(k, n)` smallest keys, in order, of the `n` candidates of a
     /// block: the entries `j` of `mask`, the point `ids[j]` at `sq_dists[j]`, unless its index is
     /// `excluded` (every candidate precedes the row's sentinels).
@@ -278,6 +286,13 @@ fn sorted_block(
 
 /// `f32` neighbours: their exact keys sorted.
 impl RowKey for u64 {
+    /// On the 77k torus (docs/speed-log.md, "Single queries, the floor, and copies of a point")
+    /// the buffer took 0.87x the sorted row's time at k = 30 and 1.14x at k = 10.
+    const ROW_MAX_K: usize = 16;
+    #[inline(always)]
+    fn index(self) -> u32 {
+        self as u32
+    }
     #[inline(always)]
     fn first_block<T: Scalar>(
         row: &mut [u64],
@@ -299,6 +314,14 @@ impl RowKey for u64 {
 /// rounded distance can be out of order, and the `m`-th smallest is among those up to the end
 /// of its run of equal rounded distances.
 impl RowKey for u128 {
+    /// At k = 30 on the 77k torus the row (its first block sorted whole) took 0.81-0.85x the
+    /// buffer's time, whose selections and final sort move `u128` keys (docs/speed-log.md,
+    /// round 11).
+    const ROW_MAX_K: usize = 32;
+    #[inline(always)]
+    fn index(self) -> u32 {
+        self as u32
+    }
     #[inline(always)]
     fn first_block<T: Scalar>(
         row: &mut [u128],
@@ -351,15 +374,18 @@ pub(crate) struct KnnBuf<'a, K> {
     worst: K,
 }
 
-impl<'a, K: PackedKey> KnnBuf<'a, K> {
+impl<'a, K: RowKey> KnnBuf<'a, K> {
     /// A set of the `k ≥ 1` nearest over `buf` (of length `2k`).
-    pub(crate) fn new<T: Scalar>(buf: &'a mut [K], k: usize, sq_radius: T) -> Self {
+    pub(crate) fn new<T: Scalar>(buf: &'a mut [K], k: usize, sq_radius: T) -> Self
+    where
+        K: PackedKey<T>,
+    {
         debug_assert!(k >= 1 && buf.len() == 2 * k);
         Self {
             buf,
             len: 0,
             k,
-            worst: K::of(sq_radius, u32::MAX),
+            worst: K::of(u32::MAX, sq_radius),
         }
     }
 
@@ -371,7 +397,7 @@ impl<'a, K: PackedKey> KnnBuf<'a, K> {
     }
 }
 
-impl<T: Scalar, K: PackedKey> ResultSet<T> for KnnBuf<'_, K> {
+impl<T: Scalar, K: RowKey + PackedKey<T>> ResultSet<T> for KnnBuf<'_, K> {
     #[inline(always)]
     fn worst_key(&self) -> (T, u32) {
         self.worst.pair()
@@ -379,7 +405,7 @@ impl<T: Scalar, K: PackedKey> ResultSet<T> for KnnBuf<'_, K> {
 
     #[inline(always)]
     fn insert(&mut self, index: u32, sq_dist: T) {
-        self.buf[self.len] = K::of(sq_dist, index);
+        self.buf[self.len] = K::of(index, sq_dist);
         self.len += 1;
         if self.len == self.k && self.worst.index() == u32::MAX {
             // Full for the first time: the worst is the largest held.
@@ -398,7 +424,7 @@ impl<T: Scalar, K: PackedKey> ResultSet<T> for KnnBuf<'_, K> {
 
     #[inline(always)]
     fn offer(&mut self, index: u32, sq_dist: T) {
-        if K::of(sq_dist, index) < self.worst {
+        if K::of(index, sq_dist) < self.worst {
             <Self as ResultSet<T>>::insert(self, index, sq_dist);
         }
     }
@@ -411,7 +437,7 @@ mod tests {
     /// Offers the same candidates (in distance `T`) to the heap and to the packed sets with
     /// keys `K`, one at a time and, for the row, the first 32 as one block, and checks they keep
     /// the same as a brute-force selection.
-    fn check_sets<T: Scalar, K: RowKey + std::fmt::Debug>() {
+    fn check_sets<T: Scalar, K: RowKey + PackedKey<T> + std::fmt::Debug>() {
         let cands: Vec<(u32, T)> = (0..200u32)
             .map(|i| {
                 let d = ((i * 37) % 23) as f64 * 0.5 + if i % 3 == 0 { 1e-9 } else { 0.0 };
