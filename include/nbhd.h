@@ -867,6 +867,31 @@ typedef struct {
 } nbhd_dynamic_stats;
 
 /**
+ * Weights of the points of the two trees of nbhd_tree_weigh_pairs: `tree_weights[i]` for the
+ * point with index i of the first tree (`tree_count` values, one per index given to its
+ * build or insert), `other_weights[j]` for the second. A NULL array weighs every point 1
+ * (its count is then ignored).
+ */
+typedef struct {
+    /**
+     * Weights of the first tree's points, or NULL.
+     */
+    const double *tree_weights;
+    /**
+     * Number of values at `tree_weights`.
+     */
+    size_t tree_count;
+    /**
+     * Weights of the second tree's points, or NULL.
+     */
+    const double *other_weights;
+    /**
+     * Number of values at `other_weights`.
+     */
+    size_t other_count;
+} nbhd_pair_weights;
+
+/**
  * A progress callback: `fraction` grows from 0 to 1 over the run; return `true` to go on,
  * `false` to stop the run, which then returns NBHD_STATUS_CANCELLED and writes no output.
  * It is called from the thread that runs the computation (the calling thread when
@@ -2422,6 +2447,158 @@ nbhd_status nbhd_dynamic_boxsize(const nbhd_dynamic_tree *tree,
                                  double *out_boxsize,
                                  size_t capacity,
                                  bool *out_periodic);
+
+/**
+ * Every pair i < j of points of `tree` within `radius` of each other (inclusive, scipy's
+ * `query_pairs`) as a new table in `*out_table`: row i (one per index, as
+ * nbhd_tree_neighborhoods) holds the j > i in ascending order (not by distance), with the
+ * pair's key in the distances (squared for the Euclidean metric, the distance for p = 1 and
+ * infinity, the sum of |x_j|^p otherwise). `options` may be NULL; its `query` sets the
+ * metric, eps (all pairs within radius / (1 + eps) and none beyond radius * (1 + eps)) and a
+ * strict radius; `exclude_self` does not apply. Identical for any number of threads.
+ *
+ * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
+ *
+ * Errors: NULL_POINTER (`tree`, `out_table`), MISALIGNED_POINTER, INVALID_RADIUS (negative,
+ * NaN or infinite, or a key that overflows the tree's type), INVALID_OPTION (the query
+ * options), OUT_OF_MEMORY, THREAD_POOL.
+ *
+ * Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
+ *
+ * # Safety
+ * `tree` NULL or a live handle; `options` NULL or readable; `out_table` NULL or writable.
+ */
+nbhd_status nbhd_tree_pairs(const nbhd_tree *tree,
+                            double radius,
+                            const nbhd_table_options *options,
+                            nbhd_neighborhoods **out_table);
+
+/**
+ * nbhd_tree_pairs for a growing tree (rows for every index ever inserted; removed points
+ * have no pair).
+ *
+ * # Safety
+ * As nbhd_tree_pairs.
+ */
+nbhd_status nbhd_dynamic_pairs(const nbhd_dynamic_tree *tree,
+                               double radius,
+                               const nbhd_table_options *options,
+                               nbhd_neighborhoods **out_table);
+
+/**
+ * The pairs (i, j) of a point i of `tree` and a point j of `other` within `radius` of each
+ * other (inclusive; scipy's `query_ball_tree` and `sparse_distance_matrix`), measured by
+ * `tree` (its metric under `options->query`, its periodic box; `other`'s box is not used), as
+ * a new table in `*out_table`: row i (one per index of `tree`) holds `other`'s indices j
+ * ascending, with the pair's key (see nbhd_tree_pairs), zero distances included. Both trees
+ * must have the same dimension and scalar type. Identical for any number of threads.
+ *
+ * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
+ *
+ * Errors: as nbhd_tree_pairs; NULL_POINTER (`other`), DIMENSION_MISMATCH, INVALID_OPTION
+ * (trees of different scalar types).
+ *
+ * Ownership: the caller owns `*out_table` and frees it with nbhd_neighborhoods_free.
+ *
+ * # Safety
+ * As nbhd_tree_pairs; `other` NULL or a live handle.
+ */
+nbhd_status nbhd_tree_pairs_with(const nbhd_tree *tree,
+                                 const nbhd_tree *other,
+                                 double radius,
+                                 const nbhd_table_options *options,
+                                 nbhd_neighborhoods **out_table);
+
+/**
+ * nbhd_tree_pairs_with for two growing trees.
+ *
+ * # Safety
+ * As nbhd_tree_pairs_with.
+ */
+nbhd_status nbhd_dynamic_pairs_with(const nbhd_dynamic_tree *tree,
+                                    const nbhd_dynamic_tree *other,
+                                    double radius,
+                                    const nbhd_table_options *options,
+                                    nbhd_neighborhoods **out_table);
+
+/**
+ * How many pairs (i, j) of a point of `tree` and a point of `other` lie within each radius of
+ * `radii[0 .. radius_count]` (scipy's `count_neighbors`), measured by `tree` as
+ * nbhd_tree_pairs_with, written to `counts[0 .. radius_count]`. `other` may be `tree` itself
+ * (then each point counts with itself and each pair twice, as scipy). `cumulative`: counts[k]
+ * is the number of pairs at distance <= radii[k] (radii in any order); otherwise the number in
+ * (radii[k-1], radii[k]] ([0, radii[0]] for k = 0; radii non-decreasing; of equal radii the
+ * first gets the count, the others 0). A negative radius counts nothing, +infinity every
+ * pair; `options->query.strict` makes every radius exclusive. Exact and identical for any
+ * number of threads.
+ *
+ * Errors: NULL_POINTER (`tree`, `other`, `radii` or `counts` with radius_count > 0),
+ * MISALIGNED_POINTER, INVALID_RADIUS (a NaN radius), INVALID_OPTION (decreasing radii when
+ * not cumulative, eps > 0: counts are exact, trees of different scalar types),
+ * DIMENSION_MISMATCH, THREAD_POOL. `counts` is untouched on error.
+ *
+ * # Safety
+ * `tree`, `other` NULL or live handles; `radii` NULL or readable and `counts` NULL or
+ * writable for `radius_count` values; `options` NULL or readable.
+ */
+nbhd_status nbhd_tree_count_pairs(const nbhd_tree *tree,
+                                  const nbhd_tree *other,
+                                  const double *radii,
+                                  size_t radius_count,
+                                  bool cumulative,
+                                  const nbhd_table_options *options,
+                                  uint64_t *counts);
+
+/**
+ * nbhd_tree_count_pairs with weights (scipy's `count_neighbors` with `weights`): each pair
+ * (i, j) adds tree_weights[i] * other_weights[j] (see nbhd_pair_weights; `weights` NULL
+ * weighs every point 1), and sums[k] is the correctly rounded sum of those products (an exact
+ * sum: the same bits for any number of threads).
+ *
+ * Errors: those of nbhd_tree_count_pairs; INVALID_OPTION (a weight array whose count is not
+ * the number of indices of its tree, or a weight that is NaN or infinite).
+ *
+ * # Safety
+ * As nbhd_tree_count_pairs, `sums` for `counts`; `weights` NULL or readable, its arrays NULL
+ * or readable for their counts.
+ */
+nbhd_status nbhd_tree_weigh_pairs(const nbhd_tree *tree,
+                                  const nbhd_tree *other,
+                                  const double *radii,
+                                  size_t radius_count,
+                                  bool cumulative,
+                                  const nbhd_pair_weights *weights,
+                                  const nbhd_table_options *options,
+                                  double *sums);
+
+/**
+ * nbhd_tree_count_pairs for two growing trees.
+ *
+ * # Safety
+ * As nbhd_tree_count_pairs.
+ */
+nbhd_status nbhd_dynamic_count_pairs(const nbhd_dynamic_tree *tree,
+                                     const nbhd_dynamic_tree *other,
+                                     const double *radii,
+                                     size_t radius_count,
+                                     bool cumulative,
+                                     const nbhd_table_options *options,
+                                     uint64_t *counts);
+
+/**
+ * nbhd_tree_weigh_pairs for two growing trees.
+ *
+ * # Safety
+ * As nbhd_tree_weigh_pairs.
+ */
+nbhd_status nbhd_dynamic_weigh_pairs(const nbhd_dynamic_tree *tree,
+                                     const nbhd_dynamic_tree *other,
+                                     const double *radii,
+                                     size_t radius_count,
+                                     bool cumulative,
+                                     const nbhd_pair_weights *weights,
+                                     const nbhd_table_options *options,
+                                     double *sums);
 
 /**
  * The default smoothing options: the thesis' anisotropic flow with g_sharp at λ = 0.2/h on

@@ -28,12 +28,44 @@ use crate::filter::{
     radius_outlier_removal, statistical_outlier_removal, Kept, RadiusOutlierOptions,
     StatisticalOutlierOptions,
 };
-use crate::index::{IndexRows, NeighborIndex, Spacing};
+use crate::index::{IndexRows, NeighborIndex, PairWeights, Spacing};
 use crate::points::PointsView;
 use crate::query::{NeighborSearch, NeighborhoodSpec};
 use crate::scalar::ScalarType;
 use crate::table::{NeighborTable, TableOptions};
 use crate::tree::{BuildOptions, KdTree, Persist, SavedTreeInfo, TreeStats};
+
+/// Runs `$body` with `$a` and `$b` bound to the typed indexes inside two [`AnyIndex`] of the
+/// same scalar type (any flavours) and `$T` to that type; indexes of different scalar types
+/// are [`NbhdError::InvalidOption`] (a pair query compares coordinates of one type).
+macro_rules! with_pair {
+    ($x:expr, $y:expr, $a:ident, $b:ident, $T:ident => $body:expr) => {{
+        use AnyIndex::{GrowingF32 as G32, GrowingF64 as G64, StaticF32 as S32, StaticF64 as S64};
+        match ($x, $y) {
+            (S32($a), S32($b)) => with_pair!(@ f32, $T => $body),
+            (S32($a), G32($b)) => with_pair!(@ f32, $T => $body),
+            (G32($a), S32($b)) => with_pair!(@ f32, $T => $body),
+            (G32($a), G32($b)) => with_pair!(@ f32, $T => $body),
+            (S64($a), S64($b)) => with_pair!(@ f64, $T => $body),
+            (S64($a), G64($b)) => with_pair!(@ f64, $T => $body),
+            (G64($a), S64($b)) => with_pair!(@ f64, $T => $body),
+            (G64($a), G64($b)) => with_pair!(@ f64, $T => $body),
+            (x, y) => Err(NbhdError::InvalidOption {
+                name: "other",
+                reason: format!(
+                    "pairs need two indexes of one scalar type, got {:?} and {:?}",
+                    x.scalar_type(),
+                    y.scalar_type()
+                ),
+            }),
+        }
+    }};
+    (@ $t:ty, $T:ident => $body:expr) => {{
+        #[allow(dead_code)]
+        type $T = $t;
+        $body
+    }};
+}
 
 /// A neighbour index whose flavour and scalar type are chosen at run time.
 #[derive(Debug)]
@@ -401,6 +433,53 @@ impl AnyIndex {
     /// [`radius_outlier_removal`] over this index.
     pub fn radius_outlier_removal(&self, options: &RadiusOutlierOptions) -> Result<Kept> {
         with_index!(self, t, _T => radius_outlier_removal(t, options))
+    }
+
+    /// [`NeighborIndex::pairs`], the radius converted to the index's type.
+    pub fn pairs(&self, radius: f64, options: &TableOptions) -> Result<AnyTable> {
+        with_index!(self, t, T => Ok(t.pairs(<T as crate::scalar::Scalar>::from_f64(radius), options)?.into()))
+    }
+
+    /// [`NeighborIndex::pairs_with`] against `other` (of the same scalar type, either
+    /// flavour), the radius converted to the indexes' type.
+    pub fn pairs_with(
+        &self,
+        other: &AnyIndex,
+        radius: f64,
+        options: &TableOptions,
+    ) -> Result<AnyTable> {
+        with_pair!(self, other, a, b, T => Ok(a.pairs_with(b, <T as crate::scalar::Scalar>::from_f64(radius), options)?.into()))
+    }
+
+    /// [`NeighborIndex::count_pairs_with`] against `other` (of the same scalar type), the
+    /// radii converted to the indexes' type.
+    pub fn count_pairs_with(
+        &self,
+        other: &AnyIndex,
+        radii: &[f64],
+        cumulative: bool,
+        options: &TableOptions,
+    ) -> Result<Vec<u64>> {
+        with_pair!(self, other, a, b, T => {
+            let radii: Vec<T> = radii.iter().map(|&r| <T as crate::scalar::Scalar>::from_f64(r)).collect();
+            a.count_pairs_with(b, &radii, cumulative, options)
+        })
+    }
+
+    /// [`NeighborIndex::weigh_pairs_with`] against `other` (of the same scalar type), the
+    /// radii converted to the indexes' type.
+    pub fn weigh_pairs_with(
+        &self,
+        other: &AnyIndex,
+        radii: &[f64],
+        weights: PairWeights<'_>,
+        cumulative: bool,
+        options: &TableOptions,
+    ) -> Result<Vec<f64>> {
+        with_pair!(self, other, a, b, T => {
+            let radii: Vec<T> = radii.iter().map(|&r| <T as crate::scalar::Scalar>::from_f64(r)).collect();
+            a.weigh_pairs_with(b, &radii, weights, cumulative, options)
+        })
     }
 
     /// Bytes [`AnyIndex::save`] writes.

@@ -43,7 +43,7 @@ pub mod tree;
 
 pub use dynamic::DynamicKdTree;
 pub use error::{NbhdError, Result};
-pub use index::{IndexRows, NeighborIndex, Spacing};
+pub use index::{IndexRows, NeighborIndex, PairWeights, Spacing};
 pub use metric::Metric;
 pub use packed::NonFinitePolicy;
 pub use parallel::MAX_THREADS;

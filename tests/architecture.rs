@@ -230,6 +230,10 @@ const QUERY_NAMES: &[&str] = &[
     "neighborhoods_at",
     "neighborhoods_of",
     "spacing",
+    "pairs",
+    "pairs_with",
+    "count_pairs_with",
+    "weigh_pairs_with",
 ];
 
 /// Definitions of a query name outside `src/index/` that are not a second implementation:
@@ -241,6 +245,10 @@ const QUERY_NAMES_ELSEWHERE: &[(&str, &str, &str)] = &[
     ("handle.rs", "neighborhoods_of", "dispatch"),
     ("handle.rs", "in_boxes", "dispatch"),
     ("handle.rs", "spacing", "dispatch"),
+    ("handle.rs", "pairs", "dispatch"),
+    ("handle.rs", "pairs_with", "dispatch"),
+    ("handle.rs", "count_pairs_with", "dispatch"),
+    ("handle.rs", "weigh_pairs_with", "dispatch"),
     // constructors of the run-time neighbourhood description, not queries
     ("query/mod.rs", "knn", "NeighborhoodSpec"),
     ("query/mod.rs", "radius", "NeighborhoodSpec"),
@@ -250,6 +258,8 @@ const QUERY_NAMES_ELSEWHERE: &[(&str, &str, &str)] = &[
     // the C exports' shared bodies over the handle (`nbhd_tree_*` and `nbhd_dynamic_*`)
     ("ffi/table.rs", "neighborhoods", "C export"),
     ("ffi/table.rs", "neighborhoods_of", "C export"),
+    ("ffi/pairs.rs", "pairs", "C export"),
+    ("ffi/pairs.rs", "pairs_with", "C export"),
 ];
 
 /// The types that implement `NeighborIndex`, by the file of their implementation (in the
@@ -417,6 +427,9 @@ const PYTHON_SHARED_METHODS: &[&str] = &[
     "neighborhoods",
     "in_box",
     "spacing",
+    "pairs",
+    "pairs_with",
+    "count_pairs",
     "remove_statistical_outliers",
     "remove_radius_outliers",
     "to_bytes",

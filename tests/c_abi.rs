@@ -426,6 +426,19 @@ fn c_periodic_queries_are_clean_under_valgrind() {
 }
 
 #[test]
+fn c_pair_queries_match_brute_force() {
+    run(Command::new(compiled("pairs_test")), "tests/c/pairs_test");
+}
+
+#[test]
+fn c_pair_queries_are_clean_under_valgrind() {
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(compiled("pairs_test"));
+        run(cmd, "valgrind tests/c/pairs_test");
+    }
+}
+
+#[test]
 fn c_smoothing_checks_against_a_sphere() {
     run(Command::new(compiled("smooth_test")), "tests/c/smooth_test");
 }
@@ -518,7 +531,8 @@ fn c_tests_call_every_export() {
     let mut source = String::new();
     for entry in std::fs::read_dir(Path::new(ROOT).join("tests/c")).unwrap() {
         let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "c") {
+        // the programs and the headers they share (tests/c/brute.h calls the searches)
+        if path.extension().is_some_and(|e| e == "c" || e == "h") {
             source += &std::fs::read_to_string(path).unwrap();
         }
     }

@@ -9,6 +9,7 @@
 
 mod common;
 
+use common::trees::static_and_growing;
 use common::{points, to_f32, Kind, Rng};
 use nbhd::{
     BruteForce, BuildOptions, DynamicKdTree, KdTree, Metric, NbhdError, Neighbor, NeighborIndex,
@@ -70,26 +71,6 @@ fn nbhds<T: Scalar>(n: usize, radius: T) -> Vec<Neighborhood<T>> {
     ]
 }
 
-fn build<T: Scalar>(coords: &[T], d: usize, pivot: PivotPolicy) -> (KdTree<T>, DynamicKdTree<T>) {
-    let opts = BuildOptions {
-        pivot,
-        leaf_size: 3,
-        ..BuildOptions::default()
-    };
-    let tree = KdTree::from_flat(coords, d, &opts).unwrap();
-    let mut growing = DynamicKdTree::<T>::new(d, &opts).unwrap();
-    let n = coords.len() / d;
-    // three trees of the forest: a large one and two small ones
-    for part in [0..n / 2, n / 2..n * 3 / 4, n * 3 / 4..n] {
-        if !part.is_empty() {
-            growing
-                .insert_flat(&coords[part.start * d..part.end * d])
-                .unwrap();
-        }
-    }
-    (tree, growing)
-}
-
 /// Tree, growing tree and brute force agree exactly for every query under `options`.
 fn check_exact<T: Scalar>(coords: &[T], d: usize, options: &QueryOptions, seed: u64) {
     let view = PointsView::from_flat(coords, d).unwrap();
@@ -112,7 +93,7 @@ fn check_exact<T: Scalar>(coords: &[T], d: usize, options: &QueryOptions, seed: 
         T::from_f64(2.0)
     };
     for pivot in PivotPolicy::ALL {
-        let (tree, growing) = build(coords, d, pivot);
+        let (tree, growing) = static_and_growing(coords, d, None, pivot);
         let mut qs: Vec<Query<'_, T>> = stored
             .iter()
             .flat_map(|&s| [Query::stored(s), Query::stored_excluding_self(s)])
@@ -191,7 +172,7 @@ fn check_approximate<T: Scalar>(coords: &[T], d: usize, metric: Metric, eps: f64
     let tol = 1.0 + 1e-4;
     let dist = |nb: &Neighbor<T>| metric.distance_of(nb.sq_dist).to_f64();
     for pivot in [PivotPolicy::SlidingMidpoint, PivotPolicy::SpreadMedian] {
-        let (tree, growing) = build(coords, d, pivot);
+        let (tree, growing) = static_and_growing(coords, d, None, pivot);
         for i in (0..n).step_by(5) {
             let q = Query::stored_excluding_self(i as u32);
             let (mut want, mut got, mut grown) = (Vec::new(), Vec::new(), Vec::new());

@@ -12,9 +12,11 @@
 
 mod common;
 
+use common::keys::key;
+use common::trees::static_and_growing;
 use common::Rng;
 use nbhd::{
-    BuildOptions, DynamicKdTree, KdTree, Metric, NbhdError, Neighbor, NeighborIndex, Neighborhood,
+    BuildOptions, DynamicKdTree, KdTree, NbhdError, Neighbor, NeighborIndex, Neighborhood,
     PivotPolicy, PointsView, Query, QueryOptions, Scalar, TableOptions,
 };
 
@@ -56,36 +58,6 @@ fn cloud(kind: usize, n: usize, sizes: &[f64], seed: u64) -> Vec<f64> {
     v
 }
 
-/// Wraps `x` into `[0, L)` (nothing on an open axis), in `T` as the tree does.
-fn wrap<T: Scalar>(x: T, l: T) -> T {
-    if !l.is_finite() {
-        return x;
-    }
-    let r = x % l;
-    let r = if r < T::ZERO { r + l } else { r };
-    if r < l {
-        r
-    } else {
-        T::ZERO
-    }
-}
-
-/// The key from `q` to `p` under `metric` with every axis at its nearest image.
-fn key<T: Scalar>(metric: Metric, q: &[T], p: &[T], sizes: &[T]) -> T {
-    let mut s = T::ZERO;
-    for j in 0..q.len() {
-        let t = (wrap(q[j], sizes[j]) - p[j]).abs();
-        let t = t.min_of(sizes[j] - t);
-        s = match metric {
-            Metric::Euclidean => s + t * t,
-            Metric::Manhattan => s + t,
-            Metric::Chebyshev => s.max_of(t),
-            Metric::Minkowski(p) => s + t.powf(T::from_f64(p)),
-        };
-    }
-    s
-}
-
 /// The brute force's answer: every point (but `exclude`) by `(key, index)`, cut as `nbhd`
 /// asks under `options` (exact).
 fn brute<T: Scalar>(
@@ -124,31 +96,6 @@ fn brute<T: Scalar>(
         }
     }
     all
-}
-
-fn build<T: Scalar>(
-    coords: &[T],
-    d: usize,
-    given: &[f64],
-    pivot: PivotPolicy,
-) -> (KdTree<T>, DynamicKdTree<T>) {
-    let opts = BuildOptions {
-        pivot,
-        leaf_size: 3,
-        ..BuildOptions::default()
-    };
-    let view = PointsView::from_flat(coords, d).unwrap();
-    let tree = KdTree::build_periodic(&view, &opts, given).unwrap();
-    let mut growing = DynamicKdTree::<T>::new_periodic(d, &opts, given).unwrap();
-    let n = coords.len() / d;
-    for part in [0..n / 2, n / 2..n * 3 / 4, n * 3 / 4..n] {
-        if !part.is_empty() {
-            growing
-                .insert_flat(&coords[part.start * d..part.end * d])
-                .unwrap();
-        }
-    }
-    (tree, growing)
 }
 
 /// The queries: stored points (with and without themselves), and free points — a stored
@@ -198,7 +145,7 @@ fn check<T: Scalar>(coords: &[T], given: &[f64], sizes: &[f64], options: &QueryO
     let stored: Vec<u32> = (0..3).map(|_| rng.below(n) as u32).collect();
     let l = sizes.iter().copied().find(|l| l.is_finite()).unwrap();
     for pivot in PivotPolicy::ALL {
-        let (tree, growing) = build(coords, d, given, pivot);
+        let (tree, growing) = static_and_growing(coords, d, Some(given), pivot);
         for radius in [0.3 * l, 0.6 * l, 1.5 * l] {
             let radius = T::from_f64(radius);
             let nbhds = [
@@ -328,7 +275,8 @@ fn run<T: Scalar>(n: usize, seed: u64) {
                 };
                 check(&coords, &given, &sizes, &strict, seed);
                 // the plain methods are the default options
-                let (tree, _) = build(&coords, d, &given, PivotPolicy::SlidingMidpoint);
+                let (tree, _) =
+                    static_and_growing(&coords, d, Some(&given), PivotPolicy::SlidingMidpoint);
                 let mut plain = Vec::new();
                 let q = vec![T::from_f64(-0.1); d];
                 tree.knn(Query::point(&q), 3, &mut plain).unwrap();

@@ -146,6 +146,40 @@ class KdTree:
         strict: bool = False,
         threads: int = 0,
     ) -> Table: ...
+    def pairs(
+        self,
+        radius: float,
+        *,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
+        threads: int = 0,
+    ) -> Table:
+        """Pairs i < j within radius: row i holds the j > i ascending, with their keys."""
+    def pairs_with(
+        self,
+        other: Union[KdTree, DynamicKdTree],
+        radius: float,
+        *,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
+        threads: int = 0,
+    ) -> Table:
+        """Row i: the indices j of ``other`` within radius of point i, ascending, with keys."""
+    def count_pairs(
+        self,
+        other: Union[KdTree, DynamicKdTree],
+        radii: Sequence[float],
+        *,
+        cumulative: bool = True,
+        weights: Optional[Sequence[float]] = None,
+        other_weights: Optional[Sequence[float]] = None,
+        p: float = 2.0,
+        strict: bool = False,
+        threads: int = 0,
+    ) -> Union[npt.NDArray[np.uint64], F64]:
+        """Pair counts per radius (uint64), or weight sums (float64) when weighted."""
     def in_box(
         self, min: npt.ArrayLike, max: npt.ArrayLike, *, threads: int = 0
     ) -> Union[U32, tuple[npt.NDArray[np.uint64], U32]]:
@@ -241,6 +275,40 @@ class DynamicKdTree:
         strict: bool = False,
         threads: int = 0,
     ) -> Table: ...
+    def pairs(
+        self,
+        radius: float,
+        *,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
+        threads: int = 0,
+    ) -> Table:
+        """Pairs i < j within radius: row i holds the j > i ascending, with their keys."""
+    def pairs_with(
+        self,
+        other: Union[KdTree, DynamicKdTree],
+        radius: float,
+        *,
+        p: float = 2.0,
+        eps: float = 0.0,
+        strict: bool = False,
+        threads: int = 0,
+    ) -> Table:
+        """Row i: the indices j of ``other`` within radius of point i, ascending, with keys."""
+    def count_pairs(
+        self,
+        other: Union[KdTree, DynamicKdTree],
+        radii: Sequence[float],
+        *,
+        cumulative: bool = True,
+        weights: Optional[Sequence[float]] = None,
+        other_weights: Optional[Sequence[float]] = None,
+        p: float = 2.0,
+        strict: bool = False,
+        threads: int = 0,
+    ) -> Union[npt.NDArray[np.uint64], F64]:
+        """Pair counts per radius (uint64), or weight sums (float64) when weighted."""
     def in_box(
         self, min: npt.ArrayLike, max: npt.ArrayLike, *, threads: int = 0
     ) -> Union[U32, tuple[npt.NDArray[np.uint64], U32]]:

@@ -25,7 +25,7 @@ use crate::options;
 #[pyclass(module = "nbhd._nbhd", name = "DynamicKdTree")]
 pub struct PyDynamicKdTree {
     /// Always a growing tree.
-    index: AnyIndex,
+    pub(crate) index: AnyIndex,
 }
 
 /// Inserts the rows of `arr` (of the tree's dtype `T`) into the growing `index`.

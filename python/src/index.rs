@@ -258,6 +258,98 @@ pub(crate) fn remove_radius_outliers<'py>(
     Ok(kept(py, result.or_raise()?))
 }
 
+/// Runs `f` with the index of `other`, a `KdTree` or a `DynamicKdTree` (else `TypeError`).
+fn with_other<R>(
+    other: &Bound<'_, PyAny>,
+    f: impl FnOnce(&AnyIndex) -> PyResult<R>,
+) -> PyResult<R> {
+    if let Ok(t) = other.cast::<crate::tree::PyKdTree>() {
+        return f(&t.get().index);
+    }
+    if let Ok(t) = other.cast::<crate::dynamic::PyDynamicKdTree>() {
+        return f(&t.try_borrow()?.index);
+    }
+    Err(pyo3::exceptions::PyTypeError::new_err(format!(
+        "other must be a KdTree or a DynamicKdTree, not {}",
+        other.get_type().name()?
+    )))
+}
+
+/// The pairs `i < j` of stored points within `radius` (`nbhd::NeighborIndex::pairs`) as a
+/// `Table`: row i holds the j > i ascending, with the pair's key.
+pub(crate) fn pairs(
+    index: &AnyIndex,
+    py: Python<'_>,
+    radius: f64,
+    options: QueryOptions,
+    threads: usize,
+) -> PyResult<PyTable> {
+    let opts = TableOptions {
+        threads,
+        query: options,
+        ..TableOptions::default()
+    };
+    let rows = py.detach(|| index.pairs(radius, &opts)).or_raise()?;
+    table(py, rows, index.source_len(), &options)
+}
+
+/// The pairs `(i, j)` of a stored point and a point of `other` within `radius`, measured by
+/// `index` (`nbhd::NeighborIndex::pairs_with`), as a `Table` of `index`'s rows whose columns
+/// are `other`'s indices, ascending.
+pub(crate) fn pairs_with(
+    index: &AnyIndex,
+    py: Python<'_>,
+    other: &Bound<'_, PyAny>,
+    radius: f64,
+    options: QueryOptions,
+    threads: usize,
+) -> PyResult<PyTable> {
+    let opts = TableOptions {
+        threads,
+        query: options,
+        ..TableOptions::default()
+    };
+    with_other(other, |o| {
+        let rows = py
+            .detach(|| index.pairs_with(o, radius, &opts))
+            .or_raise()?;
+        table(py, rows, o.source_len(), &options)
+    })
+}
+
+/// Pair counts against `other` in bins of `radii` (`nbhd::NeighborIndex::count_pairs_with`):
+/// uint64 counts, or with a weight array on either side the float64 sums of the weight
+/// products (`weigh_pairs_with`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn count_pairs<'py>(
+    index: &AnyIndex,
+    py: Python<'py>,
+    other: &Bound<'py, PyAny>,
+    radii: Vec<f64>,
+    cumulative: bool,
+    weights: (Option<Vec<f64>>, Option<Vec<f64>>),
+    options: QueryOptions,
+    threads: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let opts = TableOptions {
+        threads,
+        query: options,
+        ..TableOptions::default()
+    };
+    with_other(other, |o| {
+        if weights.0.is_none() && weights.1.is_none() {
+            let counts = py.detach(|| index.count_pairs_with(o, &radii, cumulative, &opts));
+            return Ok(vec1(py, counts.or_raise()?).into_any());
+        }
+        let w = nbhd::PairWeights {
+            this: weights.0.as_deref(),
+            other: weights.1.as_deref(),
+        };
+        let sums = py.detach(|| index.weigh_pairs_with(o, &radii, w, cumulative, &opts));
+        Ok(vec1(py, sums.or_raise()?).into_any())
+    })
+}
+
 /// Emits the one `#[pymethods]` block of a Python index class (`KdTree`, `DynamicKdTree`): the
 /// class's own methods (`own`) and every method the two classes share, each a call of a
 /// function of this module over the class's `index: AnyIndex`. PyO3 takes one `#[pymethods]`
@@ -402,6 +494,80 @@ macro_rules! index_pymethods {
                 let spec = $crate::index::spec(k, radius, sorted)?;
                 let options = $crate::index::options(p, eps, strict)?;
                 $crate::index::neighborhoods(&self.index, py, spec, options, exclude_self, threads)
+            }
+
+            #[doc = concat!("Every pair i < j of ", $held, " within `radius` of each other")]
+            /// (inclusive; scipy's `query_pairs`) as a `Table`: row i holds the j > i in
+            /// ascending order (not by distance) with the pair's key in `sq_dists` (as `knn`).
+            /// `p`, `eps`, `strict`: as `knn` and `radius` (with `eps`, every pair within
+            /// `radius / (1 + eps)` and none beyond `radius * (1 + eps)`). Periodic trees pair
+            /// nearest images. Identical for any `threads`.
+            #[pyo3(signature = (radius, *, p = 2.0, eps = 0.0, strict = false, threads = 0))]
+            fn pairs(
+                &self,
+                py: ::pyo3::Python<'_>,
+                radius: f64,
+                p: f64,
+                eps: f64,
+                strict: bool,
+                threads: usize,
+            ) -> ::pyo3::PyResult<$crate::tree::PyTable> {
+                let options = $crate::index::options(p, eps, strict)?;
+                $crate::index::pairs(&self.index, py, radius, options, threads)
+            }
+
+            #[doc = concat!("The pairs (i, j) of ", $held, " i and points j of `other` (a")]
+            /// `KdTree` or `DynamicKdTree` of the same dimension and dtype) within `radius`
+            /// (inclusive; scipy's `query_ball_tree` and `sparse_distance_matrix`), measured by
+            /// this tree (its `p`, its periodic box; `other`'s box is not used): a `Table` with
+            /// a row per index of this tree holding `other`'s indices ascending and the pairs'
+            /// keys (zero distances included; `to_csr(distances=True)` gives scipy's sparse
+            /// distance matrix). `p`, `eps`, `strict`: as `pairs`.
+            #[pyo3(signature = (other, radius, *, p = 2.0, eps = 0.0, strict = false,
+                                threads = 0))]
+            #[allow(clippy::too_many_arguments)]
+            fn pairs_with(
+                &self,
+                py: ::pyo3::Python<'_>,
+                other: &::pyo3::Bound<'_, ::pyo3::PyAny>,
+                radius: f64,
+                p: f64,
+                eps: f64,
+                strict: bool,
+                threads: usize,
+            ) -> ::pyo3::PyResult<$crate::tree::PyTable> {
+                let options = $crate::index::options(p, eps, strict)?;
+                $crate::index::pairs_with(&self.index, py, other, radius, options, threads)
+            }
+
+            #[doc = concat!("How many pairs (i, j) of ", $held, " i and points j of `other`")]
+            /// lie within each radius of `radii` (scipy's `count_neighbors`), measured as
+            /// `pairs_with`; `other` may be this tree (each point then counts with itself and
+            /// each pair twice). `cumulative=True`: entry k counts distances ≤ radii[k];
+            /// otherwise those in (radii[k-1], radii[k]] (radii non-decreasing; of equal radii
+            /// the first gets the count). A negative radius counts nothing, inf everything.
+            /// Unweighted: uint64 counts. With `weights` (one per index of this tree) and/or
+            /// `other_weights` (one per index of `other`; a missing side weighs 1): float64
+            /// sums of the products, each correctly rounded (the same bits for any `threads`).
+            #[pyo3(signature = (other, radii, *, cumulative = true, weights = None,
+                                other_weights = None, p = 2.0, strict = false, threads = 0))]
+            #[allow(clippy::too_many_arguments)]
+            fn count_pairs<'py>(
+                &self,
+                py: ::pyo3::Python<'py>,
+                other: &::pyo3::Bound<'py, ::pyo3::PyAny>,
+                radii: Vec<f64>,
+                cumulative: bool,
+                weights: Option<Vec<f64>>,
+                other_weights: Option<Vec<f64>>,
+                p: f64,
+                strict: bool,
+                threads: usize,
+            ) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::PyAny>> {
+                let options = $crate::index::options(p, 0.0, strict)?;
+                let w = (weights, other_weights);
+                $crate::index::count_pairs(&self.index, py, other, radii, cumulative, w, options,
+                                           threads)
             }
 
             #[doc = concat!("The ", $held, " inside closed axis-aligned boxes")]

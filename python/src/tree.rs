@@ -20,7 +20,7 @@ use crate::options;
 #[pyclass(frozen, module = "nbhd._nbhd", name = "KdTree")]
 pub struct PyKdTree {
     /// Always a static tree.
-    index: AnyIndex,
+    pub(crate) index: AnyIndex,
 }
 
 index_pymethods!(

@@ -57,6 +57,31 @@ pub(crate) unsafe fn init_out<T>(p: *mut T, arg: &str, value: T) -> Result<*mut 
     Ok(p)
 }
 
+/// The `count` values at `p` (`arg` names it), checked: `count` 0 needs no pointer (NULL or
+/// aligned); otherwise `p` non-NULL and aligned, and the byte size within the address space.
+///
+/// # Safety
+/// `p` NULL or readable for `count` values of `T`, not written during `'a`.
+pub(crate) unsafe fn read_slice<'a, T>(
+    p: *const T,
+    count: usize,
+    arg: &str,
+) -> Result<&'a [T], FfiError> {
+    if count == 0 {
+        check_optional(p, arg)?;
+        return Ok(&[]);
+    }
+    check_ptr(p, arg)?;
+    if count > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
+        return Err(FfiError::InvalidArgument(format!(
+            "{arg}: {count} values overflow the address space"
+        )));
+    }
+    // SAFETY: non-NULL and aligned (checked above), `count` readable values (caller) whose
+    // byte size fits in isize (checked above); only read.
+    Ok(unsafe { std::slice::from_raw_parts(p, count) })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -50,6 +50,8 @@ pub mod dynamic;
 
 pub mod periodic;
 
+pub mod pairs;
+
 pub mod smoothing_io;
 
 pub mod smooth;

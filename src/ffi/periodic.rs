@@ -2,35 +2,14 @@
 //! periodic box, and the box read back; every query of such a tree (nbhd_tree_search and the
 //! rest) then wraps the query into the box and measures nearest images.
 
-use super::args::{check_optional, check_ptr, deref, init_out};
+use super::args::{check_optional, check_ptr, deref, init_out, read_slice};
 use super::dynamic::nbhd_dynamic_tree;
 use super::enums::{enum_argument, nbhd_scalar_type, ScalarTypeArg};
-use super::status::{guard, nbhd_status, FfiError};
+use super::status::{guard, nbhd_status};
 use super::tree::{hand_out_index, nbhd_tree, IndexHandle};
 use super::types::{nbhd_build_options, nbhd_points, read_build_options, PointsArg};
 use crate::handle::AnyIndex;
 use crate::scalar::ScalarType;
-
-/// The `count` box sizes at `boxsize`, checked (`count` 0 needs no pointer and is refused by
-/// the core as a length of neither 1 nor the dimension).
-///
-/// # Safety
-/// `boxsize` NULL or readable for `count` doubles.
-unsafe fn read_boxsize<'a>(boxsize: *const f64, count: usize) -> Result<&'a [f64], FfiError> {
-    if count == 0 {
-        check_optional(boxsize, "boxsize")?;
-        return Ok(&[]);
-    }
-    check_ptr(boxsize, "boxsize")?;
-    if count > isize::MAX as usize / std::mem::size_of::<f64>() {
-        return Err(FfiError::InvalidArgument(format!(
-            "boxsize_count {count} overflows the address space"
-        )));
-    }
-    // SAFETY: non-NULL and aligned (checked above), `count` readable doubles (caller) whose
-    // byte size fits in isize (checked above); only read.
-    Ok(unsafe { std::slice::from_raw_parts(boxsize, count) })
-}
 
 /// Builds a periodic k-d tree (a torus, as scipy's `cKDTree(data, boxsize=...)`) over
 /// `*points` and stores a new handle in `*out_tree`. `boxsize[0 .. boxsize_count]` holds the
@@ -68,7 +47,7 @@ pub unsafe extern "C" fn nbhd_tree_build_periodic(
             (
                 PointsArg::read(points, "points")?,
                 read_build_options(options)?,
-                read_boxsize(boxsize, boxsize_count)?,
+                read_slice(boxsize, boxsize_count, "boxsize")?,
             )
         };
         // SAFETY: the caller's description of the point memory is true (contract above).
@@ -106,7 +85,7 @@ pub unsafe extern "C" fn nbhd_dynamic_create_periodic(
         let (options, boxsize) = unsafe {
             (
                 read_build_options(options)?,
-                read_boxsize(boxsize, boxsize_count)?,
+                read_slice(boxsize, boxsize_count, "boxsize")?,
             )
         };
         let scalar: nbhd_scalar_type = enum_argument(scalar_type, "scalar_type")?;

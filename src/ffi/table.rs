@@ -49,7 +49,7 @@ pub extern "C" fn nbhd_table_options_default() -> nbhd_table_options {
 ///
 /// # Safety
 /// `out` was checked by `init_out`.
-unsafe fn hand_out(out: *mut *mut nbhd_neighborhoods, table: AnyTable) {
+pub(super) unsafe fn hand_out(out: *mut *mut nbhd_neighborhoods, table: AnyTable) {
     let handle = Box::into_raw(Box::new(nbhd_neighborhoods { table }));
     // SAFETY: `out` is non-NULL, aligned and writable (checked by the caller); the handle is
     // a fresh Box that the C caller now owns.

@@ -20,7 +20,10 @@
 //! - `in_box.rs`: box queries ([`NeighborIndex::in_box`], [`NeighborIndex::in_boxes`]);
 //! - `tables.rs`: tables ([`NeighborIndex::neighborhoods`], [`NeighborIndex::neighborhoods_at`],
 //!   [`NeighborIndex::neighborhoods_of`]);
-//! - `spacing.rs`: the nearest-neighbour spacing ([`NeighborIndex::spacing`]).
+//! - `spacing.rs`: the nearest-neighbour spacing ([`NeighborIndex::spacing`]);
+//! - `pairs.rs`: pairs within a radius, in one index or between two, as tables or counted
+//!   ([`NeighborIndex::pairs`], [`NeighborIndex::pairs_with`],
+//!   [`NeighborIndex::count_pairs_with`], [`NeighborIndex::weigh_pairs_with`]).
 //!
 //! A metric (a Minkowski p-norm, `src/metric.rs`) and approximation are a parameter of the
 //! traversal ([`NeighborIndex::visit_with`], the default Euclidean queries keeping
@@ -33,11 +36,13 @@
 //! the same traversal.
 
 mod in_box;
+mod pairs;
 mod search;
 mod spacing;
 mod tables;
 
 pub use in_box::IndexRows;
+pub use pairs::PairWeights;
 pub(crate) use search::{answer, search};
 pub(crate) use spacing::{check_spacing, mean_distance};
 pub use spacing::{Length, Spacing, Units};
@@ -427,6 +432,138 @@ pub trait NeighborIndex<T: Scalar>: NeighborSearch<T> + Sized {
     /// [`NeighborIndex::neighborhoods`].
     fn spacing(&self, threads: usize) -> Result<Spacing> {
         spacing::spacing(self, threads)
+    }
+
+    /// Every pair `i < j` of held points within `radius` of each other (inclusive; scipy's
+    /// `query_pairs`), under `options.query` (any metric, eps, a strict radius), as a table:
+    /// row `i` (caller index, [`NeighborSearch::source_len`] rows) holds the `j > i`
+    /// ascending, with the pair's key in `sq_dists` (squared for Euclidean, the distance for
+    /// p = 1 and ∞, `Σ |x_j|^p` otherwise). On a periodic index pairs meet at their nearest
+    /// images. `options.exclude_self` does not apply (a point is never its own pair).
+    /// Computed in parallel on `options.threads`, identical for any thread count.
+    ///
+    /// With `eps > 0` (scipy's rule for pairs): every pair within `r / (1 + eps)` is returned
+    /// and none beyond `r · (1 + eps)` — the pairs up to `r · (1 + eps)` whose cells the
+    /// pruning at `r / (1 + eps)` did not skip.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView, TableOptions};
+    ///
+    /// let pts = [0.0f64, 1.0, 1.5, 4.0];
+    /// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 1)?, &BuildOptions::default())?;
+    /// let pairs = tree.pairs(1.0, &TableOptions::default())?;
+    /// assert_eq!((pairs.indices_of(0), pairs.indices_of(1), pairs.total()), (&[1u32][..], &[2u32][..], 2));
+    /// assert_eq!(pairs.sq_dists_of(1), [0.25]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of a radius query under `options.query`
+    /// ([`NeighborIndex::search_with`]), [`NbhdError::OutOfMemory`](crate::NbhdError::OutOfMemory),
+    /// [`NbhdError::ThreadPool`](crate::NbhdError::ThreadPool).
+    fn pairs(&self, radius: T, options: &TableOptions) -> Result<NeighborTable<T>> {
+        pairs::pairs(self, radius, options)
+    }
+
+    /// The pairs `(i, j)` of a held point `i` and a point `j` of `other` within `radius` of each
+    /// other (inclusive; scipy's `query_ball_tree` and, as distances, `sparse_distance_matrix`),
+    /// measured by this index (its metric under `options.query`, its periodic box; `other`'s
+    /// box, if any, is not used, as scipy measures by the tree whose method is called): row `i`
+    /// (caller index, [`NeighborSearch::source_len`] rows) holds `other`'s caller indices `j`
+    /// ascending, with the pair's key in `sq_dists` — zero distances included. Computed in
+    /// parallel, identical for any thread count. With `eps > 0` the rule of
+    /// [`NeighborIndex::pairs`].
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView, TableOptions};
+    ///
+    /// let a = [0.0f64, 2.0];
+    /// let b = [0.5f64, 0.0, 9.0];
+    /// let opts = BuildOptions::default();
+    /// let ta = KdTree::<f64>::build(&PointsView::from_flat(&a, 1)?, &opts)?;
+    /// let tb = KdTree::<f64>::build(&PointsView::from_flat(&b, 1)?, &opts)?;
+    /// let rows = ta.pairs_with(&tb, 1.5, &TableOptions::default())?;
+    /// assert_eq!((rows.indices_of(0), rows.indices_of(1)), (&[0u32, 1][..], &[0u32][..]));
+    /// assert_eq!(rows.sq_dists_of(0), [0.25, 0.0]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of [`NeighborIndex::pairs`];
+    /// [`NbhdError::DimensionMismatch`](crate::NbhdError::DimensionMismatch) for indexes of
+    /// different dimensions.
+    fn pairs_with<O: NeighborIndex<T>>(
+        &self,
+        other: &O,
+        radius: T,
+        options: &TableOptions,
+    ) -> Result<NeighborTable<T>> {
+        pairs::pairs_with(self, other, radius, options)
+    }
+
+    /// How many pairs `(i, j)` of a held point and a point of `other` lie within each radius of
+    /// `radii` (scipy's `count_neighbors` without weights), measured by this index as in
+    /// [`NeighborIndex::pairs_with`] — so counting an index against itself counts each point
+    /// with itself and each pair twice, as scipy does. `cumulative`: entry `k` counts the pairs
+    /// with distance `≤ radii[k]` (radii in any order); otherwise the pairs in
+    /// `(radii[k − 1], radii[k]]` (`[0, radii[0]]` for the first; `radii` non-decreasing; of
+    /// equal radii the first gets the count, the others 0). A negative radius counts nothing,
+    /// +∞ everything; `options.query.strict` makes every radius exclusive. Exact, identical for
+    /// any thread count.
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView, TableOptions};
+    ///
+    /// let pts = [0.0f64, 1.0, 3.0];
+    /// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 1)?, &BuildOptions::default())?;
+    /// let opts = TableOptions::default();
+    /// // pairs by distance: 0 (3 of them), 1 (2), 2 (2), 3 (2)
+    /// assert_eq!(tree.count_pairs_with(&tree, &[0.0, 1.0, 2.5, f64::INFINITY], true, &opts)?, [3, 5, 7, 9]);
+    /// assert_eq!(tree.count_pairs_with(&tree, &[0.0, 1.0, 2.5, f64::INFINITY], false, &opts)?, [3, 2, 2, 2]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: a NaN radius ([`NbhdError::InvalidRadius`](crate::NbhdError::InvalidRadius));
+    /// decreasing radii when not `cumulative`, `eps > 0` (counts are exact), a bad metric
+    /// ([`NbhdError::InvalidOption`](crate::NbhdError::InvalidOption));
+    /// [`NbhdError::DimensionMismatch`](crate::NbhdError::DimensionMismatch),
+    /// [`NbhdError::ThreadPool`](crate::NbhdError::ThreadPool).
+    fn count_pairs_with<O: NeighborIndex<T>>(
+        &self,
+        other: &O,
+        radii: &[T],
+        cumulative: bool,
+        options: &TableOptions,
+    ) -> Result<Vec<u64>> {
+        pairs::count_pairs_with(self, other, radii, cumulative, options)
+    }
+
+    /// [`NeighborIndex::count_pairs_with`] with weights (scipy's `count_neighbors` with
+    /// `weights`): each pair `(i, j)` adds `w_this[i] · w_other[j]` (a missing side weighs 1),
+    /// and each entry is the correctly rounded sum of those products (an exact sum: the same
+    /// bits for any thread count and any order).
+    ///
+    /// ```
+    /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PairWeights, PointsView, TableOptions};
+    ///
+    /// let pts = [0.0f64, 1.0, 3.0];
+    /// let tree = KdTree::<f64>::build(&PointsView::from_flat(&pts, 1)?, &BuildOptions::default())?;
+    /// let w = [1.0, 2.0, 4.0];
+    /// let both = PairWeights { this: Some(&w), other: Some(&w) };
+    /// // within 1: (0,0) 1, (1,1) 4, (2,2) 16, (0,1) and (1,0) 2 each
+    /// assert_eq!(tree.weigh_pairs_with(&tree, &[1.0], both, true, &TableOptions::default())?, [25.0]);
+    /// # Ok::<(), nbhd::NbhdError>(())
+    /// ```
+    ///
+    /// Errors: those of [`NeighborIndex::count_pairs_with`]; weights not one per caller index
+    /// of their side or not finite ([`NbhdError::InvalidOption`](crate::NbhdError::InvalidOption)).
+    fn weigh_pairs_with<O: NeighborIndex<T>>(
+        &self,
+        other: &O,
+        radii: &[T],
+        weights: PairWeights<'_>,
+        cumulative: bool,
+        options: &TableOptions,
+    ) -> Result<Vec<f64>> {
+        pairs::weigh_pairs_with(self, other, radii, weights, cumulative, options)
     }
 
     /// The caller indices of the held points, ascending.

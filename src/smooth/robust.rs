@@ -61,11 +61,7 @@
 //!    which is the angle θ to third order) *or* their chord is perpendicular to their
 //!    mean normal within a quarter of the inlier width (the biweight of `⟨m, x_j − p_i⟩`,
 //!    which holds on any smooth surface however curved, and fails for the blended normals
-//!    next to an edge); `a_ij` is the larger of the two. Where a point's neighbourhood reads as
-//!    the two sheets of a thin part (the residuals to its plane spread flat, averaged over its
-//!    wide neighbours: `sheet_sides` in `robust/planes.rs`), a neighbour on the other sheet
-//!    weighs 0 — the normal term of robust implicit MLS (Öztireli et al. 2009) with the side of
-//!    the barycentre for the orientation the normals lack.
+//!    next to an edge); `a_ij` is the larger of the two.
 //! 5. **Stopping rule**: stop as soon as an iteration lowered the noise estimate σ̂ by less than
 //!    the fraction `tolerance` (by less than a quarter while more than 0.4 of the first σ̂ is
 //!    left on a cloud that did not start as a ball of noise: that spread is mostly the
@@ -88,14 +84,12 @@
 //! input's nearest distances, summed in caller order) is computed once. Everything else is per
 //! point. One iteration reads the rows of a point (its candidates are the `k_plane` nearest of the
 //! first search on the input, `WIDE`·`k_plane` = 3·`k_plane` while wide, not cut at ε; of them
-//! it uses those within ε = 12h of it in the current proxy) and reaches four hops along such
+//! it uses those within ε = 12h of it in the current proxy) and reaches three hops along such
 //! rows: the step reads the neighbours' normals, a neighbour's normal is chosen among the
 //! covariance planes of its own wide neighbours, and each plane is fitted to that neighbour's
-//! row. The neighbours' sides of a thin part add a fourth: a side reads the kurtosis of the
-//! neighbour's wide neighbours, each of which reads its own row and normal. A point's new
-//! position thus depends on points within 4ε of it in the current proxy, and a tile needs,
-//! besides the first search's candidates of its points (the exact k nearest, however far), a
-//! halo of 4ε per iteration plus the distance points move in it. The points
+//! row. A point's new position thus depends on points within 3ε of it in the current proxy,
+//! and a tile needs, besides the first search's candidates of its points (the exact k nearest,
+//! however far), a halo of 3ε per iteration plus the distance points move in it. The points
 //! are stored in the k-d tree's order while the iterations run, so that a point's neighbours
 //! lie close in memory.
 //!
@@ -127,7 +121,7 @@ use crate::error::{NbhdError, Result};
 use crate::geometry::neighbors::mean_spacing_of_nearest;
 use crate::geometry::normals::Orientation;
 use glam::DVec3;
-use planes::{covariance_planes, noise_estimate, selected_normals, sheet_sides};
+use planes::{covariance_planes, noise_estimate, selected_normals};
 use rows::Rows;
 use step::step;
 
@@ -498,8 +492,7 @@ fn iterate(
         let width = o.inlier_width * sigma;
         it.normals = selected_normals(&st.cur, &st.rows, &planes, width);
         report(base + 0.6, Stage::Step)?;
-        let sides = sheet_sides(&st.cur, &st.rows, &planes, &it.normals);
-        let next = step(&st.cur, &st.rows, &it.normals, &sides, width, &o);
+        let next = step(&st.cur, &st.rows, &it.normals, width, &o);
         let rms = displacement_rms(&st.cur, &next, &st.order);
         it.moved.push(rms);
         st.cur = next;

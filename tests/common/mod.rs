@@ -3,6 +3,9 @@
 
 pub use nbhd::shapes::Rng;
 
+pub mod keys;
+pub mod trees;
+
 /// The kinds of point sets the property tests run on.
 #[derive(Clone, Copy, Debug)]
 pub enum Kind {

@@ -280,63 +280,6 @@ impl Queue {
     }
 }
 
-/// The kurtosis `m₄ / m₂²` of a neighbourhood's residuals below which, averaged over the point
-/// and its wide neighbours, the neighbourhood reads as the two sheets of a thin part. One sheet
-/// with Gaussian noise gives 3 (less at an edge, whose residuals spread over two faces); two
-/// sheets at `±a` with noise σ give `(3σ⁴ + 6σ²a² + a⁴) / (σ² + a²)²`, 2.4 at `a` ≈ 1.1σ: a
-/// mixture of two Gaussians flattens the distribution long before it turns bimodal
-/// (R. B. Darlington, "Is kurtosis really 'peakedness'?", The American Statistician 24(2),
-/// 1970). The average over about 50 or 150 neighbourhoods steadies an estimate that one
-/// neighbourhood gives to about ±0.7 or ±0.4. Measured on the protocol of
-/// docs/smoothing-results.md (round 5): 2.2 leaves the turbine's blades folding, 2.6 starts to
-/// read the homer's and the cube's 3 % clouds as thin.
-const TWO_SHEET_KURTOSIS: f64 = 2.4;
-
-/// Each stored point's side of a thin part, for the step ([`super::step::step`]): where the
-/// residuals of the point's wide neighbourhood to its own plane (the barycentre of its
-/// covariance plane and its selected normal), their kurtosis averaged over the point and its
-/// wide neighbours, read as two sheets ([`TWO_SHEET_KURTOSIS`]), the point's offset from that
-/// barycentre along its normal (its sign says on which sheet it lies); NaN elsewhere.
-///
-/// Where the noise is about half the thickness of a thin part (the blades of the turbine of
-/// the protocol at 10K points and 3 %), every neighbourhood spans both sheets, their covariance
-/// planes are mid-planes, σ̂ includes the thickness, and the step pulls each sheet onto the
-/// other. Read through the noise, a sheet is not a point's own offset (which the noise turns
-/// one time in six or so) but how the residuals of many neighbourhoods spread.
-pub(super) fn sheet_sides(
-    points: &[DVec3],
-    rows: &Rows,
-    planes: &[Plane],
-    normals: &[DVec3],
-) -> Vec<f64> {
-    let kurtosis: Vec<f64> = (0..points.len())
-        .into_par_iter()
-        .map(|s| {
-            let (n, b) = (normals[s], planes[s].barycentre);
-            let (mut m2, mut m4, mut count) = (0.0, 0.0, 0.0);
-            for &j in rows.wide(s).iter().chain(&[s as u32]) {
-                let r = n.dot(points[j as usize] - b);
-                m2 += r * r;
-                m4 += r * r * r * r;
-                count += 1.0;
-            }
-            (m4 / count) / (m2 / count).powi(2)
-        })
-        .collect();
-    (0..points.len())
-        .into_par_iter()
-        .map(|s| {
-            let row = rows.wide(s);
-            let sum = kurtosis[s] + row.iter().map(|&j| kurtosis[j as usize]).sum::<f64>();
-            if sum / ((row.len() + 1) as f64) < TWO_SHEET_KURTOSIS {
-                normals[s].dot(points[s] - planes[s].barycentre)
-            } else {
-                f64::NAN
-            }
-        })
-        .collect()
-}
-
 /// The biweight itself is defined once, in `geometry::robust_plane`; the scoring loop above
 /// inlines its arithmetic (multiplying by the inverse width) so that it vectorises. This
 /// checks that both agree.

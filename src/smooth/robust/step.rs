@@ -12,19 +12,17 @@ use rayon::prelude::*;
 const CHORD_WIDTH: f64 = 0.25;
 
 /// The points after one step `p_i + τ Σ_j g_ij m_ij m_ijᵀ (x_j − p_i) / Σ_j g_ij` over the
-/// umbrella neighbourhoods (the first `k` of each row), without the neighbours on the other
-/// sheet of a thin part (`sides`, see [`super::planes::sheet_sides`]). Every point reads
-/// `points` only and sums its neighbours in a fixed order (see [`Sums`]): the result does not
-/// depend on the number of threads.
+/// umbrella neighbourhoods (the first `k` of each row). Every point reads `points` only and sums
+/// its neighbours in a fixed order (see [`Sums`]): the result does not depend on the number of
+/// threads.
 pub(super) fn step(
     points: &[DVec3],
     rows: &Rows,
     normals: &[DVec3],
-    sides: &[f64],
     width: f64,
     o: &RobustOptions,
 ) -> Vec<DVec3> {
-    let kernel = Kernel::new(width, o, sides);
+    let kernel = Kernel::new(width, o);
     (0..points.len())
         .into_par_iter()
         .map(|s| kernel.moved(points, normals, s, rows.narrow(s, o.k)))
@@ -35,7 +33,7 @@ pub(super) fn step(
 const LANES: usize = 4;
 
 /// The constants of one step.
-struct Kernel<'a> {
+struct Kernel {
     /// `1 / width` for the biweight of a neighbour's tangent-plane distance (a product per
     /// neighbour instead of a quotient).
     inv_width: f64,
@@ -45,18 +43,13 @@ struct Kernel<'a> {
     /// The weight of "one smooth patch" between two normals.
     patch: PatchWeight,
     tau: f64,
-    /// Each stored point's side of a thin part ([`super::planes::sheet_sides`]): its offset
-    /// from its neighbourhood's barycentre along its normal, NaN where its neighbourhood reads
-    /// as one sheet.
-    sides: &'a [f64],
 }
 
 /// [`LANES`] neighbours of `p_i`, coordinate by coordinate: the offsets `e = x_j − p_i` and the
-/// normals `n_j`, and their sides ([`Kernel::sides`]).
+/// normals `n_j`.
 struct Block {
     e: [[f64; LANES]; 3],
     n: [[f64; LANES]; 3],
-    side: [f64; LANES],
 }
 
 /// The sums of a row's step, lane by lane: lane `l` adds the neighbours `l`, `l + 4`, `l + 8`,
@@ -76,14 +69,13 @@ struct Sums {
     weight: [f64; LANES],
 }
 
-impl<'a> Kernel<'a> {
-    fn new(width: f64, o: &RobustOptions, sides: &'a [f64]) -> Self {
+impl Kernel {
+    fn new(width: f64, o: &RobustOptions) -> Self {
         Self {
             inv_width: 1.0 / width,
             inv_chord_width_sq: 1.0 / (CHORD_WIDTH * width).powi(2),
             patch: PatchWeight::new(o.feature_angle),
             tau: o.tau,
-            sides,
         }
     }
 
@@ -127,22 +119,14 @@ impl<'a> Kernel<'a> {
         let mut sums = Sums::default();
         let blocks = row.chunks_exact(LANES);
         let rest = blocks.remainder();
-        // as long as `points` too
-        let sides = &self.sides[..points.len()];
-        let side = sides[s];
-        let gather = |ids: &[u32; LANES]| {
-            let mut b = gather(points, normals, p, ids);
-            b.side = ids.map(|j| sides[j as usize]);
-            b
-        };
         for block in blocks {
             let ids = block.try_into().expect("a full block");
-            self.add_terms(&mut sums, ni, side, &gather(ids), LANES);
+            self.add_terms(&mut sums, ni, &gather(points, normals, p, ids), LANES);
         }
         if !rest.is_empty() {
             let mut ids = [s as u32; LANES];
             ids[..rest.len()].copy_from_slice(rest);
-            self.add_terms(&mut sums, ni, side, &gather(&ids), rest.len());
+            self.add_terms(&mut sums, ni, &gather(points, normals, p, &ids), rest.len());
         }
         let (step, weight) = sums.total(ni);
         if weight > 0.0 {
@@ -164,17 +148,8 @@ impl<'a> Kernel<'a> {
     /// such `v`. The scaling takes the quotient out of the chord's biweight; for unit normals
     /// `‖n_i + n'_j‖² = 2 (1 + |c|)` and `‖v‖² = a (a + 2bc) + b²`, and `⟨v, e⟩ = a ⟨n_i, e⟩ +
     /// b ⟨n_j, e⟩` reuses the tangent-plane distance: one division per neighbour.
-    ///
-    /// A neighbour on the other sheet of a thin part weighs 0: both points on thin parts
-    /// (`side_i` and the neighbour's side finite), on opposite sides of their barycentres (the
-    /// neighbour's side along `n'_j`), and the neighbour behind `p_i` as seen from its own side
-    /// (`⟨n_i, e⟩ side_i < 0`). This is the normal term of robust implicit MLS (Öztireli,
-    /// Guennebaud and Gross, "Feature preserving point set surfaces based on non-linear kernel
-    /// regression", Eurographics 2009), which keeps the two sheets of a thin part apart by the
-    /// orientation of their normals; here the orientation is the side, read where the
-    /// neighbourhood shows two sheets.
     #[inline(always)]
-    fn add_terms(&self, sums: &mut Sums, ni: DVec3, side_i: f64, block: &Block, live: usize) {
+    fn add_terms(&self, sums: &mut Sums, ni: DVec3, block: &Block, live: usize) {
         for l in 0..LANES {
             let (ex, ey, ez) = (block.e[0][l], block.e[1][l], block.e[2][l]);
             let (nx, ny, nz) = (block.n[0][l], block.n[1][l], block.n[2][l]);
@@ -189,13 +164,6 @@ impl<'a> Kernel<'a> {
             let c = ni.x * nx + ni.y * ny + ni.z * nz;
             let flip = c < 0.0;
             let ne = ni.x * ex + ni.y * ey + ni.z * ez;
-            // the other sheet (a NaN side compares false: one sheet)
-            let side_j = if flip { -block.side[l] } else { block.side[l] };
-            let g = if side_i * side_j < 0.0 && ne * side_i < 0.0 {
-                0.0
-            } else {
-                g
-            };
             // one smooth patch: normals close, or the chord perpendicular to their mean
             // s = n_i + n'_j (the biweight of ⟨s, e⟩ / (w ‖s‖), w the chord width): b a_ij is
             // the larger of b times the patch weight and (‖s‖² − ⟨s, e⟩² / w²)², b = ‖s‖⁴
@@ -230,7 +198,6 @@ impl Block {
         let mut b = Self {
             e: [[0.0; LANES]; 3],
             n: [[0.0; LANES]; 3],
-            side: [f64::NAN; LANES],
         };
         for (l, &j) in ids.iter().enumerate() {
             let (x, n) = (points[j as usize], normals[j as usize]);
@@ -284,7 +251,6 @@ impl Block {
         Self {
             e: [0, 1, 2].map(|c| array(_mm256_sub_pd(x[c], _mm256_set1_pd(p[c])))),
             n: n.map(array),
-            side: [f64::NAN; LANES],
         }
     }
 }
@@ -392,8 +358,7 @@ mod tests {
     fn lanes_give_the_scalar_formula_bits() {
         let o = RobustOptions::default();
         let width = 0.3;
-        let one_sheet = vec![f64::NAN; 23];
-        let kernel = Kernel::new(width, &o, &one_sheet);
+        let kernel = Kernel::new(width, &o);
         let points: Vec<DVec3> = (0..23)
             .map(|i| {
                 let f = i as f64;
@@ -443,35 +408,6 @@ mod tests {
         assert_eq!(bits(portable), bits(expect));
         let dispatched = kernel.moved(&points, &normals, 0, &row);
         assert_eq!(bits(dispatched), bits(expect));
-    }
-
-    #[test]
-    fn the_other_sheet_of_a_thin_part_drops_out() {
-        // a point on the upper of two parallel sheets z = ±0.5, eight neighbours on each, all
-        // normals +z and every tangent plane within the width
-        let o = RobustOptions::default();
-        let mut points = vec![DVec3::new(0.0, 0.0, 0.5)];
-        for i in 0..16 {
-            let f = i as f64;
-            let z = if i % 2 == 0 { 0.5 } else { -0.5 };
-            points.push(DVec3::new(0.3 * (f * 0.7).cos(), 0.3 * (f * 0.7).sin(), z));
-        }
-        let normals = vec![DVec3::Z; points.len()];
-        let row: Vec<u32> = (1..17).collect();
-        // one sheet (no sides): the point is pulled half-way to the lower sheet
-        let one_sheet = vec![f64::NAN; points.len()];
-        let moved = Kernel::new(10.0, &o, &one_sheet).moved(&points, &normals, 0, &row);
-        assert!((moved.z - 0.0).abs() < 0.05, "{moved}");
-        // two sheets (each point's offset from the mid-plane): the lower one drops out
-        let sides: Vec<f64> = points.iter().map(|p| p.z).collect();
-        let moved = Kernel::new(10.0, &o, &sides).moved(&points, &normals, 0, &row);
-        assert_eq!(moved, points[0]);
-        // an unoriented normal of the other sheet reads the same (its side flips with it)
-        let (mut flipped, mut sides) = (normals.clone(), sides);
-        flipped[3] = -flipped[3];
-        sides[3] = -sides[3];
-        let moved = Kernel::new(10.0, &o, &sides).moved(&points, &flipped, 0, &row);
-        assert_eq!(moved, points[0]);
     }
 
     #[test]

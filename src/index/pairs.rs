@@ -1,0 +1,358 @@
+//! Pair queries (scipy's `query_pairs`, `query_ball_tree`, `sparse_distance_matrix`,
+//! `count_neighbors`): the pairs of points within a radius of each other, in one index or
+//! between two, as tables or counted in bins of radii. Each is the index's single radius search
+//! (`search.rs`) run once per point of the other side, under the [`QueryOptions`] of
+//! [`TableOptions::query`] — every metric, eps, strict radii — and always measured by the index
+//! the method is called on (`self`): its metric and its periodic box, as scipy measures by the
+//! tree whose method is called.
+//!
+//! Results are deterministic and identical for any thread count: tables hold rows in the
+//! caller's index order with the other side's indices ascending (not by distance), and counts
+//! are exact (integers, or the correctly rounded sum of the weight products, `ExactSum`).
+//!
+//! Keys, as every query of the crate: `sq_dist` holds the metric's key (squared for Euclidean,
+//! the distance for p = 1 and ∞, `Σ |x_j|^p` otherwise); scipy's plain distances are
+//! [`Metric::distance_of`](crate::Metric::distance_of) of them.
+
+use rayon::prelude::*;
+
+use super::search::answer_with;
+use super::NeighborIndex;
+use crate::error::{NbhdError, Result};
+use crate::metric::Measure;
+use crate::parallel::with_threads;
+use crate::query::{Neighborhood, Plan, QueryOptions};
+use crate::scalar::Scalar;
+use crate::sum::ExactSum;
+use crate::table::{rows_in_work_order, NeighborTable, TableOptions};
+
+/// [`NeighborIndex::pairs`].
+pub(super) fn pairs<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    radius: T,
+    options: &TableOptions,
+) -> Result<NeighborTable<T>> {
+    let plan = options.query.plan(Neighborhood::Radius {
+        radius,
+        sorted: false,
+    })?;
+    with_threads(options.threads, || {
+        index.with_stored(|stored| {
+            rows_in_work_order(
+                index.source_len(),
+                stored.len,
+                |w| (stored.at)(w).0 as usize,
+                |w, row, _| {
+                    let (i, q) = (stored.at)(w);
+                    answer_with(index, q, Some(i), &plan, row);
+                    row.retain(|nb| nb.index > i);
+                    row.sort_unstable_by_key(|nb| nb.index);
+                    Ok(())
+                },
+            )
+        })
+    })?
+}
+
+/// [`NeighborIndex::pairs_with`].
+pub(super) fn pairs_with<T: Scalar, I: NeighborIndex<T>, O: NeighborIndex<T>>(
+    index: &I,
+    other: &O,
+    radius: T,
+    options: &TableOptions,
+) -> Result<NeighborTable<T>> {
+    same_dim(index, other)?;
+    let plan = options.query.plan(Neighborhood::Radius {
+        radius,
+        sorted: false,
+    })?;
+    // row j: the points of `index` near point j of `other`, found by `index`'s own search
+    let by_other = with_threads(options.threads, || {
+        other.with_stored(|stored| {
+            rows_in_work_order(
+                other.source_len(),
+                stored.len,
+                |w| (stored.at)(w).0 as usize,
+                |w, row, _| {
+                    answer_with(index, (stored.at)(w).1, None, &plan, row);
+                    Ok(())
+                },
+            )
+        })
+    })??;
+    transpose(&by_other, index.source_len())
+}
+
+/// The table whose row `i` holds `(j, key)` for every entry `(i, key)` of row `j` of `table`,
+/// `rows` rows (every index of `table` below it), rows ordered by `j` (a counting sort).
+fn transpose<T: Scalar>(table: &NeighborTable<T>, rows: usize) -> Result<NeighborTable<T>> {
+    let total = table.total();
+    let mut offsets = vec![0usize; rows + 1];
+    for &i in table.indices() {
+        offsets[i as usize + 1] += 1;
+    }
+    for r in 0..rows {
+        offsets[r + 1] += offsets[r];
+    }
+    let oom = |_| NbhdError::OutOfMemory {
+        what: "the table of pairs",
+        bytes: total as u128 * (4 + std::mem::size_of::<T>() as u128),
+    };
+    let mut indices: Vec<u32> = Vec::new();
+    indices.try_reserve_exact(total).map_err(oom)?;
+    indices.resize(total, 0);
+    let mut keys: Vec<T> = Vec::new();
+    keys.try_reserve_exact(total).map_err(oom)?;
+    keys.resize(total, T::ZERO);
+    let mut next = offsets[..rows].to_vec();
+    for j in 0..table.len() {
+        for (&i, &key) in table.indices_of(j).iter().zip(table.sq_dists_of(j)) {
+            let at = &mut next[i as usize];
+            indices[*at] = j as u32;
+            keys[*at] = key;
+            *at += 1;
+        }
+    }
+    Ok(NeighborTable::from_parts(offsets, indices, keys).expect("offsets made from the rows"))
+}
+
+fn same_dim<T: Scalar, I: NeighborIndex<T>, O: NeighborIndex<T>>(
+    index: &I,
+    other: &O,
+) -> Result<()> {
+    if index.dim() != other.dim() {
+        return Err(NbhdError::DimensionMismatch {
+            expected: index.dim(),
+            got: other.dim(),
+        });
+    }
+    Ok(())
+}
+
+/// The weights of [`NeighborIndex::weigh_pairs_with`]: per caller index of each side (the
+/// length of each is that side's `source_len`), `None` for a weight of 1 on every point.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PairWeights<'a> {
+    /// The weights of the points of the index the method is called on.
+    pub this: Option<&'a [f64]>,
+    /// The weights of the points of the other index.
+    pub other: Option<&'a [f64]>,
+}
+
+/// The radii of a count resolved to keys: `keys` ascending (a copy of the radii's keys sorted),
+/// each pair counted in the bin of the first key it does not exceed (scipy's `lower_bound`).
+struct Bins<T> {
+    keys: Vec<T>,
+}
+
+impl<T: Scalar> Bins<T> {
+    /// The keys of `radii` under `options` (a negative radius counts no pair, +∞ every pair;
+    /// strict: below the radius), checked: no NaN, non-decreasing unless `cumulative`, no eps.
+    fn new(radii: &[T], cumulative: bool, options: &QueryOptions) -> Result<(Self, Vec<T>)> {
+        options.validate()?;
+        if options.eps != 0.0 {
+            return Err(NbhdError::InvalidOption {
+                name: "eps",
+                reason: "pair counts are exact (scipy's count_neighbors has no eps)".into(),
+            });
+        }
+        let metric = options.metric.canonical()?;
+        let mut of_radius = Vec::with_capacity(radii.len());
+        for &r in radii {
+            if r.to_f64().is_nan() {
+                return Err(NbhdError::InvalidRadius(f64::NAN));
+            }
+            let key = if r < T::ZERO {
+                T::ZERO - T::INFINITY
+            } else {
+                metric.key_of(r)
+            };
+            of_radius.push(if options.strict { key.next_down() } else { key });
+        }
+        if !cumulative && of_radius.windows(2).any(|w| w[1] < w[0]) {
+            return Err(NbhdError::InvalidOption {
+                name: "radii",
+                reason: "non-cumulative counts need non-decreasing radii".into(),
+            });
+        }
+        let mut keys = of_radius.clone();
+        keys.sort_unstable_by(|a, b| a.partial_cmp(b).expect("no NaN key"));
+        Ok((Self { keys }, of_radius))
+    }
+
+    /// The bin of a pair's key, `None` beyond the largest radius.
+    #[inline]
+    fn of(&self, key: T) -> Option<usize> {
+        let b = self.keys.partition_point(|&k| k < key);
+        (b < self.keys.len()).then_some(b)
+    }
+
+    /// The per-radius answer from the per-bin sums: for radius `k` (key `of_radius[k]`) the
+    /// sum of the bins up to its key (cumulative), or its own bin — the first of equal radii
+    /// holds the count, the others 0, as scipy (`of_radius` is then non-decreasing).
+    fn per_radius<S: Clone>(
+        &self,
+        of_radius: &[T],
+        bins: &[S],
+        cumulative: bool,
+        zero: S,
+        add: impl Fn(&mut S, &S),
+    ) -> Vec<S> {
+        let mut prefix = vec![zero.clone()];
+        for b in bins {
+            let mut next = prefix.last().expect("prefix starts with zero").clone();
+            add(&mut next, b);
+            prefix.push(next);
+        }
+        let mut out = Vec::with_capacity(of_radius.len());
+        for (k, &key) in of_radius.iter().enumerate() {
+            let first = self.keys.partition_point(|&s| s < key);
+            out.push(if cumulative {
+                prefix[self.keys.partition_point(|&s| s <= key)].clone()
+            } else if k > 0 && of_radius[k - 1] == key {
+                zero.clone()
+            } else {
+                bins[first].clone()
+            });
+        }
+        out
+    }
+}
+
+/// Runs `index`'s search of every point of `other` out to the largest key of `bins` and hands
+/// each pair `(i of index, j of other, bin)` to `add` on a per-worker accumulator made by
+/// `zero`; the accumulators are merged by `merge` (order-independent sums: the result is the
+/// same for any thread count).
+fn binned<T, I, O, A>(
+    index: &I,
+    other: &O,
+    bins: &Bins<T>,
+    options: &TableOptions,
+    zero: impl Fn() -> A + Sync + Send,
+    add: impl Fn(&mut A, u32, u32, usize) + Sync + Send,
+    merge: impl Fn(A, A) -> A + Sync + Send,
+) -> Result<A>
+where
+    T: Scalar,
+    I: NeighborIndex<T>,
+    O: NeighborIndex<T>,
+    A: Send,
+{
+    same_dim(index, other)?;
+    let Some(&bound) = bins.keys.last().filter(|&&b| b >= T::ZERO) else {
+        return Ok(zero());
+    };
+    let plan = Plan {
+        nbhd: Neighborhood::Radius {
+            radius: T::ZERO,
+            sorted: false,
+        },
+        plain: false,
+        k: usize::MAX,
+        bound,
+        measure: Measure {
+            metric: options.query.metric.canonical()?,
+            scale: 1.0,
+        },
+    };
+    with_threads(options.threads, || {
+        other.with_stored(|stored| {
+            (0..stored.len)
+                .into_par_iter()
+                .fold(
+                    || (zero(), Vec::new()),
+                    |(mut acc, mut row), w| {
+                        let (j, q) = (stored.at)(w);
+                        answer_with(index, q, None, &plan, &mut row);
+                        for nb in &row {
+                            if let Some(b) = bins.of(nb.sq_dist) {
+                                add(&mut acc, nb.index, j, b);
+                            }
+                        }
+                        (acc, row)
+                    },
+                )
+                .map(|(acc, _)| acc)
+                .reduce(&zero, &merge)
+        })
+    })
+}
+
+/// [`NeighborIndex::count_pairs_with`].
+pub(super) fn count_pairs_with<T: Scalar, I: NeighborIndex<T>, O: NeighborIndex<T>>(
+    index: &I,
+    other: &O,
+    radii: &[T],
+    cumulative: bool,
+    options: &TableOptions,
+) -> Result<Vec<u64>> {
+    let (bins, of_radius) = Bins::new(radii, cumulative, &options.query)?;
+    let n = bins.keys.len();
+    let counts = binned(
+        index,
+        other,
+        &bins,
+        options,
+        || vec![0u64; n],
+        |acc, _, _, b| acc[b] += 1,
+        |mut a, b| {
+            a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
+            a
+        },
+    )?;
+    Ok(bins.per_radius(&of_radius, &counts, cumulative, 0, |a, b| *a += b))
+}
+
+/// [`NeighborIndex::weigh_pairs_with`].
+pub(super) fn weigh_pairs_with<T: Scalar, I: NeighborIndex<T>, O: NeighborIndex<T>>(
+    index: &I,
+    other: &O,
+    radii: &[T],
+    weights: PairWeights<'_>,
+    cumulative: bool,
+    options: &TableOptions,
+) -> Result<Vec<f64>> {
+    let w_this = check_weights(weights.this, index.source_len(), "weights of this index")?;
+    let w_other = check_weights(weights.other, other.source_len(), "weights of the other")?;
+    let (bins, of_radius) = Bins::new(radii, cumulative, &options.query)?;
+    let n = bins.keys.len();
+    let weight = |w: Option<&[f64]>, i: u32| w.map_or(1.0, |w| w[i as usize]);
+    let sums = binned(
+        index,
+        other,
+        &bins,
+        options,
+        || vec![ExactSum::new(); n],
+        |acc, i, j, b| acc[b].add(weight(w_this, i) * weight(w_other, j)),
+        |mut a, b| {
+            a.iter_mut().zip(&b).for_each(|(x, y)| x.merge(y));
+            a
+        },
+    )?;
+    let sums = bins.per_radius(&of_radius, &sums, cumulative, ExactSum::new(), |a, b| {
+        a.merge(b)
+    });
+    Ok(sums.iter().map(ExactSum::value).collect())
+}
+
+/// `weights` checked: one per caller index (`len`), each finite.
+fn check_weights<'a>(
+    weights: Option<&'a [f64]>,
+    len: usize,
+    name: &'static str,
+) -> Result<Option<&'a [f64]>> {
+    let Some(w) = weights else { return Ok(None) };
+    if w.len() != len {
+        return Err(NbhdError::InvalidOption {
+            name,
+            reason: format!("{} weights for {len} points (one per index)", w.len()),
+        });
+    }
+    if let Some(at) = w.iter().position(|x| !x.is_finite()) {
+        return Err(NbhdError::InvalidOption {
+            name,
+            reason: format!("the weight of point {at} is {}, not finite", w[at]),
+        });
+    }
+    Ok(Some(w))
+}
