@@ -5,8 +5,8 @@
 
 use super::NeighborIndex;
 use crate::error::Result;
-use crate::query::order;
-use crate::query::result_set::{Key32, KnnBuf, KnnRow, RowEntry, SortedRow, WithinRadius};
+use crate::query::order::PackedKey;
+use crate::query::result_set::{KnnBuf, KnnRow, RowKey, WithinRadius};
 use crate::query::{Neighbor, NeighborHeap, Neighborhood, Plan, Query, QueryOptions};
 use crate::scalar::{Scalar, ScalarType};
 
@@ -129,28 +129,11 @@ pub(crate) fn answer<T: Scalar, I: NeighborIndex<T>>(
         if nbhd.is_sorted() {
             out.sort_unstable_by(|a, b| a.cmp_by_distance(b));
         }
-    } else if k <= SORTED_MAX_K && T::TYPE == ScalarType::F32 {
-        if k <= KNN_ROW_MAX_K {
-            let mut buf = [Key32::default(); KNN_ROW_MAX_K];
-            let mut row = KnnRow::new(&mut buf[..k], sq_radius);
-            index.visit(q, exclude, &mut row);
-            out.clear();
-            out.extend(row.held().map(|e| {
-                let (sq_dist, index) = e.pair();
-                Neighbor { index, sq_dist }
-            }));
-        } else {
-            let mut buf = [0u64; 2 * SORTED_MAX_K];
-            let mut set = KnnBuf::new(&mut buf[..2 * k], k, sq_radius);
-            index.visit(q, exclude, &mut set);
-            out.clear();
-            out.extend(set.finish().iter().map(|&e| {
-                let (sq_dist, index) = order::unkey32(e);
-                Neighbor { index, sq_dist }
-            }));
-        }
     } else if k <= SORTED_MAX_K {
-        search_sorted::<T, Neighbor<T>, I>(index, q, exclude, k, sq_radius, out);
+        match T::TYPE {
+            ScalarType::F32 => search_packed::<T, u64, I>(index, q, exclude, k, sq_radius, out),
+            ScalarType::F64 => search_packed::<T, u128, I>(index, q, exclude, k, sq_radius, out),
+        }
     } else {
         let mut heap = NeighborHeap::new(out, k, sq_radius);
         index.visit(q, exclude, &mut heap);
@@ -158,21 +141,16 @@ pub(crate) fn answer<T: Scalar, I: NeighborIndex<T>>(
     }
 }
 
-/// Single kNN queries up to this `k` keep their candidates on the call stack (`f32`: sorted in a
-/// [`KnnRow`] up to [`KNN_ROW_MAX_K`], unsorted in a [`KnnBuf`] above; `f64`: sorted by
-/// insertion); larger ones in a heap in the result vector.
+/// Single kNN queries up to this `k` keep their candidates on the call stack, as packed keys
+/// (`src/query/order.rs`: `u64` for `f32`, `u128` for `f64`), sorted in a [`KnnRow`] up to
+/// [`RowKey::ROW_MAX_K`], unsorted in a [`KnnBuf`] above; larger ones in a heap in the result
+/// vector.
 const SORTED_MAX_K: usize = 32;
 
-/// `f32` single kNN queries up to this `k` insert into a sorted row, larger ones append to a
-/// buffer selected when full: on the 77k torus (docs/speed-log.md, "Single queries, the floor,
-/// and copies of a point") the buffer took 0.87x the sorted row's time at k = 30 and 1.14x at
-/// k = 10.
-const KNN_ROW_MAX_K: usize = 16;
-
-/// A kNN search (`k ≤ SORTED_MAX_K`) into a [`SortedRow`] on the call stack — entries `E` the
-/// packed `f32` keys of `src/query/order.rs` or neighbours — copied to `out` at the end: a
-/// candidate costs a short shift of one-integer compares, and the result needs no sort.
-fn search_sorted<T: Scalar, E: RowEntry<T> + Default, I: NeighborIndex<T>>(
+/// A kNN search (`k ≤ SORTED_MAX_K`) into a [`KnnRow`] or a [`KnnBuf`] of packed keys `K` on
+/// the call stack, copied to `out` at the end: a candidate costs one-integer compares and a
+/// short shift or a store, and the result needs no sort.
+fn search_packed<T: Scalar, K: RowKey + PackedKey<T>, I: NeighborIndex<T>>(
     index: &I,
     q: &[T],
     exclude: Option<u32>,
@@ -180,17 +158,21 @@ fn search_sorted<T: Scalar, E: RowEntry<T> + Default, I: NeighborIndex<T>>(
     sq_radius: T,
     out: &mut Vec<Neighbor<T>>,
 ) {
-    let mut buf = [E::default(); SORTED_MAX_K];
-    let mut len = 0;
-    let mut row = SortedRow {
-        row: &mut buf[..k],
-        len: &mut len,
-        sq_radius,
-    };
-    index.visit(q, exclude, &mut row);
-    out.clear();
-    out.extend(buf[..len].iter().map(|&e| {
+    let pair = |e: &K| {
         let (sq_dist, index) = e.pair();
         Neighbor { index, sq_dist }
-    }));
+    };
+    if k <= K::ROW_MAX_K {
+        let mut buf = [K::default(); SORTED_MAX_K];
+        let mut row = KnnRow::new(&mut buf[..k], sq_radius);
+        index.visit(q, exclude, &mut row);
+        out.clear();
+        out.extend(row.held().map(|e| pair(&e)));
+    } else {
+        let mut buf = [K::default(); 2 * SORTED_MAX_K];
+        let mut set = KnnBuf::new(&mut buf[..2 * k], k, sq_radius);
+        index.visit(q, exclude, &mut set);
+        out.clear();
+        out.extend(set.finish().iter().map(pair));
+    }
 }

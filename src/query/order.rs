@@ -56,6 +56,39 @@ pub(crate) fn unkey64<T: Scalar>(key: u128) -> (T, u32) {
     (T::from_f64(f64::from_bits((key >> 32) as u64)), key as u32)
 }
 
+/// A neighbour packed into one integer key that orders as `(sq_dist, index)` ([`cmp`]): a `u64`
+/// for `f32` ([`key32`]), a `u128` for any scalar ([`key64`]). The single queries' result sets
+/// (`src/query/result_set.rs`) and the grouped search's rows (`src/tree/group_search/`) hold
+/// these, so that an insertion, a sort or a heap compares integers.
+pub(crate) trait PackedKey<T>: Copy + Ord + Default {
+    /// The key of a candidate.
+    fn of(index: u32, sq_dist: T) -> Self;
+    /// Its `(sq_dist, index)`.
+    fn pair(self) -> (T, u32);
+}
+
+impl<T: Scalar> PackedKey<T> for u64 {
+    #[inline(always)]
+    fn of(index: u32, sq_dist: T) -> Self {
+        key32(sq_dist, index)
+    }
+    #[inline(always)]
+    fn pair(self) -> (T, u32) {
+        unkey32(self)
+    }
+}
+
+impl<T: Scalar> PackedKey<T> for u128 {
+    #[inline(always)]
+    fn of(index: u32, sq_dist: T) -> Self {
+        key64(sq_dist, index)
+    }
+    #[inline(always)]
+    fn pair(self) -> (T, u32) {
+        unkey64(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

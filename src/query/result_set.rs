@@ -5,14 +5,15 @@
 //! (`src/tree/group_search.rs`) and the baselines — only offer; what is kept is decided here:
 //!
 //! - `NeighborHeap` (`src/query/heap.rs`): the k nearest within a radius, any `k`;
-//! - `SortedRow`: the same for small `k`, kept sorted by insertion;
-//! - `KnnRow`: the same for one single `f32` query, sorted by insertion (its first leaf
-//!   as one sorted block);
+//! - `KnnRow`: the same for one single query with small `k`, packed keys sorted by insertion
+//!   (its first leaf as one sorted block);
+//! - `KnnBuf`: the same for one single query with larger `k`, packed keys appended unsorted;
 //! - `WithinRadius`: every point within a radius.
 //!
 //! All of them order by `(sq_dist, index)` (`src/query/order.rs`).
 
-use super::{order, Neighbor, NeighborHeap};
+use super::order::{self, PackedKey};
+use super::{Neighbor, NeighborHeap};
 use crate::scalar::Scalar;
 use crate::select::network::sort32;
 
@@ -120,7 +121,7 @@ impl<T: Scalar> ResultSet<T> for WithinRadius<'_, T> {
     }
 }
 
-/// How a [`SortedRow`] holds a neighbour: as a [`Neighbor`], or packed into one integer key
+/// How a sorted row of the grouped search (`src/tree/group_search/rows.rs`) holds a neighbour: as a [`Neighbor`], or packed into one integer key
 /// (`src/query/order.rs`) so that the insertion compares one integer.
 pub(crate) trait RowEntry<T>: Copy {
     /// The entry of a candidate.
@@ -165,192 +166,248 @@ impl<T: Scalar> RowEntry<T> for Key32 {
     }
 }
 
-/// The k nearest within a radius kept sorted by insertion in a borrowed slice of length `k`
-/// (its first `len` entries hold the set): a candidate costs a short shift and the result
-/// needs no final sort. For small `k`.
-pub(crate) struct SortedRow<'a, T, E> {
-    /// Storage of `k` entries.
-    pub row: &'a mut [E],
-    /// How many are held.
-    pub len: &'a mut usize,
-    /// The squared radius.
-    pub sq_radius: T,
-}
-
-impl<T: Scalar, E: RowEntry<T>> ResultSet<T> for SortedRow<'_, T, E> {
-    #[inline(always)]
-    fn worst_key(&self) -> (T, u32) {
-        let k = self.row.len();
-        if *self.len < k {
-            (self.sq_radius, u32::MAX)
-        } else {
-            self.row[k - 1].pair()
-        }
-    }
-
-    #[inline(always)]
-    fn insert(&mut self, index: u32, sq_dist: T) {
-        let k = self.row.len();
-        let cand = E::of(index, sq_dist);
-        let held = *self.len;
-        // the slot the candidate's entry ends in; the worst entry falls off a full row
-        let last = if held < k {
-            *self.len += 1;
-            held
-        } else {
-            k - 1
-        };
-        if last >= LONG_ROW {
-            // long rows: a binary search and one block move instead of a compare per entry
-            let at = self.row[..last].partition_point(|e| e.precedes(cand));
-            self.row.copy_within(at..last, at + 1);
-            self.row[at] = cand;
-            return;
-        }
-        let mut j = last;
-        while j > 0 && cand.precedes(self.row[j - 1]) {
-            self.row[j] = self.row[j - 1];
-            j -= 1;
-        }
-        self.row[j] = cand;
-    }
-}
-
-/// Held entries from which [`SortedRow`] finds a candidate's place by binary search.
-const LONG_ROW: usize = 24;
-
 /// The k nearest within a radius for one single query with small `k`, kept sorted in a
 /// borrowed slice of length `k` that [`KnnRow::new`] fills with the sentinel
-/// `(sq_radius, u32::MAX)`, packed [`Key32`] entries. The sentinel is the worst admissible key
-/// of a set that is not yet full (caller indices are below `u32::MAX`), so the worst key is
-/// always the last entry and no count is tested on every offer (cachegrind's branch simulation
-/// counted that test among the most mispredicted of a single query, README "Single queries, the
-/// floor, and copies of a point"); an insertion shifts the entries that follow the candidate,
-/// and the query's first leaf enters as one sorted block ([`ResultSet::offer_block`]).
-pub(crate) struct KnnRow<'a> {
+/// `(sq_radius, u32::MAX)`, as packed keys `K` (`src/query/order.rs`: `u64` for `f32`, `u128`
+/// for `f64`). The sentinel is the worst admissible key of a set that is not yet full (caller
+/// indices are below `u32::MAX`), so the worst key is always the last entry and no count is
+/// tested on every offer (cachegrind's branch simulation counted that test among the most
+/// mispredicted of a single query, docs/speed-log.md "Single queries, the floor, and copies of
+/// a point"); an insertion shifts the entries that follow the candidate, and the query's first
+/// leaf enters as one sorted block ([`ResultSet::offer_block`]).
+pub(crate) struct KnnRow<'a, K> {
     /// Storage of `k ≥ 1` entries, sorted, sentinels last.
-    row: &'a mut [Key32],
+    row: &'a mut [K],
 }
 
-impl<'a> KnnRow<'a> {
+impl<'a, K: RowKey> KnnRow<'a, K> {
     /// A set over `row` (its length is `k`, at least 1), every entry the sentinel.
-    pub(crate) fn new<T: Scalar>(row: &'a mut [Key32], sq_radius: T) -> Self {
-        row.fill(Key32(order::key32(sq_radius, u32::MAX)));
+    pub(crate) fn new<T: Scalar>(row: &'a mut [K], sq_radius: T) -> Self
+    where
+        K: PackedKey<T>,
+    {
+        row.fill(K::of(u32::MAX, sq_radius));
         Self { row }
     }
 
     /// The entries held, in `(sq_dist, index)` order.
-    pub(crate) fn held(&self) -> impl Iterator<Item = Key32> + '_ {
+    pub(crate) fn held(&self) -> impl Iterator<Item = K> + '_ {
         self.row
             .iter()
             .copied()
-            .take_while(|e| e.0 as u32 != u32::MAX)
+            .take_while(|e| e.index() != u32::MAX)
     }
 }
 
-impl<T: Scalar> ResultSet<T> for KnnRow<'_> {
+impl<T: Scalar, K: RowKey + PackedKey<T>> ResultSet<T> for KnnRow<'_, K> {
     #[inline(always)]
     fn worst_key(&self) -> (T, u32) {
-        order::unkey32(self.row[self.row.len() - 1].0)
+        self.row[self.row.len() - 1].pair()
     }
 
     #[inline(always)]
     fn insert(&mut self, index: u32, sq_dist: T) {
-        let cand = order::key32(sq_dist, index);
+        let cand = K::of(index, sq_dist);
         let row = &mut *self.row;
         let mut j = row.len() - 1;
-        while j > 0 && cand < row[j - 1].0 {
+        while j > 0 && cand < row[j - 1] {
             row[j] = row[j - 1];
             j -= 1;
         }
-        row[j] = Key32(cand);
+        row[j] = cand;
     }
 
     #[inline(always)]
     fn offer(&mut self, index: u32, sq_dist: T) {
-        if order::key32(sq_dist, index) < self.row[self.row.len() - 1].0 {
+        if K::of(index, sq_dist) < self.row[self.row.len() - 1] {
             <Self as ResultSet<T>>::insert(self, index, sq_dist);
         }
     }
 
     /// An empty row (the query's first leaf) takes the block's candidates at once: their keys
-    /// sorted (a sorting network, `src/select/network.rs`) and the first `k` copied in, instead of one insertion
+    /// sorted and the first `k` copied in ([`RowKey::first_block`]), instead of one insertion
     /// each. Most of a single query's insertions come from its first leaf (every point of it is
     /// within the sentinel bound), each shifting the sentinels behind it; the kept keys are the
     /// same `k` smallest, so the row, its bound and all later pruning are unchanged.
     #[inline(always)]
-    fn offer_block(&mut self, ids: &[u32], sq_dists: &[T], mut mask: u32, excluded: u32) {
-        if self.row[0].0 as u32 != u32::MAX {
+    fn offer_block(&mut self, ids: &[u32], sq_dists: &[T], mask: u32, excluded: u32) {
+        if self.row[0].index() != u32::MAX {
             return offer_each(self, ids, sq_dists, mask, excluded);
         }
-        // Every candidate within the bound precedes the sentinel `(sq_radius, u32::MAX)`.
-        // Unused entries (and the excluded index's, written at `n` and not counted) hold the
-        // largest key, which sorts last.
-        let mut keys = [u64::MAX; 33];
-        let mut n = 0;
-        while mask != 0 {
-            let j = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            let id = ids[j];
-            keys[n] = order::key32(sq_dists[j], id);
-            n += (id != excluded) as usize;
-        }
-        keys[n] = u64::MAX;
-        let sorted: &mut [u64; 32] = (&mut keys[..32]).try_into().unwrap();
-        sort32(sorted);
-        let m = n.min(self.row.len());
-        for (e, &key) in self.row[..m].iter_mut().zip(&keys[..m]) {
-            *e = Key32(key);
-        }
+        K::first_block(self.row, ids, sq_dists, mask, excluded);
     }
 }
 
-/// The k nearest within a radius for one single `f32` query with larger `k`: packed
-/// [`order::key32`] keys appended unsorted to a buffer of `2k` while they precede the worst
+/// A packed key of a [`KnnRow`], with the way an empty row takes a whole block.
+pub(crate) trait RowKey: Copy + Ord + Default {
+    /// Single queries up to this `k` keep a [`KnnRow`], larger ones a [`KnnBuf`]
+    /// (`src/index/search.rs`).
+    const ROW_MAX_K: usize;
+    /// The index of a key.
+    fn index(self) -> u32;
+    /// Writes into `row` the `min(k, n)` smallest keys, in order, of the `n` candidates of a
+    /// block: the entries `j` of `mask`, the point `ids[j]` at `sq_dists[j]`, unless its index is
+    /// `excluded` (every candidate precedes the row's sentinels).
+    fn first_block<T: Scalar>(
+        row: &mut [Self],
+        ids: &[u32],
+        sq_dists: &[T],
+        mask: u32,
+        excluded: u32,
+    );
+}
+
+/// The keys of a block's candidates, packed by `key(j)` for its entries `j` of `mask` except
+/// the `excluded` index, then `u64::MAX` (which sorts last), sorted by a network
+/// (`src/select/network.rs`; a comparison sort mispredicted about ten branches a query); and
+/// their number.
+#[inline(always)]
+fn sorted_block(
+    ids: &[u32],
+    mut mask: u32,
+    excluded: u32,
+    key: impl Fn(usize) -> u64,
+) -> ([u64; 33], usize) {
+    // The excluded index's key is written at `n` and not counted: the next one, or the final
+    // `u64::MAX`, overwrites it.
+    let mut keys = [u64::MAX; 33];
+    let mut n = 0;
+    while mask != 0 {
+        let j = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        keys[n] = key(j);
+        n += (ids[j] != excluded) as usize;
+    }
+    keys[n] = u64::MAX;
+    let sorted: &mut [u64; 32] = (&mut keys[..32]).try_into().unwrap();
+    sort32(sorted);
+    (keys, n)
+}
+
+/// `f32` neighbours: their exact keys sorted.
+impl RowKey for u64 {
+    /// On the 77k torus (docs/speed-log.md, "Single queries, the floor, and copies of a point")
+    /// the buffer took 0.87x the sorted row's time at k = 30 and 1.14x at k = 10.
+    const ROW_MAX_K: usize = 16;
+    #[inline(always)]
+    fn index(self) -> u32 {
+        self as u32
+    }
+    #[inline(always)]
+    fn first_block<T: Scalar>(
+        row: &mut [u64],
+        ids: &[u32],
+        sq_dists: &[T],
+        mask: u32,
+        excluded: u32,
+    ) {
+        let (keys, n) = sorted_block(ids, mask, excluded, |j| order::key32(sq_dists[j], ids[j]));
+        let m = n.min(row.len());
+        row[..m].copy_from_slice(&keys[..m]);
+    }
+}
+
+/// `f64` neighbours: a network of 32 `u128` keys took 20 instructions a compare-exchange, 3,800
+/// a query (callgrind, 77k torus, k = 10), so the block is sorted by `u64` keys of the distance
+/// rounded to `f32` and the block position, then put in exact order by insertion. Rounding is
+/// monotone: a smaller rounded distance means a smaller distance, so only candidates of equal
+/// rounded distance can be out of order, and the `m`-th smallest is among those up to the end
+/// of its run of equal rounded distances.
+impl RowKey for u128 {
+    /// At k = 30 on the 77k torus the row (its first block sorted whole) took 0.81-0.85x the
+    /// buffer's time, whose selections and final sort move `u128` keys (docs/speed-log.md,
+    /// round 11).
+    const ROW_MAX_K: usize = 32;
+    #[inline(always)]
+    fn index(self) -> u32 {
+        self as u32
+    }
+    #[inline(always)]
+    fn first_block<T: Scalar>(
+        row: &mut [u128],
+        ids: &[u32],
+        sq_dists: &[T],
+        mask: u32,
+        excluded: u32,
+    ) {
+        let rounded = |j: usize| u64::from((sq_dists[j].to_f64() as f32).to_bits());
+        let (keys, n) = sorted_block(ids, mask, excluded, |j| rounded(j) << 32 | j as u64);
+        let m = n.min(row.len());
+        if m == 0 {
+            return;
+        }
+        let last = keys[m - 1] >> 32;
+        let mut end = m;
+        while end < n && keys[end] >> 32 == last {
+            end += 1;
+        }
+        let mut exact = [0u128; 32];
+        for (e, &key) in exact[..end].iter_mut().zip(&keys[..end]) {
+            let j = key as u32 as usize;
+            *e = order::key64(sq_dists[j], ids[j]);
+        }
+        for i in 1..end {
+            let cand = exact[i];
+            let mut j = i;
+            while j > 0 && cand < exact[j - 1] {
+                exact[j] = exact[j - 1];
+                j -= 1;
+            }
+            exact[j] = cand;
+        }
+        row[..m].copy_from_slice(&exact[..m]);
+    }
+}
+
+/// The k nearest within a radius for one single query with larger `k`: packed keys `K`
+/// (`src/query/order.rs`) appended unsorted to a buffer of `2k` while they precede the worst
 /// key, which is the `k`-th smallest key at the last compaction (a selection when the buffer is
 /// full), or `(sq_radius, u32::MAX)` before `k` keys were held. The worst key may lag behind
 /// the true `k`-th nearest held, which only lets a few more candidates in (pruning stays
 /// exact); [`KnnBuf::finish`] sorts and keeps `k`. An insertion costs a store instead of a
 /// shift by a mispredicted loop.
-pub(crate) struct KnnBuf<'a> {
+pub(crate) struct KnnBuf<'a, K> {
     /// Storage of `2k` keys, the first `len` held.
-    buf: &'a mut [u64],
+    buf: &'a mut [K],
     len: usize,
     k: usize,
-    worst: u64,
+    worst: K,
 }
 
-impl<'a> KnnBuf<'a> {
+impl<'a, K: RowKey> KnnBuf<'a, K> {
     /// A set of the `k ≥ 1` nearest over `buf` (of length `2k`).
-    pub(crate) fn new<T: Scalar>(buf: &'a mut [u64], k: usize, sq_radius: T) -> Self {
+    pub(crate) fn new<T: Scalar>(buf: &'a mut [K], k: usize, sq_radius: T) -> Self
+    where
+        K: PackedKey<T>,
+    {
         debug_assert!(k >= 1 && buf.len() == 2 * k);
         Self {
             buf,
             len: 0,
             k,
-            worst: order::key32(sq_radius, u32::MAX),
+            worst: K::of(u32::MAX, sq_radius),
         }
     }
 
     /// Sorts the held keys and returns the `k` first (fewer if fewer were found).
-    pub(crate) fn finish(self) -> &'a [u64] {
+    pub(crate) fn finish(self) -> &'a [K] {
         let held = &mut self.buf[..self.len];
         held.sort_unstable();
         &held[..self.len.min(self.k)]
     }
 }
 
-impl<T: Scalar> ResultSet<T> for KnnBuf<'_> {
+impl<T: Scalar, K: RowKey + PackedKey<T>> ResultSet<T> for KnnBuf<'_, K> {
     #[inline(always)]
     fn worst_key(&self) -> (T, u32) {
-        order::unkey32(self.worst)
+        self.worst.pair()
     }
 
     #[inline(always)]
     fn insert(&mut self, index: u32, sq_dist: T) {
-        self.buf[self.len] = order::key32(sq_dist, index);
+        self.buf[self.len] = K::of(index, sq_dist);
         self.len += 1;
-        if self.len == self.k && self.worst as u32 == u32::MAX {
+        if self.len == self.k && self.worst.index() == u32::MAX {
             // Full for the first time: the worst is the largest held.
             self.worst = self.buf[..self.k]
                 .iter()
@@ -367,7 +424,7 @@ impl<T: Scalar> ResultSet<T> for KnnBuf<'_> {
 
     #[inline(always)]
     fn offer(&mut self, index: u32, sq_dist: T) {
-        if order::key32(sq_dist, index) < self.worst {
+        if K::of(index, sq_dist) < self.worst {
             <Self as ResultSet<T>>::insert(self, index, sq_dist);
         }
     }
@@ -377,70 +434,59 @@ impl<T: Scalar> ResultSet<T> for KnnBuf<'_> {
 mod tests {
     use super::*;
 
-    /// Offers the same candidates to every k-nearest set and checks they keep the same.
-    #[test]
-    fn the_k_nearest_sets_agree() {
-        let cands: Vec<(u32, f32)> = (0..200u32)
+    /// Offers the same candidates (in distance `T`) to the heap and to the packed sets with
+    /// keys `K`, one at a time and, for the row, the first 32 as one block, and checks they keep
+    /// the same as a brute-force selection.
+    fn check_sets<T: Scalar, K: RowKey + PackedKey<T> + std::fmt::Debug>() {
+        let cands: Vec<(u32, T)> = (0..200u32)
             .map(|i| {
-                (
-                    i.wrapping_mul(2_654_435_761) % 1000,
-                    ((i * 37) % 23) as f32 * 0.5,
-                )
+                let d = ((i * 37) % 23) as f64 * 0.5 + if i % 3 == 0 { 1e-9 } else { 0.0 };
+                (i.wrapping_mul(2_654_435_761) % 1000, T::from_f64(d))
             })
             .collect();
+        let excluded = cands[5].0;
         for k in [1usize, 3, 8, 50, 300] {
-            for r2 in [f32::INFINITY, 4.0, 0.0] {
+            for r2 in [f64::INFINITY, 4.0, 0.0].map(T::from_f64) {
                 let mut heap_out = Vec::new();
                 let mut heap = NeighborHeap::new(&mut heap_out, k, r2);
-                let mut nb = vec![Neighbor::<f32>::default(); k];
-                let mut keys = vec![Key32::default(); k];
-                let (mut nb_len, mut key_len) = (0, 0);
-                let mut sorted = SortedRow {
-                    row: &mut nb[..],
-                    len: &mut nb_len,
-                    sq_radius: r2,
-                };
-                let mut packed = SortedRow {
-                    row: &mut keys[..],
-                    len: &mut key_len,
-                    sq_radius: r2,
-                };
-                let mut single_keys = vec![Key32::default(); k];
+                let mut single_keys = vec![K::default(); k];
                 let mut single = KnnRow::new(&mut single_keys[..], r2);
-                let mut buf_keys = vec![0u64; 2 * k];
+                let mut block_keys = vec![K::default(); k];
+                let mut block = KnnRow::new(&mut block_keys[..], r2);
+                let mut buf_keys = vec![K::default(); 2 * k];
                 let mut buffered = KnnBuf::new(&mut buf_keys[..], k, r2);
-                for &(i, d) in &cands {
-                    heap.offer(i, d);
-                    sorted.offer(i, d);
-                    packed.offer(i, d);
-                    single.offer(i, d);
-                    buffered.offer(i, d);
+                // the first 32 candidates as one block, the excluded index among them
+                let (ids, dists): (Vec<u32>, Vec<T>) = cands[..32].iter().copied().unzip();
+                let mask = below(&dists, ResultSet::<T>::bound(&block));
+                block.offer_block(&ids, &dists, mask, excluded);
+                for (n, &(i, d)) in cands.iter().enumerate() {
+                    if i != excluded {
+                        heap.offer(i, d);
+                        single.offer(i, d);
+                        buffered.offer(i, d);
+                        if n >= 32 {
+                            block.offer(i, d);
+                        }
+                    }
                     // The buffer's worst key never precedes the exact one (it may lag).
                     let (exact, lagging) = (heap.worst_key(), buffered.worst_key());
                     assert!(!order::precedes(lagging, exact), "k {k} r2 {r2}");
-                    assert_eq!(heap.worst_key(), sorted.worst_key());
-                    assert_eq!(heap.worst_key(), packed.worst_key());
                     assert_eq!(heap.worst_key(), single.worst_key());
                 }
+                assert_eq!(heap.worst_key(), block.worst_key());
                 heap.finish();
-                let want: Vec<(f32, u32)> = heap_out.iter().map(|n| n.key()).collect();
-                let got: Vec<(f32, u32)> = nb[..nb_len].iter().map(|n| n.key()).collect();
-                let got_packed: Vec<(f32, u32)> =
-                    keys[..key_len].iter().map(|&e| e.pair()).collect();
-                let got_single: Vec<(f32, u32)> = single.held().map(|e| e.pair()).collect();
+                let want: Vec<(T, u32)> = heap_out.iter().map(|n| n.key()).collect();
+                let got_single: Vec<(T, u32)> = single.held().map(|e| e.pair()).collect();
                 assert_eq!(got_single, want, "k {k} r2 {r2}");
-                let got_buffered: Vec<(f32, u32)> = buffered
-                    .finish()
-                    .iter()
-                    .map(|&e| order::unkey32(e))
-                    .collect();
+                let got_block: Vec<(T, u32)> = block.held().map(|e| e.pair()).collect();
+                assert_eq!(got_block, want, "block: k {k} r2 {r2}");
+                let got_buffered: Vec<(T, u32)> =
+                    buffered.finish().iter().map(|&e| e.pair()).collect();
                 assert_eq!(got_buffered, want, "k {k} r2 {r2}");
-                assert_eq!(got, want, "k {k} r2 {r2}");
-                assert_eq!(got_packed, want, "k {k} r2 {r2}");
                 // a brute-force reference: sort all within the radius, keep k
-                let mut all: Vec<(f32, u32)> = cands
+                let mut all: Vec<(T, u32)> = cands
                     .iter()
-                    .filter(|c| c.1 <= r2)
+                    .filter(|c| c.1 <= r2 && c.0 != excluded)
                     .map(|&(i, d)| (d, i))
                     .collect();
                 all.sort_by(|&a, &b| order::cmp(a, b));
@@ -449,6 +495,20 @@ mod tests {
                 assert_eq!(want, all);
             }
         }
+    }
+
+    /// The bits of the entries of `d` (at most 32) within `bound`.
+    fn below<T: Scalar>(d: &[T], bound: T) -> u32 {
+        d.iter()
+            .enumerate()
+            .fold(0, |m, (j, &x)| m | u32::from(x <= bound) << j)
+    }
+
+    #[test]
+    fn the_k_nearest_sets_agree() {
+        check_sets::<f32, u64>();
+        check_sets::<f32, u128>();
+        check_sets::<f64, u128>();
     }
 
     #[test]

@@ -7,7 +7,7 @@
 /// Puts the smaller of `x[a]`, `x[b]` at `a` and the larger at `b` (`a < b`), without a
 /// branch.
 #[inline(always)]
-fn compare_exchange(x: &mut [u64; 32], a: usize, b: usize) {
+fn compare_exchange<K: Copy + Ord>(x: &mut [K; 32], a: usize, b: usize) {
     let (p, q) = (x[a], x[b]);
     x[a] = p.min(q);
     x[b] = p.max(q);
@@ -19,9 +19,9 @@ fn compare_exchange(x: &mut [u64; 32], a: usize, b: usize) {
 macro_rules! network {
     ($($a:literal $b:literal),* $(,)?) => {
         /// Sorts `x` ascending: Batcher's odd-even merge sort of 32 entries, 191
-        /// compare-exchanges.
+        /// compare-exchanges (of packed keys: `u64` for `f32` neighbours, `u128` for `f64`).
         #[inline(always)]
-        pub(crate) fn sort32(x: &mut [u64; 32]) {
+        pub(crate) fn sort32<K: Copy + Ord>(x: &mut [K; 32]) {
             $(compare_exchange(x, $a, $b);)*
         }
 
@@ -104,10 +104,16 @@ mod tests {
                 s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
                 *v = (s >> 33) % if round % 2 == 0 { 7 } else { u64::MAX };
             }
+            // `u128` keys (`f64` neighbours) whose high and low halves both decide
+            let mut y = x.map(|v| u128::from(v % 5) << 64 | u128::from(v >> 3));
             let mut want = x;
             want.sort_unstable();
             sort32(&mut x);
             assert_eq!(x, want);
+            let mut want = y;
+            want.sort_unstable();
+            sort32(&mut y);
+            assert_eq!(y, want);
         }
     }
 }

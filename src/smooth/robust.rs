@@ -17,12 +17,13 @@
 //!    about two spacings and more), `k` and `k_plane` are tripled until the proxy reads as a
 //!    surface (the stopping rule waits for it); then the rows are cut back and the iterations go on as below. Clouds with noise
 //!    up to about 1.5 spacings are never widened.
-//! 1. **Neighbourhoods** (Section 2.1.1): the `k_plane` nearest other points within ε. They
-//!    are searched once, on the input; later iterations re-measure and re-sort each point's
-//!    candidates on the proxy ('Update Neighbors', Section 7.3, without a second search: points
-//!    move across the surface by a fraction of a spacing, so their nearest neighbours stay among
-//!    the first search's candidates; see `robust/rows.rs`). The first `k` of each row form the
-//!    umbrella neighbourhood `N_i`.
+//! 1. **Neighbourhoods** (Section 2.1.1): each point's candidates are the `k_plane` nearest
+//!    other points of the **input**, with no radius limit, searched once; every iteration
+//!    re-measures and re-sorts them on the proxy and keeps those within ε ('Update Neighbors',
+//!    Section 7.3, without a second search: points move across the surface by a fraction of a
+//!    spacing, so their nearest neighbours stay among the first search's candidates; see
+//!    `robust/rows.rs`). A candidate beyond ε in the input can move inside it later. The first
+//!    `k` of each row form the umbrella neighbourhood `N_i`.
 //! 2. **Noise estimate** σ̂: the median absolute distance of a point to the covariance plane
 //!    (eq. 2.8–2.10) of its wide neighbourhood, times 1.4826 (the median absolute deviation of a
 //!    normal distribution). The median ignores the minority of points at edges and creases.
@@ -72,26 +73,33 @@
 //!    step by step.
 //!
 //! Every per-point computation reads the previous iteration only and sums its neighbours in row
-//! order; medians are taken over vectors collected in point order. The result is bit-identical
-//! for any number of rayon threads.
+//! order; medians are exact selections of values collected per point. The result is
+//! bit-identical for any number of rayon threads.
 //!
-//! **Global statistics and reach** (what a tiled run must reduce and exchange). Per iteration
-//! the method uses exactly two quantities computed over all points, each an exact median (a
-//! selection of one value among per-point values, so it can be reduced exactly across tiles):
-//! the noise estimate σ̂ (`noise_estimate` in `robust/planes.rs`, over each point's distance to its
-//! covariance plane) and, while the rows are wide, the median distance ratio of the noise scale
-//! (`distance_ratio` in `robust/scales.rs`, over each point's `d₄ₘ/dₘ`). The spacing h (a mean over the
-//! input's nearest distances, summed in caller order) is computed once. Everything else is per
-//! point. One iteration reads the rows of a point (its candidates are the `k_plane` nearest of the
-//! first search on the input, `WIDE`·`k_plane` = 3·`k_plane` while wide, not cut at ε; of them
-//! it uses those within ε = 12h of it in the current proxy) and reaches three hops along such
-//! rows: the step reads the neighbours' normals, a neighbour's normal is chosen among the
-//! covariance planes of its own wide neighbours, and each plane is fitted to that neighbour's
-//! row. A point's new position thus depends on points within 3ε of it in the current proxy,
-//! and a tile needs, besides the first search's candidates of its points (the exact k nearest,
-//! however far), a halo of 3ε per iteration plus the distance points move in it. The points
-//! are stored in the k-d tree's order while the iterations run, so that a point's neighbours
-//! lie close in memory.
+//! **Driver and tiles.** A run is split in two (`robust/run.rs`, `robust/tile.rs`): the
+//! [`RobustRun`] holds every decision that depends on the whole cloud (the noise scale, σ̂, the
+//! stopping rule, λ) and no point, and asks for [`Round`]s; a [`RobustTile`] computes a round's
+//! per-point values over the points it owns. [`smooth_robust`] is the run driven over one tile
+//! that owns the whole cloud; a cloud split into tiles (larger than memory, or spread over a
+//! cluster) runs the same code with many tiles and gets the same bits.
+//!
+//! **Global statistics and reach** (what a tiled run reduces and exchanges). Per iteration the
+//! method uses exactly two quantities computed over all points, each an exact median (the
+//! value of rank ⌊n/2⌋ in `total_cmp` order, so it can be selected exactly across tiles with
+//! `select::radix`): σ̂ (over each point's distance to its covariance plane, `plane_distances`
+//! in `robust/planes.rs`) and, while the rows are wide, the median distance ratio of the noise
+//! scale (over each point's `d₄ₘ/dₘ`, `distance_ratios` in `robust/scales.rs`). The reported RMS
+//! displacement sums the squared displacements in an [`crate::ExactSum`], which does not depend
+//! on the order. The spacing h (a mean over the input's nearest distances, summed in caller
+//! order) is computed once. Everything else is per point. A point's row is its candidates (the
+//! `k_plane` nearest of the input, `WIDE`·`k_plane` = 3·`k_plane` while wide, not cut at ε),
+//! and one iteration reaches **three hops** along rows: the step reads the neighbours'
+//! normals, a neighbour's normal is chosen among the covariance planes of its own row's
+//! farthest quarter, and each plane is fitted to that point's row. A hop is bounded by the
+//! input's distance to its `k_plane`-th (or wide) nearest, not by ε, so no radius bounds the
+//! reach next to outliers and holes: a tile checks per point whether its rows are the whole
+//! cloud's and how many hops of them it holds (`robust/reach.rs`). The points are stored in the
+//! k-d tree's order while the iterations run, so that a point's neighbours lie close in memory.
 //!
 //! Speed (docs/smoothing-results.md#speed): one search instead of one per iteration, a quarter of
 //! the candidate planes, the scoring in eight `f32` lanes, and no arc cosine or square root in
@@ -102,9 +110,16 @@
 //! the analytic shapes; quality within 0.002h).
 
 mod planes;
+mod reach;
 mod rows;
+mod run;
 mod scales;
 mod step;
+mod tile;
+
+pub use reach::Region;
+pub use run::{median, Reduced, RobustRun, Round, RowSet};
+pub use tile::{reduce, RobustTile, TilePart};
 
 /// The factor of `k` and `k_plane` while the cloud reads as a ball of noise
 /// ([`RobustOptions::noise_scale`], `robust/scales.rs`).
@@ -114,16 +129,12 @@ pub use scales::WIDE as NOISE_SCALE_FACTOR;
 /// ([`RobustOptions::noise_scale`], `robust/scales.rs`).
 pub use scales::BALL_DIMENSION as NOISE_SCALE_DIMENSION;
 
-use super::source::{knn_rows, Neighbors, SearchMethod};
-use super::{check_spacing, point_outputs, progress_in_units, Criteria, Length};
+use super::source::Neighbors;
+use super::{point_outputs, progress_in_units, Criteria, Length};
 use super::{FeatureCriterion, SmoothResult, Stage, Weighting};
 use crate::error::{NbhdError, Result};
-use crate::geometry::neighbors::mean_spacing_of_nearest;
 use crate::geometry::normals::Orientation;
 use glam::DVec3;
-use planes::{covariance_planes, noise_estimate, selected_normals};
-use rows::Rows;
-use step::step;
 
 /// Settings of [`smooth_robust`]. The defaults are one setting for every shape and noise level:
 /// all thresholds are multiples of the estimated noise σ̂ or dimensionless, and the
@@ -340,54 +351,9 @@ fn robust_on_pool(
     }
 }
 
-/// The neighbour rows of a cloud in the k-d tree's order, and the points stored that way.
-struct Stored {
-    rows: Rows,
-    /// `order[s]`: the caller's index of the point stored at `s`.
-    order: Vec<u32>,
-    /// The points (as smoothed so far) in stored order.
-    cur: Vec<DVec3>,
-}
-
-/// The `k_plane` nearest of every point of `points` from `neighbors` in the k-d tree's order
-/// (`robust/rows.rs`), by blocks where the call searches with the tree, and each point's
-/// squared distance to its nearest (by caller index); not yet cut at ε.
-fn search_rows(
-    points: &[DVec3],
-    neighbors: Neighbors<'_>,
-    k_plane: usize,
-) -> Result<(Stored, Vec<Option<f64>>)> {
-    let (rows, order, nearest) = match neighbors {
-        Neighbors::Search(SearchMethod::KdTree) => Rows::search(points, k_plane)?,
-        _ => {
-            let (knn, order) = knn_rows(points, neighbors, k_plane)?;
-            let nearest = (0..knn.len())
-                .map(|i| knn.sq_dists_of(i).first().copied())
-                .collect();
-            (Rows::in_stored_order(&knn, &order), order, nearest)
-        }
-    };
-    let cur = order.iter().map(|&o| points[o as usize]).collect();
-    Ok((Stored { rows, order, cur }, nearest))
-}
-
-/// What the iterations of [`iterate`] leave.
-#[derive(Default)]
-struct Iterations {
-    /// The robust normals of the last step, in stored order (empty if no step was taken).
-    normals: Vec<DVec3>,
-    /// σ̂ of each iteration's input, absolute.
-    noise: Vec<f64>,
-    /// RMS displacement of each iteration, absolute.
-    moved: Vec<f64>,
-    /// The local dimension of each check of the noise scale (`robust/scales.rs`).
-    dimension: Vec<f64>,
-    /// How many iterations used the wide neighbourhoods.
-    wide: usize,
-}
-
 /// [`smooth_robust_from`] on finite points (nonempty, every coordinate finite:
-/// [`super::finite_subset`] checked or chose them, so they are not scanned again).
+/// [`super::finite_subset`] checked or chose them, so they are not scanned again): the run
+/// (`robust/run.rs`) driven over the whole cloud as one tile (`robust/tile.rs`).
 fn robust_finite(
     points: &[DVec3],
     neighbors: Neighbors<'_>,
@@ -397,204 +363,46 @@ fn robust_finite(
     let total = options.max_iterations as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
-    let (mut st, nearest) = search_rows(points, neighbors, options.k_plane)?;
-    let h = mean_spacing_of_nearest(nearest.into_iter());
-    let relative = matches!(options.epsilon, Length::Relative(_));
-    check_spacing(h, relative)?;
-    let eps = options.epsilon.resolve(h);
-    st.rows.cut(&st.cur, &st.order, eps);
-    if st.rows.max_len() + 1 < 3 {
-        // no neighbourhood reaches 3 points: the same refusal as every smoothing call
-        let narrow = st.rows.narrow_table(&st.cur, options.k_plane, &st.order);
-        super::check_not_degenerate(&narrow, None, eps, h, relative)?;
-    }
-    let min_neighbors = st.rows.min_narrow_len(options.k);
-    let (dimension, wide) = noise_scale(points, &mut st, neighbors, eps, options)?;
-    let mut it = iterate(&mut st, eps, wide, options, &mut report)?;
-    it.dimension.splice(0..0, dimension);
-    finish(st, it, h, eps, min_neighbors, options, report)
-}
-
-/// Item 0 of the module documentation: the local dimension of the input (`robust/scales.rs`),
-/// and where it reads as a ball of noise and the call searches (a caller's table is measured,
-/// never widened), the rows of `st` searched again, `WIDE` times as long. Returns the local
-/// dimension and whether the rows are wide.
-fn noise_scale(
-    points: &[DVec3],
-    st: &mut Stored,
-    neighbors: Neighbors<'_>,
-    eps: f64,
-    options: &RobustOptions,
-) -> Result<(Option<f64>, bool)> {
-    if !options.noise_scale {
-        return Ok((None, false));
-    }
-    let ratio = scales::distance_ratio(&st.cur, &st.rows, options.k_plane);
-    // a caller's table has the rows it has: measured, never widened
-    let wide = scales::is_ball(ratio, false) && !matches!(neighbors, Neighbors::Table(_));
-    if wide {
-        let (mut w, _) = search_rows(points, neighbors, options.k_plane * scales::WIDE)?;
-        w.rows.cut(&w.cur, &w.order, eps);
-        *st = w;
-    }
-    Ok((ratio.map(scales::dimension), wide))
-}
-
-/// Items 1–5 of the module documentation: the iterations on the rows and points of `st`, until
-/// the stopping rule or `max_iterations`; `st.rows` are left measured on `st.cur`.
-fn iterate(
-    st: &mut Stored,
-    eps: f64,
-    mut wide: bool,
-    options: &RobustOptions,
-    report: &mut impl FnMut(f64, Stage) -> Result<()>,
-) -> Result<Iterations> {
-    let mut it = Iterations::default();
-    let started_wide = wide;
-    let mut prev_sigma = f64::INFINITY;
-    // whether `rows` were measured on `cur` as it is now
-    let mut rows_current = true;
-    for i in 0..options.max_iterations {
-        let base = i as f64;
-        if !rows_current {
-            report(base, Stage::Neighbors)?;
-            st.rows.update(&st.cur, &st.order, eps);
-            rows_current = true;
-        }
-        if wide && i > 0 {
-            // the noise scale again, on the proxy: back to the usual rows once it reads as a
-            // surface (σ̂ is then measured on other rows: no comparison with the last one)
-            let ratio = scales::distance_ratio(&st.cur, &st.rows, options.k_plane);
-            it.dimension.extend(ratio.map(scales::dimension));
-            if !scales::is_ball(ratio, true) {
-                st.rows.shrink(options.k_plane);
-                wide = false;
-                prev_sigma = f64::INFINITY;
+    let mut tile = RobustTile::whole(points, neighbors);
+    let h = RobustRun::spacing_of_nearest(tile.nearest(options.k_plane)?.0);
+    let mut run = RobustRun::new(options, h, neighbors)?;
+    let eps = run.epsilon();
+    // the generation whose rows were last re-measured, for the progress of 'Neighbors'
+    let mut measured = 0;
+    loop {
+        let round = run.round();
+        match round {
+            Round::Ratio { generation } | Round::Measure { generation, .. }
+                if generation > measured =>
+            {
+                report(generation as f64, Stage::Neighbors)?;
+                measured = generation;
             }
+            _ => {}
         }
-        let o = RobustOptions {
-            k: options.k * if wide { scales::WIDE } else { 1 },
-            ..*options
-        };
-        report(base + 0.2, Stage::Geometry)?;
-        let planes = covariance_planes(&st.cur, &st.rows);
-        let sigma = noise_estimate(&st.cur, &planes);
-        it.noise.push(sigma);
-        // while the rows are balls of noise σ̂ measures the ball: the noise scale ends them
-        if i > 0
-            && !wide
-            && sigma > (1.0 - stop_tolerance(sigma, &it, started_wide, options)) * prev_sigma
-        {
-            break;
+        match round {
+            Round::Measure { generation, .. } => report(generation as f64 + 0.2, Stage::Geometry)?,
+            Round::Step { generation, .. } => report(generation as f64 + 0.6, Stage::Step)?,
+            Round::Finish { .. } => break,
+            _ => {}
         }
-        it.wide += usize::from(wide);
-        prev_sigma = sigma;
-        let width = o.inlier_width * sigma;
-        it.normals = selected_normals(&st.cur, &st.rows, &planes, width);
-        report(base + 0.6, Stage::Step)?;
-        let next = step(&st.cur, &st.rows, &it.normals, width, &o);
-        let rms = displacement_rms(&st.cur, &next, &st.order);
-        it.moved.push(rms);
-        st.cur = next;
-        rows_current = false;
-        if rms == 0.0 {
-            break;
-        }
+        let mut part = [tile.round(&round, options, eps)?];
+        run.feed(&reduce(&round, &mut part)?)?;
     }
-    if !rows_current {
-        st.rows.update(&st.cur, &st.order, eps);
-    }
-    Ok(it)
-}
-
-/// Fraction of the first noise estimate above which what is left is mostly the surface's own
-/// shape (see [`stop_tolerance`]).
-const SHAPE_SPREAD: f64 = 0.4;
-
-/// The stopping rule's tolerance where what is left is mostly shape.
-const SHAPE_TOLERANCE: f64 = 0.25;
-
-/// The first iteration the shape rule may refuse (the third; the second is judged by
-/// `options.tolerance` alone). The fall of σ̂ over the first iteration cannot tell shape from
-/// noise left: σ̂₀ itself holds the curvature the plane fit reads as noise. Measured: on a
-/// torus of 4,000 points (tube radius about 13h) at 1h of noise σ̂ falls 0.82h → 0.64h
-/// (0.78), and the second iteration takes the RMS distance to the surface from 0.31h to
-/// 0.23h; on the protocol's meshes at 10K and 1 % only the turbine's thin blades lose by it
-/// (CD 3.54 → 4.88 ×10⁻⁴), every other cell of the protocol is the same bits
-/// (docs/smoothing-results.md).
-const SHAPE_FROM: usize = 2;
-
-/// The tolerance of the stopping rule (item 5 of the module documentation) for an iteration
-/// whose input has the noise estimate `sigma`: `options.tolerance`, unless more than
-/// [`SHAPE_SPREAD`] of the first estimate is left on a cloud that did not start as a ball of
-/// noise, from iteration [`SHAPE_FROM`] on. There the spread about the planes is mostly the surface's own shape (curvature and
-/// detail finer than the neighbourhoods, which the plane fit reads as noise): smoothing it
-/// further erodes the detail, so the iterations go on only while each still lowers σ̂ by
-/// [`SHAPE_TOLERANCE`]. Measured on the meshes of the denoising protocol at 10K points and 1 %
-/// noise (docs/smoothing-results.md): σ̂ falls to 0.5–0.7 of the first estimate on detailed
-/// shapes (the dragon, the armadillo) and the iterations after the first erode them; on the
-/// cube's faces it falls below 0.3 after one iteration, and further iterations keep lowering
-/// the noise.
-fn stop_tolerance(sigma: f64, it: &Iterations, started_wide: bool, options: &RobustOptions) -> f64 {
-    let first = it.noise.first().copied().unwrap_or(sigma);
-    // `it.noise` holds the estimate of this iteration's input: iteration i has i + 1
-    let shape = !started_wide && it.noise.len() > SHAPE_FROM && sigma > SHAPE_SPREAD * first;
-    if options.tolerance > 0.0 && shape {
-        options.tolerance.max(SHAPE_TOLERANCE)
-    } else {
-        options.tolerance
-    }
-}
-
-/// The report of [`robust_finite`]: points and normals in the caller's order, and the
-/// per-point outputs where asked for.
-#[allow(clippy::too_many_arguments)]
-fn finish(
-    st: Stored,
-    it: Iterations,
-    h: f64,
-    eps: f64,
-    min_neighbors: usize,
-    options: &RobustOptions,
-    mut report: impl FnMut(f64, Stage) -> Result<()>,
-) -> Result<RobustReport> {
-    let Stored { rows, order, cur } = st;
-    let normals = if it.normals.is_empty() {
-        covariance_planes(&cur, &rows)
-            .iter()
-            .map(|c| c.normal)
-            .collect()
-    } else {
-        it.normals
-    };
-    let hu = if h > 0.0 { h } else { 1.0 };
-    let points_out = in_input_order(&cur, &order);
-    let normals = in_input_order(&normals, &order);
-    let sigma0 = it.noise.first().copied().unwrap_or(0.0);
-    let lambda = 2.0 * options.inlier_width * sigma0 / (hu * hu);
-    let outputs = if options.outputs {
+    if options.outputs {
         report(options.max_iterations as f64 + 0.2, Stage::Outputs)?;
-        let narrow = rows.narrow_table(&cur, options.k, &order);
-        drop(rows); // the wide rows are done with: their memory goes to the outputs
-        robust_outputs(&points_out, &narrow, &normals, lambda, options)?
-    } else {
-        Vec::new()
-    };
+    }
+    let (points, normals, outputs, _) = tile.finish(&run.round(), options, eps)?;
     report(options.max_iterations as f64 + 1.0, Stage::Done)?;
+    let r = run.report();
     Ok(RobustReport {
         result: SmoothResult {
-            points: points_out,
+            points,
             outputs,
-            spacing: h,
-            epsilon: eps,
-            lambda,
-            min_neighbors,
+            ..r.result
         },
         normals,
-        noise: it.noise.iter().map(|v| v / hu).collect(),
-        moved: it.moved.iter().map(|v| v / hu).collect(),
-        dimension: it.dimension,
-        wide_iterations: it.wide,
+        ..r
     })
 }
 
@@ -623,16 +431,6 @@ fn robust_outputs(
         o.normal = if n.dot(o.normal) < 0.0 { -n } else { n };
     }
     Ok(out)
-}
-
-/// RMS distance between `before` and `after` (stored as `order` says), summed in the caller's
-/// order so that it does not depend on how the points are stored.
-fn displacement_rms(before: &[DVec3], after: &[DVec3], order: &[u32]) -> f64 {
-    let mut sq = vec![0.0; before.len()];
-    for ((a, b), &o) in after.iter().zip(before).zip(order) {
-        sq[o as usize] = a.distance_squared(*b);
-    }
-    (sq.iter().sum::<f64>() / sq.len() as f64).sqrt()
 }
 
 /// Values stored in tree order (`order[s]` is the caller's index of the value at `s`), in the

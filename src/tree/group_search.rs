@@ -43,7 +43,7 @@ mod tables;
 use std::ops::Range;
 
 use gather::Gather;
-use rows::{HeapRows, KeyHeapRows, PackedKey, RadiusRows, RowSets, SortedRows};
+use rows::{GroupKey, HeapRows, KeyHeapRows, RadiusRows, RowSets, SortedRows};
 use rows::{KEY_HEAP_MAX_K, SORTED_MAX_K};
 
 pub(crate) use cells::{CellView, Cells};
@@ -191,7 +191,7 @@ fn run_rows<T: Scalar, const D: usize>(
 /// Answers every group that `groups` hands out with the rows `rows`, each group first from a
 /// gathered block where `gather` is given (`group_search/gather.rs`), and appends the rows to
 /// `out`; once a chunk's rows did not fit, it takes no more (see `RowsChunk`).
-fn answer_groups<T: Scalar, const D: usize, R: RowSets<T>, K: PackedKey<T>>(
+fn answer_groups<T: Scalar, const D: usize, R: RowSets<T>, K: GroupKey<T>>(
     groups: &dyn Fn(&mut GroupAnswer<'_, T, D>),
     mut rows: R,
     mut gather: Option<Gather<T, K, D>>,
@@ -323,7 +323,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
     /// Answers the group `mb` of `m` members from one gathered block (`gather`), or by
     /// [`Search::group_of`] with the rows `rows` where the gather does not settle it; appends
     /// its rows, in member order, to `out`.
-    fn gathered_group<R: RowSets<T>, K: PackedKey<T>>(
+    fn gathered_group<R: RowSets<T>, K: GroupKey<T>>(
         &self,
         mb: Members<T, D>,
         m: usize,

@@ -458,7 +458,8 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::query::result_set::{Key32, KnnRow, RowEntry, WithinRadius};
+    use crate::query::order::PackedKey;
+    use crate::query::result_set::{KnnRow, RowKey, WithinRadius};
     use crate::query::{Neighbor, NeighborHeap};
     use crate::tree::node::{Descent, Step};
     use crate::tree::{BuildOptions, KdTree, PivotPolicy};
@@ -490,6 +491,26 @@ mod tests {
             }
         }
         vec![grid, copies, line]
+    }
+
+    /// A single query's sorted row of packed keys `K` (its first leaf taken as one sorted
+    /// block), as found by the compact descent.
+    fn row_search<K: RowKey + PackedKey<f32>>(
+        tree: &DescentView<'_, f32>,
+        q: &[f32],
+        exclude: Option<u32>,
+        k: usize,
+        r2: f32,
+    ) -> Vec<Neighbor<f32>> {
+        let mut keys = vec![K::default(); k];
+        let mut row = KnnRow::new(&mut keys[..], r2);
+        search_compact(tree, q, exclude, &mut row);
+        row.held()
+            .map(|e| {
+                let (sq_dist, index) = e.pair();
+                Neighbor { index, sq_dist }
+            })
+            .collect()
     }
 
     /// The compact descent gives what the preorder search gives, for every result set, on
@@ -535,22 +556,13 @@ mod tests {
                                     a, b,
                                     "dim {dim} {pivot:?} leaf {leaf_size}/{bucket} q {qi} k {k}"
                                 );
-                                // The single query's sorted row of packed keys (its first
-                                // leaf taken as one sorted block) keeps the same.
-                                let mut keys = vec![Key32::default(); k];
-                                let mut row = KnnRow::new(&mut keys[..], r2);
-                                search_compact(&compact, &q, exclude, &mut row);
-                                let c: Vec<Neighbor<f32>> = row
-                                    .held()
-                                    .map(|e| {
-                                        let (sq_dist, index) = e.pair();
-                                        Neighbor { index, sq_dist }
-                                    })
-                                    .collect();
-                                assert_eq!(
-                                    a, c,
-                                    "row: dim {dim} {pivot:?} leaf {leaf_size} q {qi} k {k}"
-                                );
+                                // The single queries' sorted rows of packed keys keep
+                                // the same: `f32`'s `u64`, and `f64`'s `u128` (its first
+                                // block sorted by rounded distances, then exactly).
+                                let c = row_search::<u64>(&compact, &q, exclude, k, r2);
+                                assert_eq!(a, c, "row: dim {dim} {pivot:?} q {qi} k {k}");
+                                let c = row_search::<u128>(&compact, &q, exclude, k, r2);
+                                assert_eq!(a, c, "u128 row: dim {dim} {pivot:?} q {qi} k {k}");
                             }
                             let (mut a, mut b): (Vec<Neighbor<f32>>, Vec<Neighbor<f32>>) =
                                 (Vec::new(), Vec::new());

@@ -54,17 +54,21 @@ pub(super) fn covariance_planes(points: &[DVec3], rows: &Rows) -> Vec<Plane> {
     planes
 }
 
-/// σ̂: 1.4826 × the median distance of a point to its own covariance plane (the median absolute
-/// deviation of a normal distribution). The median ignores the minority of points at edges.
-pub(super) fn noise_estimate(points: &[DVec3], planes: &[Plane]) -> f64 {
-    let mut r: Vec<f64> = points
+/// The distance of every point to its own covariance plane: σ̂ is 1.4826 × their median (the
+/// median absolute deviation of a normal distribution; `robust/run.rs`), which ignores the
+/// minority of points at edges.
+pub(super) fn plane_distances(points: &[DVec3], planes: &[Plane]) -> Vec<f64> {
+    points
         .par_iter()
         .zip(planes)
-        .map(|(&p, c)| c.normal.dot(p - c.barycentre).abs())
-        .collect();
-    let m = r.len() / 2;
-    r.select_nth_unstable_by(m, f64::total_cmp);
-    1.4826 * r[m]
+        .map(|(&p, c)| plane_distance(p, c))
+        .collect()
+}
+
+/// The distance of `p` to the plane `c`, `|⟨n, p − b⟩|`.
+#[inline]
+pub(super) fn plane_distance(p: DVec3, c: &Plane) -> f64 {
+    c.normal.dot(p - c.barycentre).abs()
 }
 
 /// Support (biweight mass over the wide neighbourhood, as a fraction of its points, summed in

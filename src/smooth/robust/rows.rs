@@ -89,6 +89,13 @@ impl Rows {
         &self.index[s * self.width..s * self.width + self.len[s] as usize]
     }
 
+    /// Every candidate of the point stored at `s`, within ε or not, in the row's order: the
+    /// set of the first search, which the iterations re-sort but never change
+    /// (`robust/reach.rs`).
+    pub(super) fn candidates(&self, s: usize) -> &[u32] {
+        &self.index[s * self.width..s * self.width + self.candidates[s] as usize]
+    }
+
     /// The first `k` of [`Rows::wide`]: the umbrella neighbourhood `N_i`.
     #[inline]
     pub(super) fn narrow(&self, s: usize, k: usize) -> &[u32] {

@@ -21,7 +21,7 @@
 //! 3 % (σ ≈ 1.35h), 2.74–2.85 at 50K and 2 % (σ ≈ 2h), 2.86–2.93 at 50K and 3 % (σ ≈ 3h).
 //!
 //! The global statistic is the median over the points of the ratio `d₄ₘ / dₘ`
-//! ([`distance_ratio`]), an exact selection. While it shows a dimension of at least
+//! ([`distance_ratios`]), an exact selection. While it shows a dimension of at least
 //! [`BALL_DIMENSION`], the iterations use [`WIDE`] times `k` and `k_plane`: radii √3 times as
 //! large, which see the surface through noise of up to about three spacings (twice `k` left
 //! the 50K clouds at 3 % noise about 1.5 times the Chamfer distance of three times, measured
@@ -46,32 +46,35 @@ pub const WIDE: usize = 3;
 /// least where it did).
 pub const BALL_DIMENSION: f64 = 2.75;
 
-/// The median over the points of `d₄ₘ / dₘ` on `points` (stored order) with the rows `rows`,
-/// m = `k_plane`/4 (rows shorter than `k_plane` use their own length); points with fewer than
-/// four neighbours, or whose m-th nearest coincides with them, are left out. `None` when no
-/// point is left.
-pub(super) fn distance_ratio(points: &[DVec3], rows: &Rows, k_plane: usize) -> Option<f64> {
-    let mut r: Vec<f64> = (0..points.len())
+/// `d₄ₘ / dₘ` of every point of `points` (stored order) with the rows `rows` that has one
+/// ([`distance_ratio_at`]), in stored order; the noise scale reads their median (an exact
+/// selection, `robust/run.rs`).
+pub(super) fn distance_ratios(points: &[DVec3], rows: &Rows, k_plane: usize) -> Vec<f64> {
+    (0..points.len())
         .into_par_iter()
-        .filter_map(|s| {
-            let row = rows.wide(s);
-            let far = row.len().min(k_plane);
-            let near = far / 4;
-            if near == 0 {
-                return None;
-            }
-            let p = points[s];
-            let d = |i: usize| points[row[i - 1] as usize].distance_squared(p);
-            let (dn, df) = (d(near), d(far));
-            (dn > 0.0).then(|| (df / dn).sqrt())
-        })
-        .collect();
-    if r.is_empty() {
+        .filter_map(|s| distance_ratio_at(points, rows, k_plane, s))
+        .collect()
+}
+
+/// `d₄ₘ / dₘ` of the point stored at `s`, m = `k_plane`/4 (rows shorter than `k_plane` use
+/// their own length); `None` for a point with fewer than four neighbours, or whose m-th nearest
+/// coincides with it.
+pub(super) fn distance_ratio_at(
+    points: &[DVec3],
+    rows: &Rows,
+    k_plane: usize,
+    s: usize,
+) -> Option<f64> {
+    let row = rows.wide(s);
+    let far = row.len().min(k_plane);
+    let near = far / 4;
+    if near == 0 {
         return None;
     }
-    let m = r.len() / 2;
-    r.select_nth_unstable_by(m, f64::total_cmp);
-    Some(r[m])
+    let p = points[s];
+    let d = |i: usize| points[row[i - 1] as usize].distance_squared(p);
+    let (dn, df) = (d(near), d(far));
+    (dn > 0.0).then(|| (df / dn).sqrt())
 }
 
 /// The local dimension of a median distance ratio `d₄ₘ / dₘ`: `ln 4 / ln ratio`.

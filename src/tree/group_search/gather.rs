@@ -25,7 +25,7 @@
 
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
 use super::avx512;
-use super::rows::PackedKey;
+use super::rows::GroupKey;
 use super::{below_mask, box_dist, Members, Search, BLOCK, GROUP};
 use crate::scalar::Scalar;
 use crate::table::RowsChunk;
@@ -136,7 +136,7 @@ pub(super) struct Gather<T, K, const D: usize> {
     avx512: bool,
 }
 
-impl<T: Scalar, K: PackedKey<T>, const D: usize> Gather<T, K, D> {
+impl<T: Scalar, K: GroupKey<T>, const D: usize> Gather<T, K, D> {
     /// The scratch of rows of the `k` nearest (k-nearest rows, with or without a radius).
     pub(super) fn nearest(k: usize) -> Self {
         let mut g = Self::new(k, true);
@@ -439,7 +439,7 @@ fn avx512_here() -> bool {
 
 /// The first `row.len()` of the distinct `keys` in order into `row` (`keys` may be reordered;
 /// `ranked` is scratch of [`RANK_MAX`] + 1 slots).
-fn first_in_order<T, K: PackedKey<T>>(keys: &mut [K], ranked: &mut [K], row: &mut [K]) {
+fn first_in_order<T, K: GroupKey<T>>(keys: &mut [K], ranked: &mut [K], row: &mut [K]) {
     let held = row.len();
     if keys.len() <= RANK_MAX {
         let slots = &mut ranked[..keys.len().min(held) + 1];

@@ -4,6 +4,7 @@
 //! collector serves which neighbourhood is [`super::run_rows`]'s choice.
 
 use super::GROUP;
+use crate::query::order::PackedKey;
 use crate::query::result_set::{ResultSet, RowEntry, WithinRadius};
 use crate::query::{order, Neighbor, NeighborHeap};
 use crate::scalar::{Scalar, ScalarType};
@@ -125,37 +126,11 @@ impl<T: Scalar, E: RowEntry<T>> RowSets<T> for SortedRows<T, E> {
     }
 }
 
-/// A neighbour packed into one integer key that orders as `(sq_dist, index)`
-/// (`src/query/order.rs`): a `u64` for `f32` ([`order::key32`]), a `u128` for any scalar
-/// ([`order::key64`]).
-pub(super) trait PackedKey<T>: Copy + Ord + Default + super::gather::Rank + 'static {
-    /// The key of a candidate.
-    fn of(index: u32, sq_dist: T) -> Self;
-    /// Its `(sq_dist, index)`.
-    fn pair(self) -> (T, u32);
-}
+/// A packed key (`src/query/order.rs`, [`PackedKey`]) the grouped search can also rank
+/// (`gather.rs`).
+pub(super) trait GroupKey<T>: PackedKey<T> + super::gather::Rank + 'static {}
 
-impl<T: Scalar> PackedKey<T> for u64 {
-    #[inline(always)]
-    fn of(index: u32, sq_dist: T) -> Self {
-        order::key32(sq_dist, index)
-    }
-    #[inline(always)]
-    fn pair(self) -> (T, u32) {
-        order::unkey32(self)
-    }
-}
-
-impl<T: Scalar> PackedKey<T> for u128 {
-    #[inline(always)]
-    fn of(index: u32, sq_dist: T) -> Self {
-        order::key64(sq_dist, index)
-    }
-    #[inline(always)]
-    fn pair(self) -> (T, u32) {
-        order::unkey64(self)
-    }
-}
+impl<T, K: PackedKey<T> + super::gather::Rank + 'static> GroupKey<T> for K {}
 
 /// Larger `k`: each row a binary max-heap of packed keys in a fixed slice of a flat buffer, so
 /// a candidate costs `log k` integer compares and moves (a sorted row shifts or moves about
@@ -167,7 +142,7 @@ pub(super) struct KeyHeapRows<T, K> {
     buf: Vec<K>,
 }
 
-impl<T: Scalar, K: PackedKey<T>> KeyHeapRows<T, K> {
+impl<T: Scalar, K: GroupKey<T>> KeyHeapRows<T, K> {
     pub(super) fn new(k: usize, sq_radius: T) -> Self {
         Self {
             k,
@@ -191,7 +166,7 @@ impl<T: Scalar> ResultSet<T> for NoSet {
     }
 }
 
-impl<T: Scalar, K: PackedKey<T>> RowSets<T> for KeyHeapRows<T, K> {
+impl<T: Scalar, K: GroupKey<T>> RowSets<T> for KeyHeapRows<T, K> {
     type Set<'a>
         = NoSet
     where

@@ -1,0 +1,540 @@
+//! The per-point work of the robust smoothing over one tile of a cloud: [`RobustTile`].
+//!
+//! A tile is a set of input points gathered from the cloud (all of it on one machine; a box of
+//! it plus a halo when the cloud is split) of which it *owns* some. It computes the rounds of
+//! `robust/run.rs` over every gathered point with the stage functions of the sibling modules
+//! (the rows of `rows.rs`, the planes and normals of `planes.rs`, the step of `step.rs`, the
+//! noise scale of `scales.rs`) and returns the owned points' values ([`TilePart`]); the halo
+//! points only serve as neighbours. The points are kept in the k-d tree's order of the tile's
+//! input, so that a point's neighbours lie close in memory.
+//!
+//! The same arithmetic runs on one machine and in a split cloud: every per-point value reads
+//! the rows of its point and sums them in row order (`(sq_dist, index)`, with local indices
+//! that ascend with the cloud's, so ties break alike), and the batched eigen-solves and step
+//! lanes give each point what it would get alone. An owned point's value is therefore the
+//! one-machine value whenever everything it reads is right in the tile, which
+//! `robust/reach.rs` decides per point ([`TilePart::valid`]).
+
+use super::planes::{covariance_planes, plane_distance, plane_distances, selected_normals, Plane};
+use super::reach::{Reach, Region};
+use super::rows::Rows;
+use super::run::{median, Reduced, Round, RowSet};
+use super::scales;
+use super::step::step;
+use super::{robust_outputs, RobustOptions};
+use crate::error::{NbhdError, Result};
+use crate::geometry::source::{knn_rows, Neighbors, SearchMethod};
+use crate::select::radix::select_in_parts;
+use crate::smooth::PointOutput;
+use crate::sum::ExactSum;
+use glam::DVec3;
+use std::borrow::Cow;
+
+/// One tile of a robust run (see the module documentation).
+pub struct RobustTile<'a> {
+    /// The gathered input points (the tile's local order: ascending in the cloud's order).
+    input: Cow<'a, [DVec3]>,
+    /// Where the rows come from (a search of the tile's own unless one machine was given a
+    /// caller's table).
+    neighbors: Neighbors<'a>,
+    /// The box every gathered point lies in and every point of the cloud inside which was
+    /// gathered; `None` when the tile is the whole cloud.
+    region: Option<Region>,
+    /// Local indices of the owned points, ascending; `None`: every point.
+    owned: Option<Vec<u32>>,
+    /// The rows and the points in stored order, from the first round on.
+    state: Option<State>,
+    /// A proxy given before the first round ([`RobustTile::set_current`]), in local order.
+    pending: Option<(usize, Vec<DVec3>)>,
+}
+
+/// The rows of a tile and the proxy they are measured on, in the k-d tree's order.
+struct State {
+    set: RowSet,
+    rows: Rows,
+    /// `order[s]`: the local index of the point stored at `s`.
+    order: Vec<u32>,
+    /// The proxy of generation `generation`, in stored order.
+    cur: Vec<DVec3>,
+    generation: usize,
+    /// The generation the rows are measured on and cut at ε (`None`: as searched).
+    measured_on: Option<usize>,
+    /// The planes of [`Round::Measure`], kept for the step of the same generation.
+    planes: Option<(usize, Vec<Plane>)>,
+    /// The normals of the last step, in stored order.
+    normals: Vec<DVec3>,
+    /// Which stored points' values are right (`None`: all).
+    reach: Option<Reach>,
+    /// Stored positions of the owned points, in local order (`None`: all points).
+    owned_at: Option<Vec<u32>>,
+}
+
+/// The owned points' part of one round (per point values in local order).
+#[derive(Clone, Debug, Default)]
+pub struct TilePart {
+    /// Owned points.
+    pub count: u64,
+    /// Whether each owned point's value of this round is the one-machine value (empty: all
+    /// are, the tile is the whole cloud).
+    pub valid: Vec<bool>,
+    /// The owned points' distance ratios ([`Round::Start`] with the noise scale,
+    /// [`Round::Ratio`]; only points that have one) or plane distances ([`Round::Measure`]).
+    pub values: Vec<f64>,
+    /// The owned points' squared displacements ([`Round::Step`]).
+    pub moved_sq: ExactSum,
+    /// The longest owned row within ε ([`Round::Start`]).
+    pub max_len: usize,
+    /// The shortest owned row within ε, at most `k` ([`Round::Start`]).
+    pub min_narrow: usize,
+}
+
+impl TilePart {
+    /// Whether every owned point's value is right.
+    pub fn all_valid(&self) -> bool {
+        self.valid.iter().all(|&v| v)
+    }
+}
+
+/// The parts of all tiles of one round reduced to what the run takes: the medians as exact
+/// selections across the parts (one part is selected in place).
+///
+/// # Errors
+///
+/// Only those of a malformed part (a rank beyond the values).
+pub fn reduce(round: &Round, parts: &mut [TilePart]) -> Result<Reduced> {
+    let mut reduced = Reduced {
+        count: parts.iter().map(|p| p.count).sum(),
+        max_len: parts.iter().map(|p| p.max_len).max().unwrap_or(0),
+        min_narrow: parts.iter().map(|p| p.min_narrow).min().unwrap_or(0),
+        ..Reduced::default()
+    };
+    let value = match parts {
+        [one] => median(&mut one.values),
+        _ => {
+            let values: Vec<&[f64]> = parts.iter().map(|p| p.values.as_slice()).collect();
+            let n: usize = values.iter().map(|v| v.len()).sum();
+            match n {
+                0 => None,
+                n => Some(select_in_parts(&values, n as u64 / 2)?),
+            }
+        }
+    };
+    match round {
+        Round::Start | Round::Ratio { .. } => reduced.ratio = value,
+        Round::Measure { .. } => reduced.residual = value,
+        _ => {}
+    }
+    for p in parts.iter() {
+        reduced.moved_sq.merge(&p.moved_sq);
+    }
+    Ok(reduced)
+}
+
+impl<'a> RobustTile<'a> {
+    /// The whole cloud as one tile (one machine): every point owned, the rows from
+    /// `neighbors`.
+    pub fn whole(points: &'a [DVec3], neighbors: Neighbors<'a>) -> Self {
+        Self {
+            input: Cow::Borrowed(points),
+            neighbors,
+            region: None,
+            owned: None,
+            state: None,
+            pending: None,
+        }
+    }
+
+    /// A tile of a split cloud: `input` every finite point of the cloud inside `region`
+    /// (closed), in the cloud's order; `owned[i]` whether the tile owns `input[i]` (each point
+    /// of the cloud is owned by one tile).
+    ///
+    /// # Errors
+    ///
+    /// [`NbhdError::InvalidOption`] when `owned` has another length than `input` or a point
+    /// lies outside the region or is not finite.
+    pub fn gathered(input: Vec<DVec3>, owned: &[bool], region: Region) -> Result<Self> {
+        let bad = |reason: &str| NbhdError::InvalidOption {
+            name: "tile",
+            reason: reason.into(),
+        };
+        if owned.len() != input.len() {
+            return Err(bad("one owned flag per gathered point is needed"));
+        }
+        if !input.iter().all(|&p| region.contains(p)) {
+            return Err(bad("gathered points must be finite and inside the region"));
+        }
+        let owned = (0..input.len() as u32)
+            .filter(|&i| owned[i as usize])
+            .collect();
+        Ok(Self {
+            input: Cow::Owned(input),
+            neighbors: Neighbors::Search(SearchMethod::KdTree),
+            region: Some(region),
+            owned: Some(owned),
+            state: None,
+            pending: None,
+        })
+    }
+
+    /// Each owned point's squared distance to its nearest other point (`None` without one),
+    /// in local order, the input of the spacing h; and whether each is right (empty: all).
+    /// Searches the plain rows (`k_plane` nearest) and keeps them for [`Round::Start`].
+    pub fn nearest(&mut self, k_plane: usize) -> Result<(Vec<Option<f64>>, Vec<bool>)> {
+        let nearest = self.search(RowSet::Plain, k_plane)?;
+        let st = self.state.as_ref().expect("searched");
+        let valid = self.owned_valid(st, |r| r.cert());
+        Ok(match &self.owned {
+            None => (nearest, valid),
+            Some(owned) => (owned.iter().map(|&i| nearest[i as usize]).collect(), valid),
+        })
+    }
+
+    /// Searches the rows of `set` on the input (the `k_plane` nearest, `WIDE` times as many
+    /// for the wide and shrunk rows) and stores the proxy in the new tree's order. Returns each
+    /// gathered point's squared distance to its nearest, by local index.
+    fn search(&mut self, set: RowSet, k_plane: usize) -> Result<Vec<Option<f64>>> {
+        let k = match set {
+            RowSet::Plain => k_plane,
+            _ => k_plane * scales::WIDE,
+        };
+        let (rows, order, nearest) = match self.neighbors {
+            Neighbors::Search(SearchMethod::KdTree) => Rows::search(&self.input, k)?,
+            neighbors => {
+                let (knn, order) = knn_rows(&self.input, neighbors, k)?;
+                let nearest = (0..knn.len())
+                    .map(|i| knn.sq_dists_of(i).first().copied())
+                    .collect();
+                (Rows::in_stored_order(&knn, &order), order, nearest)
+            }
+        };
+        let current = match self.state.take() {
+            Some(st) if st.generation > 0 => {
+                Some((st.generation, super::in_input_order(&st.cur, &st.order)))
+            }
+            Some(_) => None,
+            None => self.pending.take(),
+        };
+        let (generation, cur) = match current {
+            Some((g, local)) => (g, order.iter().map(|&o| local[o as usize]).collect()),
+            None => (0, order.iter().map(|&o| self.input[o as usize]).collect()),
+        };
+        let reach = self.region.as_ref().map(|region| {
+            let input: Vec<DVec3> = order.iter().map(|&o| self.input[o as usize]).collect();
+            Reach::new(&input, &rows, k, region)
+        });
+        let owned_at = self.owned.as_ref().map(|owned| {
+            let position = super::super::positions_of(&order);
+            owned.iter().map(|&i| position[i as usize]).collect()
+        });
+        let set = if set == RowSet::Plain {
+            set
+        } else {
+            RowSet::Wide
+        };
+        self.state = Some(State {
+            set,
+            rows,
+            order,
+            cur,
+            generation,
+            measured_on: None,
+            planes: None,
+            normals: Vec::new(),
+            reach,
+            owned_at,
+        });
+        Ok(nearest)
+    }
+
+    /// The rows of `set` measured on the proxy of `generation` and cut at `eps`.
+    fn rows_on(&mut self, set: RowSet, generation: usize, eps: f64, k_plane: usize) -> Result<()> {
+        let searched = |s: RowSet| s == RowSet::Plain;
+        let fresh = self
+            .state
+            .as_ref()
+            .is_none_or(|st| searched(st.set) != searched(set));
+        if fresh {
+            self.search(set, k_plane)?;
+        }
+        let st = self.state.as_mut().expect("searched");
+        if st.generation != generation {
+            return Err(out_of_turn("a round of another generation"));
+        }
+        if let (RowSet::Shrunk { at }, RowSet::Wide) = (set, st.set) {
+            // the wide rows' first `k_plane` as sorted on the proxy of `at`
+            if at != generation {
+                return Err(out_of_turn(
+                    "the rows shrink on the proxy of another generation",
+                ));
+            }
+            st.measure(eps);
+            st.rows.shrink(k_plane);
+            st.set = set;
+        }
+        st.measure(eps);
+        Ok(())
+    }
+
+    /// The owned points' flags of `reach` (empty: no region, all valid).
+    fn owned_valid(&self, st: &State, of: impl Fn(&Reach) -> &[bool]) -> Vec<bool> {
+        let Some(reach) = &st.reach else {
+            return Vec::new();
+        };
+        let flags = of(reach);
+        match &st.owned_at {
+            None => flags.to_vec(),
+            Some(at) => at.iter().map(|&s| flags[s as usize]).collect(),
+        }
+    }
+
+    /// Sets the proxy of generation `generation`, in local order (the tiles that own the
+    /// halo's points computed it): a split cloud's driver calls this after every step, and
+    /// before the first round of a tile gathered anew (a wider halo) after the run started.
+    ///
+    /// # Errors
+    ///
+    /// [`NbhdError::InvalidOption`] when `current` has another length than the input.
+    pub fn set_current(&mut self, generation: usize, current: &[DVec3]) -> Result<()> {
+        if current.len() != self.input.len() {
+            return Err(out_of_turn("a proxy of another length"));
+        }
+        match &mut self.state {
+            Some(st) => {
+                for (c, &o) in st.cur.iter_mut().zip(&st.order) {
+                    *c = current[o as usize];
+                }
+                st.generation = generation;
+                st.measured_on = None;
+                st.planes = None;
+            }
+            None => self.pending = Some((generation, current.to_vec())),
+        }
+        Ok(())
+    }
+
+    /// The owned points of the current proxy, in local order.
+    pub fn owned_points(&self) -> Vec<DVec3> {
+        let Some(st) = &self.state else {
+            return Vec::new();
+        };
+        match &st.owned_at {
+            None => super::in_input_order(&st.cur, &st.order),
+            Some(at) => at.iter().map(|&s| st.cur[s as usize]).collect(),
+        }
+    }
+
+    /// Computes `round` (of the run with `options` and ε = `eps`) over the gathered points and
+    /// returns the owned points' part.
+    ///
+    /// # Errors
+    ///
+    /// [`NbhdError::InvalidOption`] for [`Round::Done`] or a round of another generation than
+    /// the tile's proxy; those of the search.
+    pub fn round(&mut self, round: &Round, options: &RobustOptions, eps: f64) -> Result<TilePart> {
+        let kp = options.k_plane;
+        match *round {
+            Round::Start => {
+                self.rows_on(RowSet::Plain, 0, eps, kp)?;
+                Ok(self.start_part(options))
+            }
+            Round::Ratio { generation } => {
+                self.rows_on(RowSet::Wide, generation, eps, kp)?;
+                Ok(self.ratio_part(kp))
+            }
+            Round::Measure { generation, rows } => {
+                self.rows_on(rows, generation, eps, kp)?;
+                Ok(self.measure_part(generation))
+            }
+            Round::Step {
+                generation,
+                rows,
+                sigma,
+                k,
+            } => {
+                self.rows_on(rows, generation, eps, kp)?;
+                Ok(self.step_part(generation, sigma, &RobustOptions { k, ..*options }))
+            }
+            Round::Finish { .. } | Round::Done => Err(out_of_turn("a round with no part")),
+        }
+    }
+
+    /// [`Round::Start`]'s part: the row lengths and, with the noise scale, the ratios.
+    fn start_part(&self, options: &RobustOptions) -> TilePart {
+        let st = self.state.as_ref().expect("rows measured");
+        let (max_len, min_narrow) = match &st.owned_at {
+            None => (st.rows.max_len(), st.rows.min_narrow_len(options.k)),
+            Some(at) => {
+                let len = |&s: &u32| st.rows.wide(s as usize).len();
+                let max = at.iter().map(len).max().unwrap_or(0);
+                let min = at.iter().map(|s| len(s).min(options.k)).min();
+                (max, min.unwrap_or(usize::MAX))
+            }
+        };
+        let ratios = if options.noise_scale {
+            self.ratio_part(options.k_plane)
+        } else {
+            self.part(|r| r.cert(), Vec::new())
+        };
+        TilePart {
+            max_len,
+            min_narrow,
+            ..ratios
+        }
+    }
+
+    /// The owned points' distance ratios on the current proxy and rows.
+    fn ratio_part(&self, k_plane: usize) -> TilePart {
+        let st = self.state.as_ref().expect("rows measured");
+        let values = match &st.owned_at {
+            None => scales::distance_ratios(&st.cur, &st.rows, k_plane),
+            Some(at) => at
+                .iter()
+                .filter_map(|&s| scales::distance_ratio_at(&st.cur, &st.rows, k_plane, s as usize))
+                .collect(),
+        };
+        self.part(|r| r.cert(), values)
+    }
+
+    /// [`Round::Measure`]'s part: the planes (kept for the step) and the owned points'
+    /// distances to their own.
+    fn measure_part(&mut self, generation: usize) -> TilePart {
+        let st = self.state.as_mut().expect("rows measured");
+        let planes = covariance_planes(&st.cur, &st.rows);
+        let values = match &st.owned_at {
+            None => plane_distances(&st.cur, &planes),
+            Some(at) => at
+                .iter()
+                .map(|&s| plane_distance(st.cur[s as usize], &planes[s as usize]))
+                .collect(),
+        };
+        st.planes = Some((generation, planes));
+        self.part(|r| r.cert(), values)
+    }
+
+    /// [`Round::Step`]'s part: the selected normals (kept), the step into the next generation
+    /// and the owned points' squared displacements.
+    fn step_part(&mut self, generation: usize, sigma: f64, options: &RobustOptions) -> TilePart {
+        let st = self.state.as_mut().expect("rows measured");
+        let planes = match st.planes.take() {
+            Some((g, planes)) if g == generation => planes,
+            _ => covariance_planes(&st.cur, &st.rows),
+        };
+        let width = options.inlier_width * sigma;
+        st.normals = selected_normals(&st.cur, &st.rows, &planes, width);
+        drop(planes);
+        let next = step(&st.cur, &st.rows, &st.normals, width, options);
+        let mut moved_sq = ExactSum::new();
+        match &st.owned_at {
+            None => moved_sq.extend(
+                next.iter()
+                    .zip(&st.cur)
+                    .map(|(a, b)| a.distance_squared(*b)),
+            ),
+            Some(at) => moved_sq.extend(at.iter().map(|&s| {
+                let s = s as usize;
+                next[s].distance_squared(st.cur[s])
+            })),
+        }
+        st.cur = next;
+        st.generation += 1;
+        TilePart {
+            moved_sq,
+            ..self.part(Reach::step, Vec::new())
+        }
+    }
+
+    /// A part with the owned count, the validity `of` the reach, and `values`.
+    fn part(&self, of: impl Fn(&Reach) -> &[bool], values: Vec<f64>) -> TilePart {
+        let st = self.state.as_ref().expect("rows measured");
+        TilePart {
+            count: self.owned.as_ref().map_or(st.cur.len(), Vec::len) as u64,
+            valid: self.owned_valid(st, of),
+            values,
+            ..TilePart::default()
+        }
+    }
+
+    /// [`Round::Finish`]: the points, the normals (the last step's, or the covariance normals
+    /// of the proxy if no step was taken) and, with `options.outputs`, the per-point outputs
+    /// with `lambda`, of the owned points in local order; whether each is right (empty: all).
+    #[allow(clippy::type_complexity)]
+    pub fn finish(
+        mut self,
+        round: &Round,
+        options: &RobustOptions,
+        eps: f64,
+    ) -> Result<(Vec<DVec3>, Vec<DVec3>, Vec<PointOutput>, Vec<bool>)> {
+        let Round::Finish {
+            generation,
+            rows,
+            lambda,
+        } = *round
+        else {
+            return Err(out_of_turn("a round that is not the last"));
+        };
+        let no_step = self.state.as_ref().is_none_or(|st| st.normals.is_empty());
+        if no_step || options.outputs {
+            self.rows_on(rows, generation, eps, options.k_plane)?;
+        }
+        let st = self.state.as_mut().expect("rows measured");
+        if no_step {
+            st.normals = covariance_planes(&st.cur, &st.rows)
+                .iter()
+                .map(|c| c.normal)
+                .collect();
+        }
+        let valid = self.owned_valid(self.state.as_ref().expect("rows"), |r| r.cert());
+        let State {
+            rows,
+            order,
+            cur,
+            normals,
+            ..
+        } = self.state.take().expect("rows measured");
+        let points = super::in_input_order(&cur, &order);
+        let normals = super::in_input_order(&normals, &order);
+        let outputs = if options.outputs {
+            let narrow = rows.narrow_table(&cur, options.k, &order);
+            drop(rows); // the wide rows are done with: their memory goes to the outputs
+            robust_outputs(&points, &narrow, &normals, lambda, options)?
+        } else {
+            Vec::new()
+        };
+        Ok(match &self.owned {
+            None => (points, normals, outputs, valid),
+            Some(owned) => {
+                let outputs = if outputs.is_empty() {
+                    outputs
+                } else {
+                    pick(&outputs, owned)
+                };
+                (pick(&points, owned), pick(&normals, owned), outputs, valid)
+            }
+        })
+    }
+}
+
+/// The values of the owned points (local indices `owned`).
+fn pick<T: Copy>(values: &[T], owned: &[u32]) -> Vec<T> {
+    owned.iter().map(|&i| values[i as usize]).collect()
+}
+
+impl State {
+    /// Measures the rows on the current proxy and cuts them at `eps`, unless they are already
+    /// (the first cut of searched rows on the input keeps the rows that are whole).
+    fn measure(&mut self, eps: f64) {
+        match self.measured_on {
+            Some(g) if g == self.generation => {}
+            None if self.generation == 0 => self.rows.cut(&self.cur, &self.order, eps),
+            _ => self.rows.update(&self.cur, &self.order, eps),
+        }
+        self.measured_on = Some(self.generation);
+    }
+}
+
+fn out_of_turn(what: &str) -> NbhdError {
+    NbhdError::InvalidOption {
+        name: "robust tile",
+        reason: format!("{what}: out of turn"),
+    }
+}
