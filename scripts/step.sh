@@ -2,7 +2,7 @@
 # when it is done, how long it took. Sourced, not run (bash):
 #
 #   . scripts/step.sh
-#   step "cargo test" "the first time about 20 min on 2 cores"   # ends the step before
+#   step "cargo test" "the first time about 15 min on 2 cores"   # ends the step before
 #   ...
 #   step_end                                                     # ends the last step
 #

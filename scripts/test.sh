@@ -48,9 +48,9 @@ export CARGO_PROFILE_DEV_DEBUG="${CARGO_PROFILE_DEV_DEBUG:-line-tables-only}"
 export CARGO_PROFILE_TEST_DEBUG="${CARGO_PROFILE_TEST_DEBUG:-line-tables-only}"
 step "cargo fmt --check"
 cargo fmt --all -- --check
-step "cargo clippy"
+step "cargo clippy" "the first time about 1.5 min on 2 free cores"
 cargo clippy --workspace --all-targets -- -D warnings
-step "cargo test"
+step "cargo test" "the first time about 15 min on 2 free cores (the build of every test binary), then about 12"
 # valgrind was installed above: its memcheck runs of the C ABI tests must not be skipped.
 export NBHD_REQUIRE_VALGRIND=1
 export NBHD_REQUIRE_CLOUDCOMPARE=1  # installed above: its test must not be skipped
@@ -60,22 +60,22 @@ export NBHD_TEST_INSTALL=1
 cargo test --workspace
 
 # --- the Python package (python/): built with maturin, installed by pip, tested by pytest ----
-step "the Python package (scripts/python-test.sh)"
+step "the Python package (scripts/python-test.sh)" "about 3 min"
 scripts/python-test.sh
 step "the wheel: auditwheel, a fresh venv without cargo, stubs (scripts/wheel-test.sh)"
 scripts/wheel-test.sh
 
 # --- fuzzing: a few seconds of each reader of nbhd::io and of the C ABI (scripts/fuzz.sh) -----
-step "fuzzing the file readers and the C ABI (scripts/fuzz.sh, FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)"
+step "fuzzing the file readers and the C ABI (scripts/fuzz.sh, FUZZ_SECONDS=${FUZZ_SECONDS:-5} each)" "about 3.5 min"
 scripts/fuzz.sh
 
 # --- C++ examples under ctest ---------------------------------------------------------------
 if [ -f cpp_examples/CMakeLists.txt ]; then
-    step "the C and C++ examples (scripts/cpp-test.sh)"
+    step "the C and C++ examples (scripts/cpp-test.sh)" "about 3 min"
     scripts/cpp-test.sh
     # The headers' ctests and the C ABI tests once more under AddressSanitizer +
     # UndefinedBehaviorSanitizer (the library cpp-test.sh installed; any report fails).
-    step "the C and C++ surfaces under the sanitizers (scripts/sanitize-test.sh)"
+    step "the C and C++ surfaces under the sanitizers (scripts/sanitize-test.sh)" "about 2.5 min"
     scripts/sanitize-test.sh
 fi
 step "the MeshLab plugin (scripts/meshlab-test.sh)"
