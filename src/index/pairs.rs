@@ -17,6 +17,7 @@
 use rayon::prelude::*;
 
 use super::search::answer_with;
+use super::tables::search_each_held;
 use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
 use crate::metric::Measure;
@@ -24,7 +25,7 @@ use crate::parallel::with_threads;
 use crate::query::{Neighborhood, Plan, QueryOptions};
 use crate::scalar::Scalar;
 use crate::sum::ExactSum;
-use crate::table::{rows_in_work_order, NeighborTable, TableOptions};
+use crate::table::{NeighborTable, TableOptions};
 
 /// [`NeighborIndex::pairs`].
 pub(super) fn pairs<T: Scalar, I: NeighborIndex<T>>(
@@ -37,19 +38,9 @@ pub(super) fn pairs<T: Scalar, I: NeighborIndex<T>>(
         sorted: false,
     })?;
     with_threads(options.threads, || {
-        index.with_stored(|stored| {
-            rows_in_work_order(
-                index.source_len(),
-                stored.len,
-                |w| (stored.at)(w).0 as usize,
-                |w, row, _| {
-                    let (i, q) = (stored.at)(w);
-                    answer_with(index, q, Some(i), &plan, row);
-                    row.retain(|nb| nb.index > i);
-                    row.sort_unstable_by_key(|nb| nb.index);
-                    Ok(())
-                },
-            )
+        search_each_held(index, index, &plan, true, |i, row| {
+            row.retain(|nb| nb.index > i);
+            row.sort_unstable_by_key(|nb| nb.index);
         })
     })?
 }
@@ -68,17 +59,7 @@ pub(super) fn pairs_with<T: Scalar, I: NeighborIndex<T>, O: NeighborIndex<T>>(
     })?;
     // row j: the points of `index` near point j of `other`, found by `index`'s own search
     let by_other = with_threads(options.threads, || {
-        other.with_stored(|stored| {
-            rows_in_work_order(
-                other.source_len(),
-                stored.len,
-                |w| (stored.at)(w).0 as usize,
-                |w, row, _| {
-                    answer_with(index, (stored.at)(w).1, None, &plan, row);
-                    Ok(())
-                },
-            )
-        })
+        search_each_held(index, other, &plan, false, |_, _| {})
     })??;
     transpose(&by_other, index.source_len())
 }

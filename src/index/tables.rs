@@ -14,7 +14,7 @@ use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
 use crate::parallel::with_threads;
 use crate::points::PointsView;
-use crate::query::{Neighborhood, Query};
+use crate::query::{Neighbor, Neighborhood, Plan, Query};
 use crate::scalar::Scalar;
 use crate::table::{check_knn_total, rows_in_work_order, NeighborTable, TableOptions};
 
@@ -32,21 +32,35 @@ pub(super) fn neighborhoods<T: Scalar, I: NeighborIndex<T>>(
                 return table;
             }
         }
-        // One search per point, in the index's order (neighbouring points touch the same
-        // nodes and leaves, so they hit the cache), written back in the caller's order.
-        index.with_stored(|stored| {
-            rows_in_work_order(
-                index.source_len(),
-                stored.len,
-                |w| (stored.at)(w).0 as usize,
-                |w, row, _| {
-                    let (id, q) = (stored.at)(w);
-                    answer_with(index, q, options.exclude_self.then_some(id), &plan, row);
-                    Ok(())
-                },
-            )
-        })
+        search_each_held(index, index, &plan, options.exclude_self, |_, _| {})
     })?
+}
+
+/// One search of `index` per point held by `source` (`index` itself, or another index of the
+/// same points' type), run in `source`'s stored order — neighbouring points touch the same
+/// nodes and leaves, so they hit the cache — and written back as the rows of `source`'s caller
+/// indices. `exclude_self` leaves each point out of its own row; `finish(i, row)` sees the row
+/// of caller index `i` after its search. Runs on the current rayon pool.
+pub(super) fn search_each_held<T: Scalar, I: NeighborIndex<T>, S: NeighborIndex<T>>(
+    index: &I,
+    source: &S,
+    plan: &Plan<T>,
+    exclude_self: bool,
+    finish: impl Fn(u32, &mut Vec<Neighbor<T>>) + Sync,
+) -> Result<NeighborTable<T>> {
+    source.with_stored(|stored| {
+        rows_in_work_order(
+            source.source_len(),
+            stored.len,
+            |w| (stored.at)(w).0 as usize,
+            |w, row, _| {
+                let (i, q) = (stored.at)(w);
+                answer_with(index, q, exclude_self.then_some(i), plan, row);
+                finish(i, row);
+                Ok(())
+            },
+        )
+    })
 }
 
 /// [`NeighborIndex::neighborhoods_at`].
