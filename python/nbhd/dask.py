@@ -67,9 +67,9 @@ def _holes_path(store, c):
 
 def _bucket(chunk, start, lo, hi, grid, store, c, skip=False):
     """Task: the points of one input chunk sorted into grid tiles, one piece file per
-    (chunk, tile); returns each piece's tile, count and tight box. Rows with a non-finite
-    coordinate are refused, or with ``skip`` written to the chunk's holes file (in no tile);
-    the piece tuples then end with that file."""
+    (chunk, tile); returns each piece's tile, count and tight box, and the chunk's holes file
+    or None. Rows with a non-finite coordinate are refused, or with ``skip`` written to the
+    chunk's holes file (their caller indices and rows) and left out of every tile."""
     pts = np.asarray(chunk)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise ValueError(f"points must be an (n, 3) array, chunk {c} is {pts.shape}")

@@ -116,6 +116,23 @@ def test_robust_with_nan_holes(client, tmp_path):
         cloud.normals()
 
 
+def test_robust_on_tile_files(client, tmp_path):
+    # LAS/PLY tiles as a survey is delivered (each file a tile; the last file's points come from
+    # everywhere, overlapping the others' boxes): the rows are the files in order
+    pts = cube(9_000, 1.0, seed=23)
+    order = np.argsort(pts[:, 0], kind="stable")
+    files = []
+    for i, g in enumerate(np.array_split(order[:8_000], 3) + [order[8_000:]]):
+        path = tmp_path / (f"t{i}.las" if i % 2 else f"t{i}.ply")
+        nbhd.write(str(path), pts[g], precision="double")
+        files.append(str(path))
+    ref_pts = np.vstack([nbhd.read(f)["positions"] for f in files])
+    ref = nbhd.smooth_robust(ref_pts)
+    cloud = ndask.tile_files(files, str(tmp_path / "store"))
+    got = cloud.smooth_robust(client=client).assemble()
+    assert differing(got, ref) == ([], 0)
+
+
 def test_an_outlier_grows_its_tiles_halo(client, tmp_path):
     pts = np.vstack([cube(8_000, 0.3, seed=11), [[3.0, 2.5, 0.2]]])
     ref = nbhd.smooth_robust(pts)
