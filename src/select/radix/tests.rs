@@ -285,6 +285,6 @@ fn a_search_and_its_counts_travel_as_bytes() {
     let mut counts = RankSearch::<f64>::new(0)
         .digit_counts(&[1.0, 2.0])
         .to_bytes();
-    counts.extend_from_slice(&counts[12..22].to_vec());
+    counts.extend_from_within(12..22);
     assert!(DigitCounts::from_bytes(&counts).is_err(), "digits repeated");
 }
