@@ -449,6 +449,11 @@ fn python_classes_share_one_definition_of_each_query() {
             );
             continue;
         }
+        // the query methods of the tree classes; other classes (the robust mode's step API in
+        // robust_tiles.rs) may have a `to_bytes` of their own
+        if !text.contains("KdTree") {
+            continue;
+        }
         let twice = defined_fns(text, PYTHON_SHARED_METHODS);
         assert!(
             twice.is_empty(),

@@ -380,3 +380,83 @@ fn a_narrow_halo_or_an_approximate_median_differs() {
     assert_ne!(approx.report.noise, one.noise);
     assert!(differences(&approx.report, &one) > p.len() / 2);
 }
+
+#[test]
+fn the_reach_flags_only_values_that_are_the_whole_clouds() {
+    // a brute-force check of `robust/reach.rs`: one tile with a narrow halo runs every round
+    // beside the whole cloud (fed the whole cloud's proxy after each step); every owned value
+    // it flags valid must be the whole cloud's, and some it flags invalid must differ (the
+    // points beyond its halo change them), so the flags are neither wrong nor vacuous
+    let p = noisy_cube(6_000, 1.0, 21);
+    let options = RobustOptions::default();
+    let h0 = mean_spacing(&p).unwrap();
+    let everything = Region {
+        lo: DVec3::NEG_INFINITY,
+        hi: DVec3::INFINITY,
+    };
+    let mut whole = RobustTile::gathered(p.clone(), &vec![true; p.len()], everything).unwrap();
+    let (lo, hi) = p
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &q| {
+            (l.min(q), h.max(q))
+        });
+    let mut t = gather(&p, (lo + hi) / 2.0, 0, 4.0 * h0);
+    let (near, _) = whole.nearest(options.k_plane).unwrap();
+    t.tile.nearest(options.k_plane).unwrap();
+    let mut run = RobustRun::new(
+        &options,
+        RobustRun::spacing_of_nearest(near),
+        Neighbors::default(),
+    )
+    .unwrap();
+    let eps = run.epsilon();
+    // (valid and equal, valid and different, invalid and different) per kind of round
+    let mut tally = [[0usize; 3]; 2];
+    let mut count = |kind: usize, valid: bool, same: bool| match (valid, same) {
+        (true, true) => tally[kind][0] += 1,
+        (true, false) => tally[kind][1] += 1,
+        (false, false) => tally[kind][2] += 1,
+        (false, true) => {}
+    };
+    let mut generation = 0;
+    loop {
+        let round = run.round();
+        if matches!(round, Round::Finish { .. }) {
+            break;
+        }
+        let mut w = [whole.round(&round, &options, eps).unwrap()];
+        let part = t.tile.round(&round, &options, eps).unwrap();
+        match round {
+            Round::Measure { .. } => {
+                for (k, &i) in t.owned.iter().enumerate() {
+                    let same = part.values[k].to_bits() == w[0].values[i].to_bits();
+                    count(0, part.valid[k], same);
+                }
+            }
+            Round::Step { .. } => {
+                let (a, b) = (t.tile.owned_points(), whole.owned_points());
+                for (k, &i) in t.owned.iter().enumerate() {
+                    let same =
+                        a[k].to_array().map(f64::to_bits) == b[i].to_array().map(f64::to_bits);
+                    count(1, part.valid[k], same);
+                }
+            }
+            _ => {}
+        }
+        run.feed(&reduce(&round, &mut w).unwrap()).unwrap();
+        if matches!(round, Round::Step { .. }) {
+            generation += 1;
+            let proxy = whole.owned_points();
+            let gathered: Vec<DVec3> = t.gathered.iter().map(|&i| proxy[i]).collect();
+            t.tile.set_current(generation, &gathered).unwrap();
+        }
+    }
+    for (kind, [right, wrong, differs]) in ["plane distances", "steps"].iter().zip(tally) {
+        assert!(right > 0, "{kind}: no owned value flagged valid");
+        assert_eq!(
+            wrong, 0,
+            "{kind}: values flagged valid that are not the cloud's"
+        );
+        assert!(differs > 0, "{kind}: no value flagged invalid differs");
+    }
+}

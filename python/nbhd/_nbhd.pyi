@@ -51,10 +51,16 @@ __all__ = [
     "curvatures",
     "smooth",
     "smooth_robust",
+    "RobustRun",
+    "RobustTile",
+    "RankSearch",
+    "DigitCounts",
+    "ExactSum",
     "voxel_grid",
     "read",
     "write",
     "_reads_in_place",
+    "_skipped_outputs",
     "MAX_THREADS",
     "__version__",
 ]
@@ -452,6 +458,161 @@ def smooth_robust(
     outputs: bool = False,
     threads: int = 0,
 ) -> RobustResult: ...
+
+# The step API of the robust mode (nbhd::smooth::robust::{RobustRun, RobustTile}) and the exact
+# reductions across tiles (RankSearch, ExactSum): what nbhd.dask drives; see python/DASK.md.
+
+RobustRound = TypedDict(
+    "RobustRound",
+    {
+        "kind": Literal["start", "ratio", "measure", "step", "finish", "done"],
+        "generation": Optional[int],
+        "rows": Optional[Literal["plain", "wide", "shrunk"]],
+        "shrunk_at": Optional[int],
+        "epsilon": float,
+        "sigma": float,
+        "k": int,
+        "lambda": float,
+    },
+    total=False,
+)
+
+RobustRunReport = TypedDict(
+    "RobustRunReport",
+    {
+        "spacing": float,
+        "epsilon": float,
+        "lambda": float,
+        "min_neighbors": int,
+        "noise": F64,
+        "moved": F64,
+        "dimension": F64,
+        "wide_iterations": int,
+    },
+)
+
+class RobustPart(TypedDict):
+    count: int
+    valid: npt.NDArray[np.bool_]
+    values: F64
+    moved_sq: ExactSum
+    max_len: int
+    min_narrow: int
+
+class RobustTileResult(TypedDict):
+    valid: npt.NDArray[np.bool_]
+    points: F64
+    normals: F64
+    outputs: Optional[Outputs]
+
+@final
+class RobustRun:
+    """The state of one robust run between rounds (``nbhd::smooth::robust::RobustRun``)."""
+    def __new__(
+        cls,
+        spacing: float,
+        *,
+        k: int = 24,
+        k_plane: int = 48,
+        epsilon: float = 12.0,
+        epsilon_units: Units = "relative",
+        max_iterations: int = 10,
+        tolerance: float = 0.05,
+        inlier_width: float = 5.0,
+        feature_angle: float = 20.0,
+        tau: float = 1.0,
+        noise_scale: Optional[bool] = None,
+        orientation: OrientationName = "unoriented",
+        orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
+        outputs: bool = False,
+    ) -> RobustRun: ...
+    @property
+    def epsilon(self) -> float: ...
+    def round(self) -> RobustRound: ...
+    def feed(
+        self,
+        round: RobustRound,
+        *,
+        count: int,
+        max_len: int = 0,
+        min_narrow: int = 0,
+        median: Optional[float] = None,
+        moved_sq: Optional[ExactSum] = None,
+    ) -> None: ...
+    @staticmethod
+    def median_rank(count: int) -> int: ...
+    def report(self) -> RobustRunReport: ...
+    @staticmethod
+    def spacing_of_nearest(nearest_sq: ArrayLike) -> float: ...
+
+@final
+class RobustTile:
+    """One tile of a robust run (``nbhd::smooth::robust::RobustTile``)."""
+    def __new__(
+        cls,
+        points: ArrayLike,
+        owned: Sequence[bool],
+        lo: Sequence[float],
+        hi: Sequence[float],
+        *,
+        k: int = 24,
+        k_plane: int = 48,
+        epsilon: float = 12.0,
+        epsilon_units: Units = "relative",
+        max_iterations: int = 10,
+        tolerance: float = 0.05,
+        inlier_width: float = 5.0,
+        feature_angle: float = 20.0,
+        tau: float = 1.0,
+        noise_scale: Optional[bool] = None,
+        orientation: OrientationName = "unoriented",
+        orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
+        outputs: bool = False,
+    ) -> RobustTile: ...
+    def nearest(self) -> tuple[F64, npt.NDArray[np.bool_]]: ...
+    def set_current(self, generation: int, current: ArrayLike) -> None: ...
+    def round(self, round: RobustRound) -> RobustPart: ...
+    def owned_points(self) -> F64: ...
+    def finish(self, round: RobustRound) -> RobustTileResult: ...
+
+@final
+class RankSearch:
+    """An exact selection across parts (``nbhd::select::radix::RankSearch`` of f64)."""
+    def __new__(cls, rank: int) -> RankSearch: ...
+    def step(self) -> tuple[Literal["counts", "values", "found"], Optional[float]]: ...
+    def digit_counts(self, values: ArrayLike) -> DigitCounts: ...
+    def matching_values(self, values: ArrayLike) -> F64: ...
+    def feed_counts(self, counts: DigitCounts) -> None: ...
+    def feed_values(self, values: ArrayLike) -> None: ...
+    def to_bytes(self) -> bytes: ...
+    @staticmethod
+    def from_bytes(bytes: bytes) -> RankSearch: ...
+    def __reduce__(self) -> tuple[Any, ...]: ...
+
+@final
+class DigitCounts:
+    """One round's digit counts of a RankSearch (of one part, or merged)."""
+    def merge(self, other: DigitCounts) -> None: ...
+    @property
+    def total(self) -> int: ...
+    def to_bytes(self) -> bytes: ...
+    @staticmethod
+    def from_bytes(bytes: bytes) -> DigitCounts: ...
+    def __reduce__(self) -> tuple[Any, ...]: ...
+
+@final
+class ExactSum:
+    """An exactly rounded, order-independent sum of f64 values (``nbhd::sum::ExactSum``)."""
+    def __new__(cls) -> ExactSum: ...
+    def add(self, values: ArrayLike) -> None: ...
+    def merge(self, other: ExactSum) -> None: ...
+    def value(self) -> float: ...
+    def to_bytes(self) -> bytes: ...
+    @staticmethod
+    def from_bytes(bytes: bytes) -> ExactSum: ...
+    def __reduce__(self) -> tuple[Any, ...]: ...
+
+def _skipped_outputs(count: int) -> Outputs: ...
 
 class CloudFile(TypedDict):
     positions: F64

@@ -60,6 +60,9 @@ class Spec:
     tiles: list
     scale: float  # the largest |coordinate|: the rounding margins are relative to it
     store: str = ""
+    # ``non_finite="skip"``: files of the rows with a NaN or infinite coordinate (``idx``,
+    # ``pts``), which are in no tile; only the robust smoothing takes such a cloud
+    holes: list = field(default_factory=list)
 
 
 BATCH = 32_768  # queries answered at a time in a tile (memory, not results, depends on it)
@@ -287,3 +290,160 @@ def partial_sum(parts, a: int, b: int, carry: float) -> float:
     x = np.sqrt(x)
     acc = np.add.accumulate(np.concatenate([[carry], x]))
     return float(acc[-1])
+
+
+# --- the robust smoothing: one stateful tile per Dask actor (python/DASK.md) ----------------
+
+
+def gather_robust(spec: Spec, t: int, width: float):
+    """Tile ``t`` with a halo of ``width`` for the robust smoothing: ``(idx, pts, owner, at,
+    lo, hi)`` — the points inside the closed box (tile box ± width) in ascending caller index,
+    as float64; for each, the tile that owns it and its position in that tile's owned order
+    (where that tile writes its positions); and the region the library checks the rows
+    against: the box, unbounded on the sides where no point of the cloud lies beyond it."""
+    tile = spec.tiles[t]
+    a = np.asarray(tile.lo, np.float64) - width
+    b = np.asarray(tile.hi, np.float64) + width
+    cloud_lo = np.min([u.lo for u in spec.tiles], axis=0)
+    cloud_hi = np.max([u.hi for u in spec.tiles], axis=0)
+    lo = np.where(a <= cloud_lo, -np.inf, a)
+    hi = np.where(b >= cloud_hi, np.inf, b)
+    idx_p, pts_p, own_p, at_p = [], [], [], []
+    for u_i, u in enumerate(spec.tiles):
+        if np.any(np.asarray(u.hi) < a) or np.any(np.asarray(u.lo) > b):
+            continue
+        base = 0
+        for idx, pts in u.pieces(spec.store):
+            sel = np.flatnonzero(np.all((pts >= a) & (pts <= b), axis=1))
+            idx_p.append(np.asarray(idx[sel], np.int64))
+            pts_p.append(np.asarray(pts[sel], np.float64))
+            own_p.append(np.full(len(sel), u_i, np.int64))
+            at_p.append(sel.astype(np.int64) + base)
+            base += len(idx)
+    idx = np.concatenate(idx_p)
+    order = np.argsort(idx, kind="stable")
+    pts = np.ascontiguousarray(np.concatenate(pts_p)[order])
+    owner = np.concatenate(own_p)[order]
+    at = np.concatenate(at_p)[order]
+    return idx[order], pts, owner, at, lo.tolist(), hi.tolist()
+
+
+def generation_path(out: str, g: int, t: int) -> str:
+    """Where tile ``t`` keeps its owned points' positions after ``g`` steps (owned order)."""
+    return os.path.join(out, f"gen_{g:04d}", f"tile_{t:06d}.npy")
+
+
+class RobustTileActor:
+    """One tile of a robust run, held on a worker for the whole run (a Dask actor): its
+    gathered points and ``nbhd.RobustTile``, which keeps the tile's rows between rounds, and
+    the values of the last round for the exact medians. Positions move between tiles through
+    the generation files; every decision (rounds, medians, halo growth) is the client's."""
+
+    def __init__(self, spec: Spec, t: int, width: float, options: dict, out: str):
+        self.spec, self.t, self.options, self.out = spec, t, options, out
+        self.own = owned(spec, t)
+        # the generation whose positions of every gathered point came from their owners (a
+        # step moves the halo too, but only the owners' positions of it are the cloud's)
+        self.synced = 0
+        self.values = np.empty(0)
+        self._gather(width)
+
+    def _gather(self, width):
+        import nbhd
+
+        idx, pts, self.owner, self.at, lo, hi = gather_robust(self.spec, self.t, width)
+        self.width = width
+        self.gathered = len(idx)
+        owned_mask = self.owner == self.t
+        self.tile = nbhd.RobustTile(pts, owned_mask, lo, hi, **self.options)
+
+    def _proxy(self, g):
+        """The positions of generation ``g`` of every gathered point, from their owners' files."""
+        proxy = np.empty((len(self.owner), 3), np.float64)
+        for u in np.unique(self.owner):
+            sel = self.owner == u
+            proxy[sel] = np.load(generation_path(self.out, g, int(u)), mmap_mode="r")[self.at[sel]]
+        return proxy
+
+    def _to(self, g):
+        if g != self.synced:
+            self.tile.set_current(g, self._proxy(g))
+            self.synced = g
+
+    def grow(self, generation):
+        """Gathers the tile again with twice the halo, at the proxy of ``generation``."""
+        self._gather(2.0 * self.width)
+        if generation > 0:
+            self.tile.set_current(generation, self._proxy(generation))
+        self.synced = generation
+        return self.width
+
+    def nearest(self):
+        """The owned points' nearest squared distances, written for the spacing's sums."""
+        near, valid = self.tile.nearest()
+        base = os.path.join(self.out, f"nearest_{self.t:06d}")
+        np.save(base + ".idx.npy", self.own)
+        np.save(base + ".nearest.npy", near)
+        return {"tile": self.t, "path": base, "valid": bool(valid.all()),
+                "invalid": int((~valid).sum()), "halo": self.width}
+
+    def round(self, round):
+        """One round; the part's summary with the first digit counts of its values."""
+        import nbhd
+
+        self._to(round["generation"])
+        part = self.tile.round(round)
+        self.values = part["values"]
+        if round["kind"] == "step":
+            path = generation_path(self.out, round["generation"] + 1, self.t)
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            tmp = path + ".tmp.npy"
+            np.save(tmp, self.tile.owned_points())
+            os.replace(tmp, path)
+        valid = part["valid"]
+        return {
+            "tile": self.t, "valid": bool(valid.all()), "invalid": int((~valid).sum()),
+            "halo": self.width, "count": part["count"], "max_len": part["max_len"],
+            "min_narrow": part["min_narrow"], "moved_sq": part["moved_sq"].to_bytes(),
+            "n_values": len(self.values),
+            "counts": nbhd.RankSearch(0).digit_counts(self.values).to_bytes(),
+        }
+
+    def digit_counts(self, search: bytes) -> bytes:
+        import nbhd
+
+        return nbhd.RankSearch.from_bytes(search).digit_counts(self.values).to_bytes()
+
+    def matching_values(self, search: bytes):
+        import nbhd
+
+        return nbhd.RankSearch.from_bytes(search).matching_values(self.values)
+
+    def finish(self, round, path):
+        """The last round: the owned points' points, normals and outputs written to ``path``."""
+        self._to(round["generation"])
+        r = self.tile.finish(round)
+        arrays = {"idx": self.own, "points": r["points"], "normals": r["normals"]}
+        for key, v in (r["outputs"] or {}).items():
+            arrays["outputs." + key] = v
+        _write(path, **arrays)
+        self.tile = None
+        return {"tile": self.t, "path": path, "rows": len(self.own), "halo": self.width,
+                "points": self.gathered, "valid": bool(r["valid"].all())}
+
+
+def partial_sum_finite(parts, a: int, b: int, carry):
+    """:func:`partial_sum` over a cloud with holes: ``carry = (sum, count)`` continued with the
+    square roots of the nearest squared distances of the caller rows ``a .. b`` that have one
+    (holes and points without a neighbour are NaN or absent), added one by one in caller
+    order as the library's spacing estimate adds them."""
+    x = np.full(b - a, np.nan)
+    for p in parts:
+        idx = np.load(p["path"] + ".idx.npy", mmap_mode="r")
+        i, j = np.searchsorted(idx, [a, b])
+        if j > i:
+            near = np.load(p["path"] + ".nearest.npy", mmap_mode="r")
+            x[np.asarray(idx[i:j]) - a] = near[i:j]
+    x = np.sqrt(x[~np.isnan(x)])
+    acc = np.add.accumulate(np.concatenate([[carry[0]], x]))
+    return float(acc[-1]), carry[1] + len(x)

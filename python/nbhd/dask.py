@@ -34,7 +34,8 @@ from . import _tiles
 from ._tiles import Spec, Tile, piece_path
 
 __all__ = [
-    "TiledCloud", "TileJob", "TileResult", "AssembledTable", "tile_array", "tile_files",
+    "TiledCloud", "TileJob", "TileResult", "RobustJob", "RobustResult", "AssembledTable",
+    "tile_array", "tile_files",
     "open_store",
 ]
 
@@ -60,15 +61,27 @@ def _grid(n, lo, hi, points_per_tile):
     return [max(1, int(round(e / side))) if on else 1 for e, on in zip(ext, live)]
 
 
-def _bucket(chunk, start, lo, hi, grid, store, c):
+def _holes_path(store, c):
+    return os.path.join(store, f"holes_c{c:06d}.npz")
+
+
+def _bucket(chunk, start, lo, hi, grid, store, c, skip=False):
     """Task: the points of one input chunk sorted into grid tiles, one piece file per
-    (chunk, tile); returns each piece's tile, count and tight box."""
+    (chunk, tile); returns each piece's tile, count and tight box, and the chunk's holes file
+    or None. Rows with a non-finite coordinate are refused, or with ``skip`` written to the
+    chunk's holes file (their caller indices and rows) and left out of every tile."""
     pts = np.asarray(chunk)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise ValueError(f"points must be an (n, 3) array, chunk {c} is {pts.shape}")
-    if not np.all(np.isfinite(pts)):
-        bad = int(np.flatnonzero(~np.all(np.isfinite(pts), axis=1))[0]) + start
-        raise ValueError(f"point {bad} has a non-finite coordinate")
+    finite = np.all(np.isfinite(pts), axis=1)
+    ids = np.arange(start, start + len(pts), dtype=np.int64)
+    hole_file = None
+    if not finite.all():
+        if not skip:
+            raise ValueError(f"point {int(ids[~finite][0])} has a non-finite coordinate")
+        hole_file = _holes_path(store, c)
+        np.savez(hole_file, idx=ids[~finite], pts=pts[~finite])
+        pts, ids = pts[finite], ids[finite]
     lo = np.asarray(lo, np.float64)
     size = (np.asarray(hi, np.float64) - lo) / np.asarray(grid)
     size[size == 0] = 1.0
@@ -86,9 +99,9 @@ def _bucket(chunk, start, lo, hi, grid, store, c):
         base = piece_path(store, c, t)
         p = pts[sel]
         np.save(base + ".pts.npy", p)
-        np.save(base + ".idx.npy", sel.astype(np.int64) + start)
+        np.save(base + ".idx.npy", ids[sel])
         out.append((t, len(sel), p.min(axis=0).tolist(), p.max(axis=0).tolist(), c))
-    return out
+    return out, hole_file
 
 
 def _ingest(path, i, store, dtype):
@@ -105,12 +118,18 @@ def _ingest(path, i, store, dtype):
     return len(pts), pts.min(axis=0).tolist(), pts.max(axis=0).tolist(), out
 
 
-def tile_array(points, store, *, points_per_tile=250_000, grid=None):
+def tile_array(points, store, *, points_per_tile=250_000, grid=None, non_finite="reject"):
     """Cuts a Dask array ``(n, 3)`` (float32 or float64; rows in any chunks) into spatial tiles
     written under the directory ``store``: one pass for the bounding box, one task per chunk
     sorting its points into tiles. ``grid`` (tiles per axis) overrides ``points_per_tile``.
-    Returns the :class:`TiledCloud`."""
+    A row with a NaN or infinite coordinate is refused (``non_finite="reject"``) or kept aside
+    as a hole (``"skip"``: only :meth:`TiledCloud.smooth_robust` takes such a cloud, and skips
+    the holes as ``nbhd.smooth_robust(..., non_finite="skip")`` does). Returns the
+    :class:`TiledCloud`."""
     import dask.array as da
+
+    if non_finite not in ("reject", "skip"):
+        raise ValueError(f"unknown non_finite {non_finite!r}; expected 'reject' or 'skip'")
 
     points = da.asarray(points)
     if points.ndim != 2 or points.shape[1] != 3:
@@ -122,16 +141,29 @@ def tile_array(points, store, *, points_per_tile=250_000, grid=None):
     n = int(points.shape[0])
     if n < 2:
         raise ValueError("a tiled cloud needs at least two points")
-    lo, hi, big = dask.compute(points.min(axis=0), points.max(axis=0), abs(points).max())
+    if non_finite == "skip":
+        # the box and the scale of the finite rows
+        finite = da.isfinite(points).all(axis=1)[:, None]
+        lo, hi, big = dask.compute(
+            da.where(finite, points, np.inf).min(axis=0),
+            da.where(finite, points, -np.inf).max(axis=0),
+            da.where(finite, abs(points), 0).max())
+        if not np.all(np.isfinite(lo)):
+            raise ValueError("a tiled cloud needs at least two finite points")
+    else:
+        lo, hi, big = dask.compute(points.min(axis=0), points.max(axis=0), abs(points).max())
     lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
     grid = list(grid) if grid is not None else _grid(n, lo, hi, points_per_tile)
     starts = np.concatenate([[0], np.cumsum(points.chunks[0])])
     blocks = points.to_delayed().ravel()
     tasks = [
-        dask.delayed(_bucket)(b, int(starts[c]), lo.tolist(), hi.tolist(), grid, store, c)
+        dask.delayed(_bucket)(b, int(starts[c]), lo.tolist(), hi.tolist(), grid, store, c,
+                              non_finite == "skip")
         for c, b in enumerate(blocks)
     ]
-    pieces = dask.compute(*tasks)
+    done = dask.compute(*tasks)
+    pieces = [p for p, _ in done]
+    holes = [h for _, h in done if h is not None]
     tiles = [Tile([0.0] * 3, [0.0] * 3, 0, t) for t in range(int(np.prod(grid)))]
     for chunk in pieces:  # chunks in order: a tile's pieces ascend in caller index
         for t, count, plo, phi, c in chunk:
@@ -143,7 +175,8 @@ def tile_array(points, store, *, points_per_tile=250_000, grid=None):
                 tile.hi = np.maximum(tile.hi, phi).tolist()
             tile.count += count
             tile.chunks.append(c)
-    spec = Spec(n, np.dtype(points.dtype).name, [t for t in tiles if t.count], float(big), store)
+    spec = Spec(n, np.dtype(points.dtype).name, [t for t in tiles if t.count], float(big), store,
+                holes)
     return TiledCloud(spec, store)
 
 
@@ -176,7 +209,8 @@ def open_store(store):
     with open(os.path.join(store, "cloud.json")) as f:
         d = json.load(f)
     tiles = [Tile(**t) for t in d["tiles"]]
-    return TiledCloud(Spec(d["n"], d["dtype"], tiles, d["scale"], store), store)
+    spec = Spec(d["n"], d["dtype"], tiles, d["scale"], store, d.get("holes", []))
+    return TiledCloud(spec, store)
 
 
 def _first_halo(spec, t, k):
@@ -223,7 +257,7 @@ class TiledCloud:
     def save(self):
         """Writes ``cloud.json`` in the store (:func:`open_store` reads it back)."""
         d = {"n": self.spec.n, "dtype": self.spec.dtype, "scale": self.spec.scale,
-             "tiles": [asdict(t) for t in self.spec.tiles]}
+             "tiles": [asdict(t) for t in self.spec.tiles], "holes": self.spec.holes}
         with open(os.path.join(self.store, "cloud.json"), "w") as f:
             json.dump(d, f)
 
@@ -231,6 +265,9 @@ class TiledCloud:
         """The tile list as one node of the graph, which every tile task depends on: shipped
         to a worker once, not copied into every task (a task holding its own copy of a list of
         thousands of tiles, with hundreds of tasks queued on a worker, fills its memory)."""
+        if self.spec.holes:
+            raise ValueError("this cloud has holes (tile_array(non_finite='skip')): only "
+                             "smooth_robust skips them")
         return dask.delayed(self.spec, pure=False, traverse=False)
 
     def _out(self, out, name):
@@ -373,7 +410,7 @@ class TiledCloud:
         and, with ``outputs``, ``outputs.<name>``, identical to the last bit. Halo: steps·ε
         (a step reads only the point's own row, fixed on the input), plus ε for the outputs.
         ``update_neighbors`` is not offered (rows follow the moving points; no halo is proven
-        for it), nor the robust mode (python/DASK.md says why)."""
+        for it); the robust mode is :meth:`smooth_robust`."""
         self._orientation(orientation)
         if steps is None:
             steps = 2 if method == "isotropic" else 3
@@ -389,6 +426,174 @@ class TiledCloud:
                   orientation_point=tuple(orientation_point), outputs=outputs, threads=threads)
         halo = eps * (steps + (1 if outputs else 0))
         return self._geometry("smooth", halo, kw, out, compute, eps)
+
+
+    def smooth_robust(self, *, k=24, k_plane=48, epsilon=12.0, epsilon_units="relative",
+                      max_iterations=10, tolerance=0.05, inlier_width=5.0, feature_angle=20.0,
+                      tau=1.0, noise_scale=None, orientation="unoriented",
+                      orientation_point=(0.0, 0.0, 0.0), non_finite="reject", outputs=False,
+                      out=None, client=None):
+        """``nbhd.smooth_robust(points, ...)`` on the tiles, identical to the last bit: the
+        arrays ``points``, ``normals`` and with ``outputs`` ``outputs.<name>``, and the run's
+        figures (``noise``, ``moved``, ``dimension``, ``wide_iterations``, ``spacing``,
+        ``epsilon``, ``lambda``, ``min_neighbors``) in :meth:`RobustResult.assemble`.
+
+        Needs a ``distributed`` client (``client``, default the current one): each tile is an
+        actor that keeps its rows on its worker for the whole run; the client drives the rounds
+        of ``nbhd.RobustRun`` and reduces every round's medians exactly
+        (``nbhd.RankSearch`` over the tiles' values, never gathered). A cloud cut with
+        ``non_finite="skip"`` has holes: they are refused here unless ``non_finite="skip"``,
+        and then keep their rows with NaN normals and outputs, as on one machine."""
+        self._orientation(orientation)
+        if non_finite not in ("reject", "skip"):
+            raise ValueError(f"unknown non_finite {non_finite!r}; expected 'reject' or 'skip'")
+        if self.spec.holes and non_finite == "reject":
+            first = min(int(np.load(h)["idx"][0]) for h in self.spec.holes)
+            raise ValueError(f"point {first} has a non-finite coordinate")
+        if client is None:
+            import distributed
+
+            client = distributed.get_client()
+        options = dict(k=k, k_plane=k_plane, epsilon=epsilon, epsilon_units=epsilon_units,
+                       max_iterations=max_iterations, tolerance=tolerance,
+                       inlier_width=inlier_width, feature_angle=feature_angle, tau=tau,
+                       noise_scale=noise_scale, orientation=orientation,
+                       orientation_point=tuple(orientation_point), outputs=outputs)
+        return RobustJob(self, options, self._out(out, "robust"), client).run()
+
+
+def _first_robust_halo(spec, t, k_plane):
+    """The first halo of a robust tile: three hops (a step's reach, ``robust/reach.rs``) of the
+    side of a square holding ``k_plane`` points if the tile's points covered its box's two
+    largest extents evenly (a surface: a terrain, a facade). The library checks every owned
+    point's reach; a tile that fails is gathered again with twice the halo."""
+    tile = spec.tiles[t]
+    ext = np.sort(np.maximum(np.asarray(tile.hi) - np.asarray(tile.lo), 0))[::-1][:2]
+    live = ext[ext > 0]
+    if len(live) == 0:
+        return max(spec.scale * 1e-6, 1e-12)
+    return float(3.0 * (np.prod(live) * k_plane / tile.count) ** (1.0 / len(live)))
+
+
+def _halo_ok(part):
+    """Whether a tile's part of a round holds the one-machine values for every owned point
+    (the library's check); otherwise the tile is gathered again with twice the halo."""
+    return part["valid"]
+
+
+def _merge_counts(counts):
+    import nbhd
+
+    merged = nbhd.DigitCounts.from_bytes(counts[0])
+    for c in counts[1:]:
+        merged.merge(nbhd.DigitCounts.from_bytes(c))
+    return merged
+
+
+def _exact_rank(actors, parts, rank):
+    """The value of rank ``rank`` among the values of the tiles' last round, exactly
+    (``nbhd.RankSearch``): the first digit counts come with the round's parts; each further
+    round asks every tile for its counts in the bucket found so far, and once that bucket is
+    small, for its values in it."""
+    import nbhd
+
+    search = nbhd.RankSearch(rank)
+    search.feed_counts(_merge_counts([p["counts"] for p in parts]))
+    while True:
+        step, value = search.step()
+        if step == "found":
+            return value
+        state = search.to_bytes()
+        if step == "counts":
+            futures = [a.digit_counts(state) for a in actors]
+            search.feed_counts(_merge_counts([f.result() for f in futures]))
+        else:
+            futures = [a.matching_values(state) for a in actors]
+            search.feed_values(np.concatenate([f.result() for f in futures]))
+
+
+class RobustJob:
+    """One robust run on a tiled cloud (:meth:`TiledCloud.smooth_robust`), driven from the
+    client: ``nbhd.RobustRun`` decides every round; each tile is a
+    :class:`nbhd._tiles.RobustTileActor` on a worker. ``status`` says where the run is."""
+
+    def __init__(self, cloud, options, out, client):
+        self.cloud, self.options, self.out, self.client = cloud, options, out, client
+        # rounds taken, halos grown, and owned values used although their tile said they are
+        # not the cloud's (none unless _halo_ok is overridden)
+        self.status = {"round": None, "generation": 0, "grown": 0, "rounds": 0, "invalid": 0}
+
+    def _actors(self):
+        spec = self.cloud.spec
+        futures = [
+            self.client.submit(_tiles.RobustTileActor, spec, t,
+                               _first_robust_halo(spec, t, self.options["k_plane"]),
+                               self.options, self.out, actor=True, pure=False)
+            for t in range(self.cloud.tiles)
+        ]
+        return [f.result() for f in futures]
+
+    def _each(self, call, generation):
+        """``call(actor)`` on every tile; a tile whose part fails :func:`_halo_ok` is gathered
+        again with twice the halo and asked again."""
+        parts = [f.result() for f in [call(a) for a in self.actors]]
+        for t, part in enumerate(parts):
+            while not _halo_ok(part):
+                self.actors[t].grow(generation).result()
+                self.status["grown"] += 1
+                part = call(self.actors[t]).result()
+            parts[t] = part
+            self.status["invalid"] += part["invalid"]
+        return parts
+
+    def _spacing(self):
+        """h as ``smooth_robust`` computes it: every owned point's nearest squared distance
+        (the tiles' plain rows), summed in caller order by a chain of tasks."""
+        parts = self._each(lambda a: a.nearest(), 0)
+        n, block, carry = self.cloud.n, 4_000_000, (0.0, 0)
+        for a in range(0, n, block):
+            carry = dask.delayed(_tiles.partial_sum_finite, pure=False)(
+                parts, a, min(a + block, n), carry)
+        total, count = self.client.compute(carry).result()
+        return total / count if count else 0.0
+
+    def run(self):
+        import nbhd
+
+        self.actors = self._actors()
+        run = nbhd.RobustRun(self._spacing(), **self.options)
+        while (r := run.round())["kind"] != "finish":
+            self.status.update(round=r["kind"], generation=r["generation"])
+            parts = self._each(lambda a, r=r: a.round(r), r["generation"])
+            total = sum(p["n_values"] for p in parts)
+            median = _exact_rank(self.actors, parts, run.median_rank(total)) if total else None
+            moved = nbhd.ExactSum()
+            for p in parts:
+                moved.merge(nbhd.ExactSum.from_bytes(p["moved_sq"]))
+            run.feed(r, count=sum(p["count"] for p in parts),
+                     max_len=max(p["max_len"] for p in parts),
+                     min_narrow=min(p["min_narrow"] for p in parts),
+                     median=median, moved_sq=moved)
+            self.status["rounds"] += 1
+            if r["kind"] == "step":
+                self._drop_generation(r["generation"])
+        self.status.update(round="finish", generation=r["generation"])
+        futures = [a.finish(r, os.path.join(self.out, f"tile_{t:06d}.npz"))
+                   for t, a in enumerate(self.actors)]
+        parts = [f.result() for f in futures]
+        self._drop_generation(r["generation"])
+        self.actors = None
+        result = RobustResult(self.cloud.spec, parts, run.report())
+        result.status = self.status
+        return result
+
+    def _drop_generation(self, g):
+        """Generation ``g``'s files, read by no later round."""
+        d = os.path.join(self.out, f"gen_{g:04d}")
+        if os.path.isdir(d):
+            for f in os.listdir(d):
+                os.remove(os.path.join(d, f))
+            os.rmdir(d)
 
 
 class TileJob:
@@ -500,3 +705,32 @@ class TileResult:
         if sq is None:
             sq = np.empty(0, np.float64)
         return AssembledTable(offsets, indices, sq)
+
+
+class RobustResult(TileResult):
+    """The result files of :meth:`TiledCloud.smooth_robust` and the run's figures
+    (``report``); :meth:`assemble` gives the dict ``nbhd.smooth_robust`` returns."""
+
+    def __init__(self, spec, parts, report):
+        super().__init__("arrays", spec.n, parts)
+        self.holes = spec.holes
+        self.report = report
+        self.epsilon = report["epsilon"]
+
+    def assemble(self):
+        import nbhd
+
+        arrays = super().assemble()
+        out = dict(self.report)
+        if self.holes:
+            holes = [np.load(h) for h in self.holes]
+            idx = np.concatenate([h["idx"] for h in holes])
+            arrays["points"][idx] = np.concatenate([h["pts"] for h in holes])
+            arrays["normals"][idx] = np.nan
+            if "outputs.normals" in arrays:
+                for key, v in nbhd._nbhd._skipped_outputs(len(idx)).items():
+                    arrays["outputs." + key][idx] = v
+        out["points"] = arrays.pop("points")
+        out["normals"] = arrays.pop("normals")
+        out["outputs"] = {k[len("outputs."):]: v for k, v in arrays.items()} or None
+        return out

@@ -15,7 +15,10 @@ use crate::errors::OrRaise;
 use crate::options;
 
 /// The per-point outputs as a dict of arrays (names as in `nbhd::smooth::PointOutput`).
-fn outputs_dict<'py>(py: Python<'py>, out: &[PointOutput]) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn outputs_dict<'py>(
+    py: Python<'py>,
+    out: &[PointOutput],
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let col = |f: fn(&PointOutput) -> f64| vec1(py, out.iter().map(f).collect::<Vec<f64>>());
     let vecs =
@@ -322,8 +325,58 @@ pub fn smooth_robust<'py>(
     outputs: bool,
     threads: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let opts = robust_options(
+        k,
+        k_plane,
+        epsilon,
+        epsilon_units,
+        max_iterations,
+        tolerance,
+        inlier_width,
+        feature_angle,
+        tau,
+        noise_scale,
+        orientation,
+        orientation_point,
+        non_finite,
+        outputs,
+        threads,
+    )?;
+    let pts = dvec3s(points)?;
+    let r = py
+        .detach(|| core::smooth_robust_report(&pts, &opts, &mut |_, _| true))
+        .or_raise()?;
+    let d = result_dict(py, &r.result, true)?;
+    d.set_item("normals", dvec3_array(py, &r.normals)?)?;
+    d.set_item("noise", vec1(py, r.noise.clone()))?;
+    d.set_item("moved", vec1(py, r.moved.clone()))?;
+    d.set_item("dimension", vec1(py, r.dimension.clone()))?;
+    d.set_item("wide_iterations", r.wide_iterations)?;
+    Ok(d)
+}
+
+/// The options of the robust mode from the keywords of `smooth_robust` (also those of the tiled
+/// run's `RobustRun` and `RobustTile`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn robust_options(
+    k: usize,
+    k_plane: usize,
+    epsilon: f64,
+    epsilon_units: &str,
+    max_iterations: usize,
+    tolerance: f64,
+    inlier_width: f64,
+    feature_angle: f64,
+    tau: f64,
+    noise_scale: Option<bool>,
+    orientation: &str,
+    orientation_point: [f64; 3],
+    non_finite: &str,
+    outputs: bool,
+    threads: usize,
+) -> PyResult<RobustOptions> {
     let defaults = RobustOptions::default();
-    let opts = RobustOptions {
+    Ok(RobustOptions {
         k,
         k_plane,
         epsilon: options::length(epsilon, epsilon_units)?,
@@ -337,16 +390,5 @@ pub fn smooth_robust<'py>(
         outputs,
         non_finite: options::non_finite(non_finite)?,
         threads,
-    };
-    let pts = dvec3s(points)?;
-    let r = py
-        .detach(|| core::smooth_robust_report(&pts, &opts, &mut |_, _| true))
-        .or_raise()?;
-    let d = result_dict(py, &r.result, true)?;
-    d.set_item("normals", dvec3_array(py, &r.normals)?)?;
-    d.set_item("noise", vec1(py, r.noise.clone()))?;
-    d.set_item("moved", vec1(py, r.moved.clone()))?;
-    d.set_item("dimension", vec1(py, r.dimension.clone()))?;
-    d.set_item("wide_iterations", r.wide_iterations)?;
-    Ok(d)
+    })
 }

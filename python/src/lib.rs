@@ -11,6 +11,7 @@ mod geometry;
 mod index;
 mod io;
 mod options;
+mod robust_tiles;
 mod tree;
 
 use pyo3::prelude::*;
@@ -35,6 +36,12 @@ fn _nbhd(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(geometry::curvatures, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::smooth, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::smooth_robust, m)?)?;
+    m.add_class::<robust_tiles::PyRobustRun>()?;
+    m.add_class::<robust_tiles::PyRobustTile>()?;
+    m.add_class::<robust_tiles::PyRankSearch>()?;
+    m.add_class::<robust_tiles::PyDigitCounts>()?;
+    m.add_class::<robust_tiles::PyExactSum>()?;
+    m.add_function(wrap_pyfunction!(robust_tiles::_skipped_outputs, m)?)?;
     m.add_function(wrap_pyfunction!(filter::voxel_grid, m)?)?;
     m.add_function(wrap_pyfunction!(io::read, m)?)?;
     m.add_function(wrap_pyfunction!(io::write, m)?)?;

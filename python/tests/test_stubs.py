@@ -109,6 +109,34 @@ def test_result_dicts_have_the_stubs_keys(tmp_path: pathlib.Path) -> None:
     assert normals.shape == pts.shape and variation.shape == (len(pts),) and flags.dtype == np.uint8
 
 
+def test_robust_step_api_returns_what_the_stubs_say() -> None:
+    # one tile that owns every point (an unbounded region) driven round by round: the dicts
+    # have the stubs' keys, and the run is smooth_robust's, bit for bit
+    fields = stub_typed_dicts()
+    pts = sphere(800)
+    inf = float("inf")
+    tile = nbhd.RobustTile(pts, [True] * len(pts), [-inf] * 3, [inf] * 3, max_iterations=2)
+    near, valid = tile.nearest()
+    assert bool(valid.all())
+    run = nbhd.RobustRun(nbhd.RobustRun.spacing_of_nearest(near), max_iterations=2)
+    while (r := run.round())["kind"] != "finish":
+        assert set(r) <= fields["RobustRound"]
+        part = tile.round(r)
+        assert set(part) == fields["RobustPart"]
+        values: npt.NDArray[np.float64] = np.sort(part["values"])
+        median = float(values[nbhd.RobustRun.median_rank(len(values))]) if len(values) else None
+        run.feed(r, count=part["count"], max_len=part["max_len"], min_narrow=part["min_narrow"],
+                 median=median, moved_sq=part["moved_sq"])
+    done = tile.finish(r)
+    assert set(done) == fields["RobustTileResult"]
+    report = run.report()
+    assert set(report) == fields["RobustRunReport"]
+    ref = nbhd.smooth_robust(pts, max_iterations=2)
+    assert done["points"].tobytes() == ref["points"].tobytes()
+    assert done["normals"].tobytes() == ref["normals"].tobytes()
+    assert report["noise"].tobytes() == ref["noise"].tobytes()
+    assert report["spacing"] == ref["spacing"] and report["lambda"] == ref["lambda"]
+
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_tree_type_follows_the_array(dtype: type[np.floating[npt.NBitBase]]) -> None:
     tree = nbhd.KdTree(sphere(100).astype(dtype))

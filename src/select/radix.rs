@@ -172,6 +172,53 @@ impl DigitCounts {
             .iter()
             .fold(0u64, |s, &(_, c)| s.saturating_add(c))
     }
+
+    /// The counts as little-endian bytes, for sending a part's counts to the process that
+    /// merges them: the prefix (8 bytes), the fixed bits (4), then 10 bytes a digit (2 of the
+    /// digit, 8 of its count). [`DigitCounts::from_bytes`] reads them back.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(12 + 10 * self.counts.len());
+        out.extend_from_slice(&self.prefix.to_le_bytes());
+        out.extend_from_slice(&self.fixed_bits.to_le_bytes());
+        for &(d, c) in &self.counts {
+            out.extend_from_slice(&d.to_le_bytes());
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+        out
+    }
+
+    /// Reads [`DigitCounts::to_bytes`].
+    ///
+    /// # Errors
+    ///
+    /// [`NbhdError::InvalidOption`] for bytes of another length, a prefix wider than its fixed
+    /// bits, fixed bits that leave no digit, and digits not ascending or counts of 0.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        if bytes.len() < 12 || (bytes.len() - 12) % 10 != 0 {
+            return Err(inconsistent("digit count bytes of a wrong length"));
+        }
+        let prefix = u64::from_le_bytes(bytes[..8].try_into().expect("8 bytes"));
+        let fixed_bits = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+        check_prefix(prefix, fixed_bits)?;
+        let counts: Vec<(u16, u64)> = bytes[12..]
+            .chunks_exact(10)
+            .map(|c| {
+                (
+                    u16::from_le_bytes(c[..2].try_into().expect("2 bytes")),
+                    u64::from_le_bytes(c[2..].try_into().expect("8 bytes")),
+                )
+            })
+            .collect();
+        let ascending = counts.windows(2).all(|w| w[0].0 < w[1].0);
+        if !ascending || counts.iter().any(|&(_, c)| c == 0) {
+            return Err(inconsistent("digit counts not ascending or empty"));
+        }
+        Ok(Self {
+            prefix,
+            fixed_bits,
+            counts,
+        })
+    }
 }
 
 /// The driver's state of one exact selection across parts: the rank still sought inside the
@@ -214,6 +261,62 @@ impl<T: OrderKey> RankSearch<T> {
     }
 
     /// Whether the key of `v` lies in the current bucket.
+    /// The search's state as 45 little-endian bytes, for sending it to the parts (they count
+    /// and match with it) or saving a driver: the key's bits (1 byte), the rank, the prefix, the
+    /// fixed bits (4), the bucket's size and the found key (each a flag byte and 8 bytes, 0
+    /// when unset). [`RankSearch::from_bytes`] reads them back.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(SEARCH_BYTES);
+        out.push(T::BITS as u8);
+        out.extend_from_slice(&self.rank.to_le_bytes());
+        out.extend_from_slice(&self.prefix.to_le_bytes());
+        out.extend_from_slice(&self.fixed_bits.to_le_bytes());
+        for v in [self.bucket, self.found] {
+            out.push(u8::from(v.is_some()));
+            out.extend_from_slice(&v.unwrap_or(0).to_le_bytes());
+        }
+        out
+    }
+
+    /// Reads [`RankSearch::to_bytes`].
+    ///
+    /// # Errors
+    ///
+    /// [`NbhdError::InvalidOption`] for bytes of another length or value type, and a state no
+    /// search reaches (a prefix wider than its bits, a rank outside the bucket).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        if bytes.len() != SEARCH_BYTES || u32::from(bytes[0]) != T::BITS {
+            return Err(inconsistent("rank search bytes of another length or type"));
+        }
+        let word = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
+        let option = |at: usize| match bytes[at] {
+            0 => Ok(None),
+            1 => Ok(Some(word(at + 1))),
+            _ => Err(inconsistent("rank search bytes with a bad flag")),
+        };
+        let fixed_bits = u32::from_le_bytes(bytes[17..21].try_into().expect("4 bytes"));
+        let (prefix, bucket, found) = (word(9), option(21)?, option(30)?);
+        if fixed_bits > T::BITS
+            || (fixed_bits < T::BITS && check_prefix(prefix, fixed_bits).is_err())
+        {
+            return Err(inconsistent("rank search bytes with a bad prefix"));
+        }
+        let rank = word(1);
+        if bucket.is_some_and(|n| rank >= n) || (fixed_bits > 0) != bucket.is_some() {
+            return Err(inconsistent(
+                "rank search bytes with a rank outside its bucket",
+            ));
+        }
+        Ok(Self {
+            rank,
+            prefix,
+            fixed_bits,
+            bucket,
+            found,
+            _value: std::marker::PhantomData,
+        })
+    }
+
     #[inline]
     fn in_bucket(&self, key: u64) -> bool {
         self.fixed_bits == 0 || key >> (T::BITS - self.fixed_bits) == self.prefix
@@ -355,6 +458,21 @@ impl<T: OrderKey> RankSearch<T> {
             _ => Ok(()),
         }
     }
+}
+
+/// Bytes of [`RankSearch::to_bytes`].
+const SEARCH_BYTES: usize = 1 + 8 + 8 + 4 + 9 + 9;
+
+/// Refuses a prefix of more bits than `fixed_bits`, or fixed bits that leave no 16-bit digit of
+/// a 64-bit key (or are not whole digits).
+fn check_prefix(prefix: u64, fixed_bits: u32) -> Result<()> {
+    if fixed_bits % DIGIT_BITS != 0
+        || fixed_bits + DIGIT_BITS > 64
+        || (fixed_bits < 64 && prefix >> fixed_bits != 0)
+    {
+        return Err(inconsistent("a prefix wider than its bits"));
+    }
+    Ok(())
 }
 
 fn inconsistent(reason: &str) -> NbhdError {

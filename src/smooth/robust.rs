@@ -118,8 +118,12 @@ mod step;
 mod tile;
 
 pub use reach::Region;
-pub use run::{median, Reduced, RobustRun, Round, RowSet};
+pub use run::{median, median_rank, Reduced, RobustRun, Round, RowSet};
 pub use tile::{reduce, RobustTile, TilePart};
+
+/// The exact selection across tiles that a driver running the tiles elsewhere reduces the
+/// medians with (`select/radix.rs`; [`reduce`] runs it in one process).
+pub use crate::select::radix::{DigitCounts, RankSearch, RankStep};
 
 /// The factor of `k` and `k_plane` while the cloud reads as a ball of noise
 /// ([`RobustOptions::noise_scale`], `robust/scales.rs`).

@@ -237,3 +237,54 @@ fn inconsistent_rounds_are_refused() {
     s.feed_values(&values).unwrap();
     assert!(matches!(s.step(), RankStep::Found(v) if v == at(9_999)));
 }
+
+#[test]
+fn a_search_and_its_counts_travel_as_bytes() {
+    let values: Vec<f64> = (0..20_000u64)
+        .map(|i| ((i * 7919) % 10_007) as f64 * 0.25 - 100.0)
+        .collect();
+    let parts: Vec<&[f64]> = values.chunks(3000).collect();
+    let travel = |c: DigitCounts| DigitCounts::from_bytes(&c.to_bytes()).unwrap();
+    for rank in [0, 1, 9_999, 19_999] {
+        let mut search = RankSearch::<f64>::new(rank);
+        let found = loop {
+            // the driver sends its state to the parts every round
+            search = RankSearch::from_bytes(&search.to_bytes()).unwrap();
+            match search.step() {
+                RankStep::Found(v) => break v,
+                RankStep::Counts => {
+                    let mut merged = travel(search.digit_counts(&[]));
+                    for p in &parts {
+                        merged.merge(&travel(search.digit_counts(p))).unwrap();
+                    }
+                    search.feed_counts(&merged).unwrap();
+                }
+                RankStep::Values => {
+                    let v: Vec<f64> = parts
+                        .iter()
+                        .flat_map(|p| search.matching_values(p))
+                        .collect();
+                    search.feed_values(&v).unwrap();
+                }
+            }
+        };
+        let direct = select_in_parts(&parts, rank).unwrap();
+        assert_eq!(found.to_bits(), direct.to_bits());
+    }
+    // another value type, lengths, flags and prefixes no search reaches are refused
+    let bytes = RankSearch::<f64>::new(3).to_bytes();
+    assert!(RankSearch::<f32>::from_bytes(&bytes).is_err());
+    assert!(RankSearch::<f64>::from_bytes(&bytes[1..]).is_err());
+    let mut flag = bytes.clone();
+    flag[21] = 2;
+    assert!(RankSearch::<f64>::from_bytes(&flag).is_err());
+    let mut bits = bytes;
+    bits[17] = 7;
+    assert!(RankSearch::<f64>::from_bytes(&bits).is_err());
+    assert!(DigitCounts::from_bytes(&[0; 11]).is_err());
+    let mut counts = RankSearch::<f64>::new(0)
+        .digit_counts(&[1.0, 2.0])
+        .to_bytes();
+    counts.extend_from_within(12..22);
+    assert!(DigitCounts::from_bytes(&counts).is_err(), "digits repeated");
+}

@@ -118,6 +118,19 @@ pub struct Reduced {
     pub moved_sq: ExactSum,
 }
 
+impl Reduced {
+    /// Sets the median `value` of the values the tiles gave for `round`: the distance ratios'
+    /// ([`Round::Start`], [`Round::Ratio`]) or the plane distances' ([`Round::Measure`]); other
+    /// rounds have none.
+    pub fn set_median(&mut self, round: &Round, value: Option<f64>) {
+        match round {
+            Round::Start | Round::Ratio { .. } => self.ratio = value,
+            Round::Measure { .. } => self.residual = value,
+            _ => {}
+        }
+    }
+}
+
 /// Where a run is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Phase {
@@ -373,6 +386,12 @@ fn missing(what: &str) -> NbhdError {
     }
 }
 
+/// The rank of the run's medians among `count` values, ⌊count/2⌋ (0-based, in `total_cmp`
+/// order): the rank a driver that selects across parts asks for.
+pub fn median_rank(count: u64) -> u64 {
+    count / 2
+}
+
 /// The value of rank ⌊n/2⌋ of `values` in `f64::total_cmp` order (`None` when empty): the
 /// medians of the run taken over one slice, the same bits as `select::radix::select_in_parts`
 /// over any split of the values.
@@ -380,7 +399,7 @@ pub fn median(values: &mut [f64]) -> Option<f64> {
     if values.is_empty() {
         return None;
     }
-    let m = values.len() / 2;
+    let m = median_rank(values.len() as u64) as usize;
     values.select_nth_unstable_by(m, f64::total_cmp);
     Some(values[m])
 }

@@ -18,7 +18,7 @@
 use super::planes::{covariance_planes, plane_distance, plane_distances, selected_normals, Plane};
 use super::reach::{Reach, Region};
 use super::rows::Rows;
-use super::run::{median, Reduced, Round, RowSet};
+use super::run::{median, median_rank, Reduced, Round, RowSet};
 use super::scales;
 use super::step::step;
 use super::{robust_outputs, RobustOptions};
@@ -115,15 +115,11 @@ pub fn reduce(round: &Round, parts: &mut [TilePart]) -> Result<Reduced> {
             let n: usize = values.iter().map(|v| v.len()).sum();
             match n {
                 0 => None,
-                n => Some(select_in_parts(&values, n as u64 / 2)?),
+                n => Some(select_in_parts(&values, median_rank(n as u64))?),
             }
         }
     };
-    match round {
-        Round::Start | Round::Ratio { .. } => reduced.ratio = value,
-        Round::Measure { .. } => reduced.residual = value,
-        _ => {}
-    }
+    reduced.set_median(round, value);
     for p in parts.iter() {
         reduced.moved_sq.merge(&p.moved_sq);
     }
