@@ -3,6 +3,7 @@ results exactly: tables byte for byte, spacing, normals, curvatures and smoothed
 last bit, for float32 and float64, from a Dask array and from LAS/PLY tile files."""
 
 import concurrent.futures
+import time
 
 import numpy as np
 import pytest
@@ -163,6 +164,21 @@ def test_halos_grow_and_refusals(client, tmp_path):
         ndask.tile_array(da.from_array(bad, chunks=(2000, 3)), str(tmp_path / "bad"))
 
 
+def wait_until_forgotten(client, keys, timeout=60.0):
+    """Polls every worker (outside its busy thread, as ``Client.run`` does) until none of ``keys``
+    is still waiting, ready or running there."""
+    live = {"waiting", "ready", "constrained", "fetch", "flight", "executing", "resumed"}
+
+    def held(dask_worker):
+        tasks = dask_worker.state.tasks
+        return [k for k in keys if k in tasks and tasks[k].state in live]
+
+    deadline = time.monotonic() + timeout
+    while any(client.run(held).values()):
+        assert time.monotonic() < deadline, "cancelled tiles still held by a worker"
+        time.sleep(0.05)
+
+
 def test_progress_and_cancel(client, tmp_path):
     """compute=False: the job's futures (what distributed.progress draws) give the same result;
     cancelled before its tiles run, a job writes no file and the cluster stays usable."""
@@ -191,6 +207,9 @@ def test_progress_and_cancel(client, tmp_path):
                         compute=False)
     futures = job.submit()  # the current client
     job.cancel()
+    # The scheduler frees a cancelled task on the workers by a message of its own, which can arrive
+    # after the gate opens: wait until no worker holds one of the job's tiles ready to run.
+    wait_until_forgotten(client, [f.key for f in futures])
     gate.set()
     distributed.wait(holds)
     assert all(f.cancelled() for f in futures)
