@@ -2454,8 +2454,9 @@ nbhd_status nbhd_dynamic_boxsize(const nbhd_dynamic_tree *tree,
  * nbhd_tree_neighborhoods) holds the j > i in ascending order (not by distance), with the
  * pair's key in the distances (squared for the Euclidean metric, the distance for p = 1 and
  * infinity, the sum of |x_j|^p otherwise). `options` may be NULL; its `query` sets the
- * metric, eps (all pairs within radius / (1 + eps) and none beyond radius * (1 + eps)) and a
- * strict radius; `exclude_self` does not apply. Identical for any number of threads.
+ * metric, eps (every pair within radius * (1 + eps): inside scipy's contract, all within
+ * radius / (1 + eps) and none beyond radius * (1 + eps)) and a strict radius; `exclude_self`
+ * does not apply. Identical for any number of threads.
  *
  * On any error `*out_table` is set to NULL (if `out_table` is not NULL).
  *

@@ -17,6 +17,13 @@ export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
 # import name=pip requirement (dask and distributed: the tests of nbhd.dask on a LocalCluster)
 . scripts/python-env.sh
 nbhd_python_env maturin numpy scipy pytest "dask.array=dask[array]" distributed
+# scipy pinned: python/tests/test_scipy_suite.py runs this version's own k-d tree tests on
+# nbhd.spatial (its expected failure is that version's), beside scipy's run of them
+scipy_version=1.17.1
+if [ "$(python -c 'import scipy; print(scipy.__version__)')" != "$scipy_version" ]; then
+    echo "== installing scipy==$scipy_version into the Python environment"
+    python -m pip install --quiet --disable-pip-version-check "scipy==$scipy_version"
+fi
 
 # python/ is a Cargo workspace of its own, built in a target directory of its own: nbhd is also a
 # cdylib, so its release rlib's file name carries no hash (target/release/deps/libnbhd.rlib), and
@@ -42,4 +49,7 @@ step "pytest python/tests"
 # pytest empties at the start of each run, not in /tmp.
 python -m pytest -q -p no:cacheprovider --rootdir python --basetemp "$CARGO_TARGET_DIR/pytest" \
     python/tests
+
+step "scipy's own k-d tree tests on scipy: the baseline of python/tests/test_scipy_suite.py"
+(cd "$CARGO_TARGET_DIR" && python -m pytest -q -p no:cacheprovider --pyargs scipy.spatial.tests.test_kdtree)
 step_end

@@ -56,13 +56,15 @@ cli="$CARGO_TARGET_DIR/debug/nbhd"
         exit 1
     fi
     python -m pip install --quiet --disable-pip-version-check --only-binary :all: \
-        "$wheel" scipy pytest mypy
+        "$wheel" scipy==1.17.1 pytest mypy
     # from outside the repository: python/ would shadow the installed package
     (cd "$venv" && python -c 'import nbhd, numpy as np; t = nbhd.KdTree(np.eye(3)); print("== import nbhd:", nbhd.__file__, t.knn([0.0, 0.0, 0.0], 2)[0])')
     echo "== pytest python/tests against the wheel"
     python -m pytest -q -p no:cacheprovider --rootdir python --basetemp "$out/pytest" python/tests
     echo "== mypy --strict python/tests/test_stubs.py: its annotated use against the stubs"
     python -m mypy --strict python/tests/test_stubs.py
+    echo "== mypy --strict python/nbhd/spatial.py: the pure-Python scipy classes against the stubs"
+    (cd python && python -m mypy --strict nbhd/spatial.py)
     echo "== stubtest: python/nbhd/_nbhd.pyi against the compiled module"
     # from target/wheel: stubtest keeps its cache in .mypy_cache of the working directory
     (cd "$out" && python -m mypy.stubtest --concise --allowlist "$root/python/tests/stubtest-allowlist.txt" nbhd._nbhd)

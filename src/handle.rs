@@ -31,9 +31,9 @@ use crate::filter::{
 use crate::index::{IndexRows, NeighborIndex, PairWeights, Spacing};
 use crate::points::PointsView;
 use crate::query::{NeighborSearch, NeighborhoodSpec};
-use crate::scalar::ScalarType;
+use crate::scalar::{Scalar, ScalarType};
 use crate::table::{NeighborTable, TableOptions};
-use crate::tree::{BuildOptions, KdTree, Persist, SavedTreeInfo, TreeStats};
+use crate::tree::{BuildOptions, KdTree, NodeInfo, Persist, SavedTreeInfo, TreeStats};
 
 /// Runs `$body` with `$a` and `$b` bound to the typed indexes inside two [`AnyIndex`] of the
 /// same scalar type (any flavours) and `$T` to that type; indexes of different scalar types
@@ -309,6 +309,36 @@ impl AnyIndex {
         match self {
             AnyIndex::StaticF32(t) => Some(t.tree_order()),
             AnyIndex::StaticF64(t) => Some(t.tree_order()),
+            _ => None,
+        }
+    }
+
+    /// The nodes of a static tree in preorder (`KdTree::nodes`), splits as `f64` (`None` for a
+    /// growing one: a forest of trees that merge as it grows has no one node list).
+    pub fn nodes(&self) -> Option<Vec<NodeInfo<f64>>> {
+        fn widen<T: Scalar>(n: NodeInfo<T>) -> NodeInfo<f64> {
+            NodeInfo {
+                split: n.split.to_f64(),
+                level: n.level,
+                split_dim: n.split_dim,
+                start: n.start,
+                end: n.end,
+                children: n.children,
+            }
+        }
+        match self {
+            AnyIndex::StaticF32(t) => Some(t.nodes().into_iter().map(widen).collect()),
+            AnyIndex::StaticF64(t) => Some(t.nodes().into_iter().map(widen).collect()),
+            _ => None,
+        }
+    }
+
+    /// Per-node sums of `weights` of a static tree (`KdTree::node_weights`; `None` for a
+    /// growing one).
+    pub fn node_weights(&self, weights: &[f64]) -> Option<Result<Vec<f64>>> {
+        match self {
+            AnyIndex::StaticF32(t) => Some(t.node_weights(weights)),
+            AnyIndex::StaticF64(t) => Some(t.node_weights(weights)),
             _ => None,
         }
     }

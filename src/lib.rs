@@ -55,7 +55,7 @@ pub use scalar::{Scalar, ScalarType};
 pub use select::radix::{select_in_parts, DigitCounts, OrderKey, RankSearch, RankStep};
 pub use sum::ExactSum;
 pub use table::{NeighborTable, TableOptions};
-pub use tree::{BuildOptions, KdTree, MedianAlgorithm, Persist, PivotPolicy, TreeStats};
+pub use tree::{BuildOptions, KdTree, MedianAlgorithm, NodeInfo, Persist, PivotPolicy, TreeStats};
 
 /// The Rust code blocks of README.md and docs/features.md, compiled and run as doctests (`cargo
 /// test --doc`), so that what the documents show keeps to the API as it is. Built for doctests

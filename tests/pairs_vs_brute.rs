@@ -8,7 +8,8 @@
 //! the static and the growing tree give the brute force's pairs and keys bit for bit, on 1 and
 //! 2 threads; counts are exact, cumulative and not, with and without weights, for radii
 //! negative, 0, on the grid, repeated and infinite. With eps > 0 the pairs keep scipy's
-//! contract (all within r / (1 + eps), none beyond r · (1 + eps)). Empty trees, bad radii,
+//! contract (all within r / (1 + eps), none beyond r · (1 + eps)) and are exactly those within
+//! r · (1 + eps), on any tree (scipy's test_query_pairs_eps counts on it). Empty trees, bad radii,
 //! weights and options are refused or answered as documented.
 
 mod common;
@@ -200,7 +201,8 @@ fn check_counts<T: Scalar>(
 }
 
 /// eps > 0: every pair within r / (1 + eps) is found, none beyond r · (1 + eps) (keys with a
-/// little slack for the rounding of the factors).
+/// little slack for the rounding of the factors) — scipy's contract — and in fact exactly the
+/// pairs within r · (1 + eps), the key the pairs are accepted up to (`NeighborIndex::pairs`).
 fn check_eps<T: Scalar>(ta: &KdTree<T>, a: &[T], d: usize, sizes: &[T], metric: Metric) {
     let eps = 0.5;
     let opts = QueryOptions {
@@ -223,6 +225,10 @@ fn check_eps<T: Scalar>(ta: &KdTree<T>, a: &[T], d: usize, sizes: &[T], metric: 
             "eps: a far pair"
         );
     }
+    let accepted = metric.key_of(r) * T::from_f64(1.0 / f);
+    let mut all = brute(a, a, d, sizes, metric, accepted, true);
+    all.iter_mut().for_each(|row| row.sort_by_key(|&(j, _)| j));
+    assert_eq!(got, all, "eps: the pairs within r · (1 + eps)");
 }
 
 fn run<T: Scalar>(seed: u64) {
@@ -254,6 +260,44 @@ fn pairs_equal_the_brute_force_f64() {
 #[test]
 fn pairs_equal_the_brute_force_f32() {
     run::<f32>(12);
+}
+
+/// scipy's `test_query_pairs_eps`: a 4 × 4 grid of step √2 (irrational: some neighbours'
+/// distances round just above √2). With r = √2 only the pairs computed ≤ √2 come back; with
+/// eps = 0.1 all 24 grid neighbours do, whichever cells the tree splits the grid into.
+#[test]
+fn pairs_with_eps_keep_the_neighbours_an_ulp_beyond_the_radius() {
+    let s = 2f64.sqrt();
+    let line: Vec<f64> = (0..4).map(|i| i as f64 * (3.0 * s / 3.0)).collect();
+    let grid: Vec<f64> = line
+        .iter()
+        .flat_map(|&x| line.iter().flat_map(move |&y| [x, y]))
+        .collect();
+    let view = PointsView::from_flat(&grid, 2).unwrap();
+    for pivot in PivotPolicy::ALL {
+        for leaf_size in [1, 4, 10, 16] {
+            let opts = BuildOptions {
+                pivot,
+                leaf_size,
+                ..BuildOptions::default()
+            };
+            let tree = KdTree::build(&view, &opts).unwrap();
+            let count = |eps: f64, r: f64| {
+                let query = QueryOptions {
+                    eps,
+                    ..QueryOptions::default()
+                };
+                tree.pairs(r, &table(query, 1)).unwrap().total()
+            };
+            let exact = count(0.0, s);
+            assert!(
+                exact < 24,
+                "{pivot:?} {leaf_size}: rounding keeps {exact} of 24"
+            );
+            assert_eq!(count(0.1, s), 24, "{pivot:?} {leaf_size}");
+            assert_eq!(count(0.0, s * 1.01), 24, "{pivot:?} {leaf_size}");
+        }
+    }
 }
 
 #[test]

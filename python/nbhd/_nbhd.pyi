@@ -26,6 +26,17 @@ class Spacing(TypedDict):
     median: float
     points: int
 
+class Nodes(TypedDict):
+    """``KdTree.nodes()``: one entry per node, in preorder."""
+
+    level: npt.NDArray[np.int64]
+    split_dim: npt.NDArray[np.int64]
+    split: F64
+    left: npt.NDArray[np.int64]
+    right: npt.NDArray[np.int64]
+    start: npt.NDArray[np.int64]
+    end: npt.NDArray[np.int64]
+
 class VoxelGrid(TypedDict):
     centroids: Floats
     nearest: U32
@@ -102,6 +113,12 @@ class KdTree:
         """The periodic box per axis (0 for an open axis), None if not periodic."""
     @property
     def tree_order(self) -> U32: ...
+    def nodes(self) -> Nodes:
+        """The nodes in preorder: level, split_dim (-1 leaf), split (left ≤ split ≤ right),
+        left/right child positions (-1 leaf), start/end (the node's points are
+        ``tree_order[start:end]``)."""
+    def node_weights(self, weights: Sequence[float]) -> F64:
+        """Per-node sums of ``weights`` (one per row of the array), in the order of ``nodes()``."""
     def stats(self) -> dict[str, int]: ...
     def options(self) -> dict[str, Any]: ...
     def __len__(self) -> int: ...

@@ -275,6 +275,16 @@ fn with_other<R>(
     )))
 }
 
+/// The table options of the pair queries (`pairs`, `pairs_with`, `count_pairs`): `options` on
+/// `threads`, every other field the default (`exclude_self` does not apply to pairs).
+fn pair_options(options: QueryOptions, threads: usize) -> TableOptions {
+    TableOptions {
+        threads,
+        query: options,
+        ..TableOptions::default()
+    }
+}
+
 /// The pairs `i < j` of stored points within `radius` (`nbhd::NeighborIndex::pairs`) as a
 /// `Table`: row i holds the j > i ascending, with the pair's key.
 pub(crate) fn pairs(
@@ -284,11 +294,7 @@ pub(crate) fn pairs(
     options: QueryOptions,
     threads: usize,
 ) -> PyResult<PyTable> {
-    let opts = TableOptions {
-        threads,
-        query: options,
-        ..TableOptions::default()
-    };
+    let opts = pair_options(options, threads);
     let rows = py.detach(|| index.pairs(radius, &opts)).or_raise()?;
     table(py, rows, index.source_len(), &options)
 }
@@ -304,11 +310,7 @@ pub(crate) fn pairs_with(
     options: QueryOptions,
     threads: usize,
 ) -> PyResult<PyTable> {
-    let opts = TableOptions {
-        threads,
-        query: options,
-        ..TableOptions::default()
-    };
+    let opts = pair_options(options, threads);
     with_other(other, |o| {
         let rows = py
             .detach(|| index.pairs_with(o, radius, &opts))
@@ -331,11 +333,7 @@ pub(crate) fn count_pairs<'py>(
     options: QueryOptions,
     threads: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let opts = TableOptions {
-        threads,
-        query: options,
-        ..TableOptions::default()
-    };
+    let opts = pair_options(options, threads);
     with_other(other, |o| {
         if weights.0.is_none() && weights.1.is_none() {
             let counts = py.detach(|| index.count_pairs_with(o, &radii, cumulative, &opts));
@@ -500,8 +498,9 @@ macro_rules! index_pymethods {
             /// (inclusive; scipy's `query_pairs`) as a `Table`: row i holds the j > i in
             /// ascending order (not by distance) with the pair's key in `sq_dists` (as `knn`).
             /// `p`, `eps`, `strict`: as `knn` and `radius` (with `eps`, every pair within
-            /// `radius / (1 + eps)` and none beyond `radius * (1 + eps)`). Periodic trees pair
-            /// nearest images. Identical for any `threads`.
+            /// `radius * (1 + eps)`: inside scipy's contract, and what scipy's own test of
+            /// `query_pairs` with eps counts on). Periodic trees pair nearest images.
+            /// Identical for any `threads`.
             #[pyo3(signature = (radius, *, p = 2.0, eps = 0.0, strict = false, threads = 0))]
             fn pairs(
                 &self,

@@ -101,6 +101,48 @@ index_pymethods!(
             vec1(py, order.to_vec())
         }
 
+        /// The tree's nodes in preorder (`nbhd::KdTree::nodes`), as a dict of equal-length
+        /// arrays: `level` (edges from the root), `split_dim` (-1 for a leaf), `split` (float64;
+        /// left subtree ≤ split ≤ right subtree, so points equal to the split may lie on both
+        /// sides), `left` and `right` (the children's positions in this list, -1 for a leaf),
+        /// `start` and `end` (the node's points are `tree_order[start:end]`). Identical points
+        /// are split by index like any others: every leaf holds at most `leaf_size` points.
+        fn nodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+            let nodes = self.index.nodes().expect("a KdTree holds a static tree");
+            let column = |f: &dyn Fn(&nbhd::NodeInfo<f64>) -> i64| -> Vec<i64> {
+                nodes.iter().map(f).collect()
+            };
+            let d = PyDict::new(py);
+            d.set_item("level", vec1(py, column(&|n| n.level as i64)))?;
+            let dim = column(&|n| n.split_dim.map_or(-1, |k| k as i64));
+            d.set_item("split_dim", vec1(py, dim))?;
+            d.set_item("split", vec1(py, nodes.iter().map(|n| n.split).collect()))?;
+            let left = column(&|n| n.children.map_or(-1, |c| c.0 as i64));
+            let right = column(&|n| n.children.map_or(-1, |c| c.1 as i64));
+            d.set_item("left", vec1(py, left))?;
+            d.set_item("right", vec1(py, right))?;
+            d.set_item("start", vec1(py, column(&|n| n.start as i64)))?;
+            d.set_item("end", vec1(py, column(&|n| n.end as i64)))?;
+            Ok(d)
+        }
+
+        /// The sum of `weights` (one per row of the array the tree was built from) over each
+        /// node's points, in the order of `nodes()` (scipy's `_build_weights`): float64, a
+        /// leaf summed in tree order, an internal node as its left child's sum plus its right
+        /// child's. A length other than `n` or a non-finite weight raises `NbhdValueError`.
+        fn node_weights<'py>(
+            &self,
+            py: Python<'py>,
+            weights: Vec<f64>,
+        ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+            let sums = self
+                .index
+                .node_weights(&weights)
+                .expect("a KdTree holds a static tree")
+                .or_raise()?;
+            Ok(vec1(py, sums))
+        }
+
         /// Depth, node counts and memory: a dict of `points`, `dim`, `depth`, `nodes`, `leaves`,
         /// `max_leaf_points`, `bytes`.
         fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {

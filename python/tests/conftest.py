@@ -64,3 +64,12 @@ def cli():
             pytest.fail("NBHD_REQUIRE_CLI=1 but the nbhd command-line tool was not found")
         pytest.skip("the nbhd command-line tool is not built (cargo build -p nbhd-cli)")
     return path
+
+
+def pytest_configure(config):
+    # scipy's k-d tree suite (test_scipy_suite.py runs it on nbhd.spatial) marks its slow
+    # tests with scipy's own plugin marker; registered here, where scipy's conftest.py is
+    # never loaded
+    config.addinivalue_line(
+        "markers", "fail_slow(seconds): scipy's marker of a slow test (no effect here)"
+    )

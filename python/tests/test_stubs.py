@@ -94,6 +94,12 @@ def test_result_dicts_have_the_stubs_keys(tmp_path: pathlib.Path) -> None:
     assert set(nbhd.KdTree(pts).spacing()) == fields["Spacing"]
     grid = nbhd.voxel_grid(pts, 0.25)
     assert set(grid) == fields["VoxelGrid"]
+    tree = nbhd.KdTree(pts, leaf_size=8)
+    nodes = tree.nodes()
+    assert set(nodes) == fields["Nodes"]
+    split_dims: npt.NDArray[np.int64] = nodes["split_dim"]
+    sums: npt.NDArray[np.float64] = tree.node_weights(np.ones(len(pts)).tolist())
+    assert split_dims.dtype == np.int64 and sums.dtype == np.float64 and sums[0] == len(pts)
     members: npt.NDArray[np.uint32] = grid["members"]
     voxel_rows: npt.NDArray[np.uint64] = grid["offsets"]
     assert members.dtype == np.uint32 and voxel_rows[-1] == len(pts)

@@ -442,9 +442,11 @@ pub trait NeighborIndex<T: Scalar>: NeighborSearch<T> + Sized {
     /// images. `options.exclude_self` does not apply (a point is never its own pair).
     /// Computed in parallel on `options.threads`, identical for any thread count.
     ///
-    /// With `eps > 0` (scipy's rule for pairs): every pair within `r / (1 + eps)` is returned
-    /// and none beyond `r · (1 + eps)` — the pairs up to `r · (1 + eps)` whose cells the
-    /// pruning at `r / (1 + eps)` did not skip.
+    /// With `eps > 0` (scipy's contract for pairs: every pair within `r / (1 + eps)` is returned
+    /// and none beyond `r · (1 + eps)`): every pair within `r · (1 + eps)`, whatever the tree.
+    /// scipy's dual traversal prunes node rectangles that touch at each split, and so keeps
+    /// pairs a search pruned at `r / (1 + eps)` by nbhd's tighter per-point cell bounds would
+    /// skip — its own test counts on pairs computed an ulp beyond `r` coming back with eps.
     ///
     /// ```
     /// use nbhd::{BuildOptions, KdTree, NeighborIndex, PointsView, TableOptions};

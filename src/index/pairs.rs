@@ -33,10 +33,13 @@ pub(super) fn pairs<T: Scalar, I: NeighborIndex<T>>(
     radius: T,
     options: &TableOptions,
 ) -> Result<NeighborTable<T>> {
-    let plan = options.query.plan(Neighborhood::Radius {
+    let mut plan = options.query.plan(Neighborhood::Radius {
         radius,
         sorted: false,
     })?;
+    // eps > 0: cells pruned at the key the pairs are accepted up to, r·(1 + eps), not at
+    // r / (1 + eps) — every pair within r·(1 + eps) (`NeighborIndex::pairs`)
+    plan.measure.scale = 1.0;
     with_threads(options.threads, || {
         search_each_held(index, index, &plan, true, |i, row| {
             row.retain(|nb| nb.index > i);

@@ -34,7 +34,7 @@
 //!    straddles the edge. Instead each point considers the covariance planes (eq. 2.10, through
 //!    the barycentre, eq. 2.3) of its own wide neighbourhood and of those of the farthest
 //!    quarter of its wide neighbours (the most shifted ones; nearer neighbours' planes repeat
-//!    its own), scores each plane by how many of the point's wide neighbours it explains —
+//!    its own; of a row widened by the noise scale, every third of them), scores each plane by how many of the point's wide neighbours it explains —
 //!    a robust (Tukey biweight) count of the points within `inlier_width`·σ̂ of it — and keeps
 //!    the best. A neighbourhood shifted off the edge fits one face and explains that face's
 //!    points; a straddling one explains only the points near the edge. The normal is then

@@ -18,6 +18,7 @@
 //! - `exact_knn.rs`: the fast exact k-nearest table of 3-D `f64` points, searched in `f32`
 //!   and proven exact in `f64` ([`exact_knn_table`]);
 //! - `periodic.rs`: periodic trees (a torus) and their descent;
+//! - `nodes.rs`: the nodes as a caller sees them (scipy's node objects) and per-node weights;
 //! - `part.rs`: what a forest reads of one of its trees;
 //! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
 
@@ -32,6 +33,7 @@ mod kernel;
 mod layout;
 mod neighborhoods;
 mod node;
+mod nodes;
 pub mod options;
 mod part;
 mod periodic;
@@ -62,6 +64,7 @@ pub use envelope::{LoadOptions, Persist, FORMAT_VERSION, HEADER_LEN, MAGIC};
 pub use envelope::{SavedFormat, SavedHeader};
 pub use exact_knn::exact_knn_table;
 use node::{Descent, Node};
+pub use nodes::NodeInfo;
 pub use options::{
     max_unbalanced_depth, BuildOptions, MedianAlgorithm, PivotPolicy, DEFAULT_LEAF_SIZE,
 };

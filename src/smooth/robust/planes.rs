@@ -170,13 +170,18 @@ impl Local {
 /// the most: near an edge they are the ones that lie on one face; the nearer neighbours'
 /// neighbourhoods overlap the point's own almost entirely and repeat its plane (measured: the
 /// quality of docs/smoothing-results.md holds or improves with a quarter of the candidates, at a
-/// quarter of the cost of scoring all). In parallel over chunks of points; the refits of the
-/// points' own planes (most points) are solved a batch at a time.
+/// quarter of the cost of scoring all). At most `candidates` of them are scored, evenly spread
+/// over the quarter (the farthest included): a row widened by the noise scale has three times
+/// as many, each scored over three times the points, and neighbours a third of a wide row's
+/// spacing apart offer nearly the same plane (see [`candidate_stride`]). In parallel over
+/// chunks of points; the refits of the points' own planes (most points) are solved a batch at a
+/// time.
 pub(super) fn selected_normals(
     points: &[DVec3],
     rows: &Rows,
     planes: &[Plane],
     width: f64,
+    candidates: usize,
 ) -> Vec<DVec3> {
     let mut normals = vec![DVec3::ZERO; points.len()];
     normals
@@ -185,7 +190,7 @@ pub(super) fn selected_normals(
         .for_each_init(Local::default, |local, (c, chunk)| {
             let mut queue = Queue::default();
             for i in 0..chunk.len() {
-                match local.select(points, rows, planes, width, c * CHUNK + i) {
+                match local.select(points, rows, planes, width, candidates, c * CHUNK + i) {
                     Selected::Normal(n) => chunk[i] = n,
                     Selected::Own(sums, own) => queue.push(i, sums, own, chunk),
                 }
@@ -211,6 +216,7 @@ impl Local {
         rows: &Rows,
         planes: &[Plane],
         width: f64,
+        candidates: usize,
         s: usize,
     ) -> Selected {
         let row = rows.wide(s);
@@ -230,7 +236,13 @@ impl Local {
         }
         self.single_precision();
         let mut best = (self.score(own.0, own.1, width), None);
-        for &j in &row[row.len() - row.len().div_ceil(4)..] {
+        let far = &row[row.len() - row.len().div_ceil(4)..];
+        let stride = candidate_stride(far.len(), candidates);
+        for &j in far
+            .iter()
+            .skip((far.len() + stride - 1) % stride)
+            .step_by(stride)
+        {
             let candidate = plane_of(j as usize);
             let score = self.score(candidate.0, candidate.1, width);
             if score > best.0 {
@@ -242,6 +254,15 @@ impl Local {
             Some((n, offset)) => Selected::Normal(self.refit(n, offset, width).unwrap_or(n)),
         }
     }
+}
+
+/// The step between the candidates scored among the `far` farthest neighbours of a row, so that
+/// at most `candidates` are (1 where the quarter holds no more, as in the plain rows: every one
+/// is scored). While the rows are widened by the noise scale (`robust/scales.rs`) the quarter
+/// holds three times `candidates`; scoring each of them over a row three times as long was
+/// about nine times the plain rows' cost per point.
+fn candidate_stride(far: usize, candidates: usize) -> usize {
+    far.div_ceil(candidates.max(1)).max(1)
 }
 
 /// The points of a chunk that wait for their own plane's refit, until a batch of them is
@@ -291,6 +312,28 @@ impl Queue {
 mod tests {
     use super::*;
     use crate::geometry::robust_plane::biweight;
+
+    /// The candidates scored: every one of a plain row's quarter, a third of a wide row's
+    /// (the farthest included), never more than asked for.
+    #[test]
+    fn candidates_spread_over_the_farthest_quarter() {
+        let scored = |far: usize, candidates: usize| {
+            let stride = candidate_stride(far, candidates);
+            let picked: Vec<usize> = (0..far)
+                .skip((far + stride - 1) % stride)
+                .step_by(stride)
+                .collect();
+            assert!(picked.len() <= candidates.max(1), "{far} {candidates}");
+            assert!(far == 0 || picked.last() == Some(&(far - 1)));
+            picked
+        };
+        assert_eq!(scored(12, 12), (0..12).collect::<Vec<_>>());
+        assert_eq!(scored(5, 12), (0..5).collect::<Vec<_>>());
+        assert_eq!(scored(36, 12), (2..36).step_by(3).collect::<Vec<_>>());
+        assert_eq!(scored(35, 12).len(), 12);
+        assert!(scored(0, 12).is_empty());
+        assert_eq!(scored(7, 0), [6]);
+    }
 
     #[test]
     fn lane_scores_match_the_biweight_sum() {

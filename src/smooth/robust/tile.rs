@@ -420,7 +420,8 @@ impl<'a> RobustTile<'a> {
             _ => covariance_planes(&st.cur, &st.rows),
         };
         let width = options.inlier_width * sigma;
-        st.normals = selected_normals(&st.cur, &st.rows, &planes, width);
+        let candidates = options.k_plane.div_ceil(4);
+        st.normals = selected_normals(&st.cur, &st.rows, &planes, width, candidates);
         drop(planes);
         let next = step(&st.cur, &st.rows, &st.normals, width, options);
         let mut moved_sq = ExactSum::new();
