@@ -4,6 +4,8 @@
 //! instructions, and give exactly the bits of their portable form either way (the same
 //! operations on the same lanes in the same order, no fused multiply-add):
 //! - the leaf masks of every search (`tree/kernel.rs`: SSE compares, x86-64's baseline);
+//! - the single queries' leaf distances and masks of `f64` points in 3-D (`tree/kernel.rs`: AVX,
+//!   four points per instruction);
 //! - the grouped table search's keys within a bound and its ranks (`tree/group_search/`:
 //!   AVX-512 F + VL, and AVX2 for the ranks);
 //! - the normals' batched eigen solves (`geometry/eigen.rs`: AVX), the robust planes' lane

@@ -341,21 +341,35 @@ impl RowKey for u128 {
         while end < n && keys[end] >> 32 == last {
             end += 1;
         }
-        let mut exact = [0u128; 32];
-        for (e, &key) in exact[..end].iter_mut().zip(&keys[..end]) {
-            let j = key as u32 as usize;
-            *e = order::key64(sq_dists[j], ids[j]);
+        if end == m {
+            // The usual case: the candidates to order exactly are the row's first `m`, put in
+            // order in place (no scratch to clear and copy).
+            exact_in_order(&mut row[..m], &keys[..m], ids, sq_dists);
+        } else {
+            let mut exact = [0u128; 32];
+            exact_in_order(&mut exact[..end], &keys[..end], ids, sq_dists);
+            row[..m].copy_from_slice(&exact[..m]);
         }
-        for i in 1..end {
-            let cand = exact[i];
-            let mut j = i;
-            while j > 0 && cand < exact[j - 1] {
-                exact[j] = exact[j - 1];
-                j -= 1;
-            }
-            exact[j] = cand;
+    }
+}
+
+/// The exact `u128` keys of the block positions in `rounded` (its low 32 bits, in the order of
+/// their rounded distances) into `exact`, in order: by insertion, which only moves a key past
+/// others of equal rounded distance.
+#[inline(always)]
+fn exact_in_order<T: Scalar>(exact: &mut [u128], rounded: &[u64], ids: &[u32], sq_dists: &[T]) {
+    for (e, &key) in exact.iter_mut().zip(rounded) {
+        let j = key as u32 as usize;
+        *e = order::key64(sq_dists[j], ids[j]);
+    }
+    for i in 1..exact.len() {
+        let cand = exact[i];
+        let mut j = i;
+        while j > 0 && cand < exact[j - 1] {
+            exact[j] = exact[j - 1];
+            j -= 1;
         }
-        row[..m].copy_from_slice(&exact[..m]);
+        exact[j] = cand;
     }
 }
 

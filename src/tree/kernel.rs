@@ -60,6 +60,99 @@ fn sq_dist_packed<T: Scalar, const D: usize>(q: &[T; 4], p: &[T]) -> T {
     s
 }
 
+/// [`sq_dists_packed`] then [`below_mask`]: the squared distances from `q` to the points of a
+/// leaf block (packed, at most `N`) into `d`, and the bits of those within `bound`. With `AVX`
+/// an `f64` block in 3-D takes [`sq_dists_below_f64x3_avx`] (four points per instruction
+/// instead of SSE2's two), the same bits; `AVX` must be set only where [`crate::simd::avx`]
+/// said so (the searches choose it once, at compile time inside the search).
+#[inline(always)]
+pub(crate) fn sq_dists_below<
+    T: Scalar,
+    const D: usize,
+    const N: usize,
+    const SSE: bool,
+    const AVX: bool,
+>(
+    q: &[T; 4],
+    points: &[T],
+    d: &mut [T; N],
+    bound: T,
+) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if AVX && D == 3 && T::TYPE == ScalarType::F64 {
+        debug_assert!(crate::simd::avx());
+        // SAFETY: `Scalar` is sealed to f32 and f64 and `T::TYPE` is F64, so `T` is f64 (the
+        // casts keep lengths and alignment); the caller set `AVX` only where the processor
+        // has AVX.
+        unsafe {
+            let q = &*(q as *const [T; 4]).cast::<[f64; 4]>();
+            let points = std::slice::from_raw_parts(points.as_ptr().cast::<f64>(), points.len());
+            let d = &mut *(d as *mut [T; N]).cast::<[f64; N]>();
+            return sq_dists_below_f64x3_avx(q, points, d, bound.to_f64());
+        }
+    }
+    sq_dists_packed::<T, D, N>(q, points, d);
+    below_mask(d, bound, SSE)
+}
+
+/// [`sq_dists_below`] for `f64` points in 3-D, compiled for AVX: four points at a time, their
+/// twelve packed coordinates read as six 128-bit halves, `[x0 y0 | x2 y2]`, `[z0 x1 | z2 x3]`
+/// and `[y1 z1 | y3 z3]`, from which two blends and a shuffle make the lanes of x, y and z;
+/// then `((qx − x)² + (qy − y)²) + (qz − z)²` per lane — the portable order, separate
+/// multiplies and adds (no fused multiply-add), so every lane is the bits of
+/// [`sq_dists_packed`] — and one compare and movemask give four bits of the mask. The last
+/// points of a block that fill no group of four are computed one by one, as the portable loop
+/// does.
+///
+/// # Safety
+/// The processor must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn sq_dists_below_f64x3_avx<const N: usize>(
+    q: &[f64; 4],
+    points: &[f64],
+    d: &mut [f64; N],
+    bound: f64,
+) -> u32 {
+    use std::arch::x86_64::*;
+    let n = (points.len() / 3).min(N);
+    let groups = n / 4;
+    let mut mask = 0u32;
+    // SAFETY: AVX is this function's contract; group `g` reads the twelve coordinates
+    // `points[12g..12g + 12]` (4g + 4 ≤ n points are in `points`) and writes `d[4g..4g + 4]`
+    // (4g + 4 ≤ n ≤ N).
+    unsafe {
+        let (qx, qy, qz) = (
+            _mm256_set1_pd(q[0]),
+            _mm256_set1_pd(q[1]),
+            _mm256_set1_pd(q[2]),
+        );
+        let b = _mm256_set1_pd(bound);
+        for g in 0..groups {
+            let p = points.as_ptr().add(12 * g);
+            let r0 = _mm256_loadu2_m128d(p.add(6), p); // x0 y0 | x2 y2
+            let r1 = _mm256_loadu2_m128d(p.add(8), p.add(2)); // z0 x1 | z2 x3
+            let r2 = _mm256_loadu2_m128d(p.add(10), p.add(4)); // y1 z1 | y3 z3
+            let tx = _mm256_sub_pd(qx, _mm256_blend_pd::<0b1010>(r0, r1));
+            let ty = _mm256_sub_pd(qy, _mm256_shuffle_pd::<0b0101>(r0, r2));
+            let tz = _mm256_sub_pd(qz, _mm256_blend_pd::<0b1010>(r1, r2));
+            let s = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(tx, tx), _mm256_mul_pd(ty, ty)),
+                _mm256_mul_pd(tz, tz),
+            );
+            _mm256_storeu_pd(d.as_mut_ptr().add(4 * g), s);
+            let within = _mm256_cmp_pd::<_CMP_LE_OQ>(s, b);
+            mask |= (_mm256_movemask_pd(within) as u32) << (4 * g);
+        }
+    }
+    for i in 4 * groups..n {
+        let s = sq_dist_packed::<f64, 3>(q, &points[3 * i..3 * i + 3]);
+        d[i] = s;
+        mask |= u32::from(s <= bound) << i;
+    }
+    mask
+}
+
 /// Bit `p` set where `d[p] ≤ bound` (`N` ≤ 32, a multiple of 4): with `sse`
 /// ([`crate::simd::sse`], read by the caller once per search or group, not per leaf) SSE
 /// compares and movemask on x86-64 (4 or 2 lanes per instruction), else a plain loop.
@@ -167,5 +260,48 @@ mod tests {
     fn distances_and_masks_match_the_plain_loops() {
         check::<f32>();
         check::<f64>();
+    }
+
+    /// The AVX leaf kernel of `f64` in 3-D gives the portable kernel's distances and mask, bit
+    /// for bit, on blocks of every length up to 32 (whole groups of four and a rest), with
+    /// bounds exactly on points, between them, zero and infinite, and squared distances that
+    /// overflow to infinity or underflow to zero.
+    #[test]
+    fn the_avx_kernel_matches_the_portable_one() {
+        if !crate::simd::avx() {
+            return;
+        }
+        let coord = |i: usize| ((i * 2_654_435_761) % 1000) as f64 * 0.37 - 150.0;
+        let spreads = [1.0, 1e-160, 1e155, 1e-310];
+        for spread in spreads {
+            let pts: Vec<f64> = (0..3 * 32).map(|i| coord(i) * spread).collect();
+            let q = [coord(5000) * spread, coord(5001) * spread, coord(5002), 0.0];
+            for n in 0..=32 {
+                let mut plain = [0.0f64; 32];
+                sq_dists_packed::<f64, 3, 32>(&q, &pts[..3 * n], &mut plain);
+                let mut bounds = vec![0.0, f64::INFINITY, f64::MAX, 1.0];
+                bounds.extend(plain[..n].iter().copied());
+                bounds.extend(plain[..n].iter().map(|&x| x * 0.999));
+                for bound in bounds {
+                    let (mut a, mut b) = ([-1.0f64; 32], [-1.0f64; 32]);
+                    let ma =
+                        sq_dists_below::<f64, 3, 32, true, true>(&q, &pts[..3 * n], &mut a, bound);
+                    let mb = sq_dists_below::<f64, 3, 32, false, false>(
+                        &q,
+                        &pts[..3 * n],
+                        &mut b,
+                        bound,
+                    );
+                    let bits = |d: &[f64]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&a[..n]), bits(&plain[..n]), "n {n} spread {spread}");
+                    assert_eq!(ma & low(n), mb & low(n), "n {n} bound {bound}");
+                    assert_eq!(u64::from(ma) >> n, 0, "bits past the block, n {n}");
+                }
+            }
+        }
+    }
+
+    fn low(n: usize) -> u32 {
+        ((1u64 << n) - 1) as u32
     }
 }

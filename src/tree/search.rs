@@ -25,12 +25,12 @@
 //! enter, the side with the smaller index is taken first (the build orders identical points by
 //! caller index, `src/tree/layout.rs`), so the copies with the lowest indices are met first.
 
-use super::kernel::{below_mask, sq_dists_packed};
+use super::kernel::sq_dists_below;
 use super::node::{Descent, Node, DESCENT_LEAF};
 use crate::metric::{Norm, L2};
 use crate::prefetch::prefetch_range;
 use crate::query::result_set::ResultSet;
-use crate::scalar::Scalar;
+use crate::scalar::{Scalar, ScalarType};
 use rayon::prelude::*;
 
 /// The tree's arrays a search reads.
@@ -342,19 +342,24 @@ fn compact_d<T: Scalar, C: ResultSet<T>>(
     out: &mut C,
     stack: &mut [Pending<T>],
 ) {
-    // The masks' form is chosen once, at compile time inside the search: a test of it per leaf
-    // cost single queries 1.4 % of their instructions (callgrind, torus-77k, k = 10).
+    // The leaf kernel's form is chosen once, at compile time inside the search: a test of it
+    // per leaf cost single queries 1.4 % of their instructions (callgrind, torus-77k, k = 10).
+    // `f64` in 3-D takes four AVX lanes where the processor has them (`tree/kernel.rs`).
+    let avx = T::TYPE == ScalarType::F64 && q.len() == 3 && crate::simd::avx();
     match (q.len(), crate::simd::sse()) {
-        (3, true) => compact_search::<T, C, 3, true>(tree, q, exclude, out, stack),
-        (2, true) => compact_search::<T, C, 2, true>(tree, q, exclude, out, stack),
-        (_, true) => compact_search::<T, C, 1, true>(tree, q, exclude, out, stack),
-        (3, false) => compact_search::<T, C, 3, false>(tree, q, exclude, out, stack),
-        (2, false) => compact_search::<T, C, 2, false>(tree, q, exclude, out, stack),
-        (_, false) => compact_search::<T, C, 1, false>(tree, q, exclude, out, stack),
+        (3, true) if avx => compact_search::<T, C, 3, true, true>(tree, q, exclude, out, stack),
+        (3, true) => compact_search::<T, C, 3, true, false>(tree, q, exclude, out, stack),
+        (2, true) => compact_search::<T, C, 2, true, false>(tree, q, exclude, out, stack),
+        (_, true) => compact_search::<T, C, 1, true, false>(tree, q, exclude, out, stack),
+        (3, false) => compact_search::<T, C, 3, false, false>(tree, q, exclude, out, stack),
+        (2, false) => compact_search::<T, C, 2, false, false>(tree, q, exclude, out, stack),
+        (_, false) => compact_search::<T, C, 1, false, false>(tree, q, exclude, out, stack),
     }
 }
 
-fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool>(
+/// `SSE`: the leaf masks by SSE compares; `AVX` (`f64`, 3-D, a processor with AVX): the leaf
+/// distances and masks in four AVX lanes ([`sq_dists_below`]).
+fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool, const AVX: bool>(
     tree: &DescentView<'_, T>,
     q: &[T],
     exclude: Option<u32>,
@@ -386,26 +391,7 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool>(
             let s = steps[node as usize];
             let sd = (s.link & 3) as usize;
             if sd == DESCENT_LEAF as usize {
-                let (a, b) = s.leaf_range();
-                // The leaf's indices are another array: their lines are requested now, while
-                // the distances are computed, instead of missing at the first offer (on the 1M
-                // cube the first index read of a leaf held a fifth of the samples).
-                prefetch_range(&tree.ids[a..b]);
-                // The leaf's points and indices as slices: no bounds test per point.
-                let points = &tree.coords[a * D..b * D];
-                let ids = &tree.ids[a..b];
-                // Blocks of up to `SCAN` points: every squared distance first (no branch, four
-                // points at a time in vector arithmetic), the points within the bound as bits
-                // of a mask (vector compares), then offers of those only, as one block (a
-                // single query's empty row sorts its first block at once). The test per point
-                // was the search's most mispredicted branch (README "Single queries, the
-                // floor, and copies of a point").
-                for (points, ids) in points.chunks(SCAN * D).zip(ids.chunks(SCAN)) {
-                    let mut d = [T::ZERO; SCAN];
-                    sq_dists_packed::<T, D, SCAN>(&qa, points, &mut d);
-                    let mask = below_mask(&d, out.bound(), SSE) & low_bits(ids.len());
-                    out.offer_block(ids, &d, mask, excluded);
-                }
+                scan_leaf::<T, C, D, SSE, AVX>(tree, &qa, s.leaf_range(), excluded, out);
                 break;
             }
             let first = s.link >> 2;
@@ -452,6 +438,36 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool>(
                 break;
             }
         }
+    }
+}
+
+/// Offers the points of the leaf at tree positions `a..b` to `out` (`qa`: the query, padded to
+/// four coordinates; `SSE`, `AVX` as in [`compact_search`]).
+#[inline(always)]
+fn scan_leaf<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool, const AVX: bool>(
+    tree: &DescentView<'_, T>,
+    qa: &[T; 4],
+    (a, b): (usize, usize),
+    excluded: u32,
+    out: &mut C,
+) {
+    // The leaf's indices are another array: their lines are requested now, while the distances
+    // are computed, instead of missing at the first offer (on the 1M cube the first index read
+    // of a leaf held a fifth of the samples).
+    prefetch_range(&tree.ids[a..b]);
+    // The leaf's points and indices as slices: no bounds test per point.
+    let points = &tree.coords[a * D..b * D];
+    let ids = &tree.ids[a..b];
+    // Blocks of up to `SCAN` points: every squared distance first (no branch, four points at a
+    // time in vector arithmetic), the points within the bound as bits of a mask (vector
+    // compares), then offers of those only, as one block (a single query's empty row sorts its
+    // first block at once). The test per point was the search's most mispredicted branch
+    // (README "Single queries, the floor, and copies of a point").
+    for (points, ids) in points.chunks(SCAN * D).zip(ids.chunks(SCAN)) {
+        let mut d = [T::ZERO; SCAN];
+        let mask = sq_dists_below::<T, D, SCAN, SSE, AVX>(qa, points, &mut d, out.bound())
+            & low_bits(ids.len());
+        out.offer_block(ids, &d, mask, excluded);
     }
 }
 
