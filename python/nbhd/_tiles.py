@@ -339,7 +339,7 @@ class RobustTileActor:
     the values of the last round for the exact medians. Positions move between tiles through
     the generation files; every decision (rounds, medians, halo growth) is the client's."""
 
-    def __init__(self, spec: Spec, t: int, width: float, options: dict, out: str):
+    def __init__(self, spec: Spec, t: int, width: float, options, out: str):
         self.spec, self.t, self.options, self.out = spec, t, options, out
         self.own = owned(spec, t)
         # the generation whose positions of every gathered point came from their owners (a
@@ -355,7 +355,7 @@ class RobustTileActor:
         self.width = width
         self.gathered = len(idx)
         owned_mask = self.owner == self.t
-        self.tile = nbhd.RobustTile(pts, owned_mask, lo, hi, **self.options)
+        self.tile = nbhd.RobustTile(pts, owned_mask, lo, hi, self.options)
 
     def _proxy(self, g):
         """The positions of generation ``g`` of every gathered point, from their owners' files."""
