@@ -276,18 +276,24 @@ def geometry_tile(spec: Spec, t: int, what: str, halo: float, out: str, kwargs: 
     return {"tile": t, "path": out, "rows": len(own), "halo": halo, "points": len(idx)}
 
 
-def partial_sum(parts, a: int, b: int, carry: float) -> float:
-    """The sum ``carry + x_a + ... + x_{b-1}`` of the square roots of the nearest squared
-    distances, added one by one in caller order as the library's spacing estimate adds them
-    (``np.add.accumulate`` is a sequential loop: the same roundings)."""
-    x = np.empty(b - a, np.float64)
+def nearest_of_rows(parts, a: int, b: int):
+    """The nearest squared distances the tiles' ``parts`` wrote for the caller rows ``a .. b``
+    (each row from the one tile that owns it), NaN for a row no tile wrote."""
+    x = np.full(b - a, np.nan)
     for p in parts:
         idx = np.load(p["path"] + ".idx.npy", mmap_mode="r")
         i, j = np.searchsorted(idx, [a, b])
         if j > i:
             near = np.load(p["path"] + ".nearest.npy", mmap_mode="r")
             x[np.asarray(idx[i:j]) - a] = near[i:j]
-    x = np.sqrt(x)
+    return x
+
+
+def partial_sum(parts, a: int, b: int, carry: float) -> float:
+    """The sum ``carry + x_a + ... + x_{b-1}`` of the square roots of the nearest squared
+    distances, added one by one in caller order as the library's spacing estimate adds them
+    (``np.add.accumulate`` is a sequential loop: the same roundings)."""
+    x = np.sqrt(nearest_of_rows(parts, a, b))
     acc = np.add.accumulate(np.concatenate([[carry], x]))
     return float(acc[-1])
 
@@ -440,13 +446,7 @@ def partial_sum_finite(parts, a: int, b: int, carry):
     square roots of the nearest squared distances of the caller rows ``a .. b`` that have one
     (holes and points without a neighbour are NaN or absent), added one by one in caller
     order as the library's spacing estimate adds them."""
-    x = np.full(b - a, np.nan)
-    for p in parts:
-        idx = np.load(p["path"] + ".idx.npy", mmap_mode="r")
-        i, j = np.searchsorted(idx, [a, b])
-        if j > i:
-            near = np.load(p["path"] + ".nearest.npy", mmap_mode="r")
-            x[np.asarray(idx[i:j]) - a] = near[i:j]
+    x = nearest_of_rows(parts, a, b)
     x = np.sqrt(x[~np.isnan(x)])
     acc = np.add.accumulate(np.concatenate([[carry[0]], x]))
     return float(acc[-1]), carry[1] + len(x)

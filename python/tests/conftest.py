@@ -66,6 +66,24 @@ def cli():
     return path
 
 
+@pytest.fixture(scope="module")
+def client():
+    """A distributed.LocalCluster of three one-thread worker processes (1 GiB each) and its client,
+    one per test module that asks for it."""
+    distributed = pytest.importorskip("distributed")
+    cluster = distributed.LocalCluster(
+        n_workers=3,
+        threads_per_worker=1,
+        processes=True,
+        memory_limit="1GiB",
+        dashboard_address=":0",
+    )
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
 def pytest_configure(config):
     # scipy's k-d tree suite (test_scipy_suite.py runs it on nbhd.spatial) marks its slow
     # tests with scipy's own plugin marker; registered here, where scipy's conftest.py is

@@ -19,21 +19,6 @@ from conftest import sphere  # noqa: E402
 N = 100_000
 
 
-@pytest.fixture(scope="module")
-def client():
-    cluster = distributed.LocalCluster(
-        n_workers=3,
-        threads_per_worker=1,
-        processes=True,
-        memory_limit="1GiB",
-        dashboard_address=":0",
-    )
-    c = distributed.Client(cluster)
-    yield c
-    c.close()
-    cluster.close()
-
-
 def surface(dtype):
     """A noisy sphere of N points with exact duplicates, some on the middle planes where the
     tiles meet (x = 0, y = 0, z = 0 cut a 2x2x2 grid of the bounding box [-1, 1]^3 nearly there)."""

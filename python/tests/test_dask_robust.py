@@ -11,26 +11,11 @@ import pytest
 import nbhd
 
 da = pytest.importorskip("dask.array")
-distributed = pytest.importorskip("distributed")
+pytest.importorskip("distributed")  # the client fixture (conftest.py) needs it
 ndask = pytest.importorskip("nbhd.dask")
 
 SCALARS = ("spacing", "epsilon", "lambda", "min_neighbors", "wide_iterations")
 ARRAYS = ("points", "normals", "noise", "moved", "dimension")
-
-
-@pytest.fixture(scope="module")
-def client():
-    cluster = distributed.LocalCluster(
-        n_workers=3,
-        threads_per_worker=1,
-        processes=True,
-        memory_limit="1GiB",
-        dashboard_address=":0",
-    )
-    c = distributed.Client(cluster)
-    yield c
-    c.close()
-    cluster.close()
 
 
 def cube(n, noise, seed=39):
