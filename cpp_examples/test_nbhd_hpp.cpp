@@ -13,6 +13,9 @@
 //    points repeat (nbhd_tree_neighborhoods_of): every answer equals the brute force.
 // 3. Wrong uses fail cleanly: a row past the table (std::out_of_range), an index past the
 //    points, k = 0 (nbhdpp::Error with the status).
+// 4. The tree's nodes (nodes, tree_order, node_weights): the root covers the tree order, a
+//    permutation of the points; every internal node's children split its range; each node's
+//    weight sum equals the sum over its points; a wrong number of weights is an nbhdpp::Error.
 // Exit 1 on any disagreement.
 #include <nbhd.hpp>
 
@@ -215,6 +218,45 @@ static void wrong_uses(std::size_t n) {
     EXPECT(status == NBHD_STATUS_INVALID_K, "k = 0: status %d", status);
 }
 
+/// Section 4: the node list, the tree order and the weight sums through the sized() helpers.
+static void nodes(std::size_t n) {
+    const std::vector<Pt> pts = random_points(n, 4);
+    const nbhdpp::Tree tree =
+        nbhdpp::build(nbhdpp::points_f32(&pts[0].x, n, sizeof(Pt)), nbhd_build_options_default());
+    const std::vector<nbhd_node> list = nbhdpp::nodes(tree.get());
+    const std::vector<std::uint32_t> order = nbhdpp::tree_order(tree.get());
+    std::vector<std::uint32_t> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    bool permutation = sorted.size() == n;
+    for (std::size_t i = 0; permutation && i < n; ++i) permutation = sorted[i] == i;
+    EXPECT(permutation, "tree_order is not a permutation of the %zu points", n);
+    EXPECT(list.size() == nbhdpp::stats(tree.get()).nodes && list[0].start == 0 && list[0].end == n,
+           "%zu nodes, root %zu..%zu", list.size(), list[0].start, list[0].end);
+    std::vector<double> w(n);
+    for (std::size_t i = 0; i < n; ++i) w[i] = static_cast<double>(i % 5);
+    const std::vector<double> sums = nbhdpp::node_weights(tree.get(), w);
+    EXPECT(sums.size() == list.size(), "%zu sums", sums.size());
+    for (std::size_t i = 0; i < list.size() && i < sums.size(); ++i) {
+        const nbhd_node& node = list[i];
+        double direct = 0.0;
+        for (std::size_t p = node.start; p < node.end; ++p) direct += w[order[p]];
+        EXPECT(sums[i] == direct, "node %zu: sum %g, over its points %g", i, sums[i], direct);
+        if (!node.leaf) {
+            EXPECT(node.left == i + 1 && list[node.left].start == node.start &&
+                       list[node.left].end == list[node.right].start &&
+                       list[node.right].end == node.end,
+                   "node %zu: children %zu, %zu", i, node.left, node.right);
+        }
+    }
+    nbhd_status status = NBHD_STATUS_OK;
+    try {
+        nbhdpp::node_weights(tree.get(), std::vector<double>(n - 1, 1.0));
+    } catch (const nbhdpp::Error& e) {
+        status = e.status();
+    }
+    EXPECT(status == NBHD_STATUS_INVALID_OPTION, "n - 1 weights: status %d", status);
+}
+
 int main(int argc, char** argv) {
     const std::size_t n = argc >= 2 ? std::strtoul(argv[1], nullptr, 10) : 4000;
     if (n < 100) {
@@ -226,6 +268,7 @@ int main(int argc, char** argv) {
     own_copy(n, r);
     threads_interleaved(n, 4, r);
     wrong_uses(n);
+    nodes(n);
     std::printf("%s\n", failures == 0 ? "all agree" : "DISAGREEMENTS");
     return failures == 0 ? 0 : 1;
 }

@@ -665,6 +665,51 @@ typedef struct {
 } nbhd_stats;
 
 /**
+ * One node of a tree, as nbhd_tree_nodes lists them: in preorder (a node, its left subtree,
+ * its right subtree; the root at position 0). A split sends coordinates `<= split` left and
+ * `>= split` right, so points equal to the split value may lie on both sides; identical
+ * points are split by index like any others, so every leaf holds at most the build's
+ * `leaf_size` points.
+ */
+typedef struct {
+    /**
+     * Edges from the root (the root is level 0).
+     */
+    size_t level;
+    /**
+     * An internal node's splitting dimension; 0 for a leaf.
+     */
+    size_t split_dim;
+    /**
+     * An internal node's splitting value, as a double whatever the tree's scalar type; 0 for
+     * a leaf.
+     */
+    double split;
+    /**
+     * The node's points are the tree positions `start .. end - 1`: entries of
+     * nbhd_tree_order, which names their caller indices.
+     */
+    size_t start;
+    /**
+     * One past the node's last tree position.
+     */
+    size_t end;
+    /**
+     * An internal node's children: their positions in the list (`left` is the node's own
+     * position plus one); 0 for a leaf (the root, position 0, is no node's child).
+     */
+    size_t left;
+    /**
+     * See `left`.
+     */
+    size_t right;
+    /**
+     * Whether the node is a leaf.
+     */
+    bool leaf;
+} nbhd_node;
+
+/**
  * How a query measures (nbhd_tree_search, nbhd_dynamic_search, nbhd_table_options.query).
  * Start from nbhd_query_options_default(); all fields zero are the defaults too.
  */
@@ -1421,6 +1466,68 @@ nbhd_status nbhd_tree_stats(const nbhd_tree *tree, nbhd_stats *out_stats);
  * tree's scalar type.
  */
 nbhd_status nbhd_tree_point(const nbhd_tree *tree, size_t index, void *out_coords);
+
+/**
+ * Copies the tree's nodes in preorder into `nodes`: `*count` of them, nbhd_stats.nodes
+ * (a tree of no point is one empty leaf). If `capacity` is smaller, nothing is written to
+ * `nodes`, `*count` receives the number needed and the status is
+ * NBHD_STATUS_BUFFER_TOO_SMALL; `nodes` may be NULL with capacity 0 to ask for the size.
+ *
+ * Errors: NULL_POINTER (`tree`, `count`, `nodes` when needed), MISALIGNED_POINTER,
+ * BUFFER_TOO_SMALL, OUT_OF_MEMORY. On any other error `*count` is 0.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `nodes` NULL or writable for `capacity` structs;
+ * `count` NULL or writable.
+ */
+nbhd_status nbhd_tree_nodes(const nbhd_tree *tree,
+                            nbhd_node *nodes,
+                            size_t capacity,
+                            size_t *count);
+
+/**
+ * Copies the caller indices of the tree's points in tree order into `indices`: `*count` of
+ * them, nbhd_stats.points (the points of a node, nbhd_node's `start .. end - 1`, are
+ * adjacent; skipped points are absent). Too small a `capacity` is BUFFER_TOO_SMALL with the
+ * size needed in `*count`, as for nbhd_tree_nodes.
+ *
+ * Errors: NULL_POINTER (`tree`, `count`, `indices` when needed), MISALIGNED_POINTER,
+ * BUFFER_TOO_SMALL. On any other error `*count` is 0.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `indices` NULL or writable for `capacity` values;
+ * `count` NULL or writable.
+ */
+nbhd_status nbhd_tree_order(const nbhd_tree *tree,
+                            uint32_t *indices,
+                            size_t capacity,
+                            size_t *count);
+
+/**
+ * The sum of `weights` over each node's points, in the order of nbhd_tree_nodes (scipy's
+ * `_build_weights`), into `sums`: `*count` values, nbhd_stats.nodes. `weights` holds one
+ * finite value per point given to the build (`weight_count` = nbhd_stats.source_points,
+ * skipped points included and never counted). A leaf sums its points in tree order, an
+ * internal node adds its left child's sum and its right child's, so the values are the same
+ * bits on every run. Too small a `capacity` is BUFFER_TOO_SMALL with the size needed in
+ * `*count`, as for nbhd_tree_nodes.
+ *
+ * Errors: NULL_POINTER (`tree`, `count`, `weights` with a count above 0, `sums` when
+ * needed), MISALIGNED_POINTER, INVALID_ARGUMENT (`weight_count` overflowing the address
+ * space), INVALID_OPTION (`weight_count` other than nbhd_stats.source_points, a NaN or
+ * infinite weight: the message names the point), BUFFER_TOO_SMALL, OUT_OF_MEMORY. On any
+ * other error `*count` is 0 and nothing is written.
+ *
+ * # Safety
+ * `tree` must be NULL or a live handle; `weights` NULL or readable for `weight_count`
+ * values; `sums` NULL or writable for `capacity` values; `count` NULL or writable.
+ */
+nbhd_status nbhd_tree_node_weights(const nbhd_tree *tree,
+                                   const double *weights,
+                                   size_t weight_count,
+                                   double *sums,
+                                   size_t capacity,
+                                   size_t *count);
 
 /**
  * Writes `tree` to the file `path` (created, or truncated if it exists) in the saved-tree

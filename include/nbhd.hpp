@@ -5,7 +5,8 @@
 //     nbhd_tree_free / nbhd_neighborhoods_free as deleter);
 //   - statuses turned into exceptions (nbhdpp::Error carries the nbhd_status and nbhd's message,
 //     read on the calling thread right after the failed call);
-//   - query helpers that grow their buffers when nbhd answers NBHD_STATUS_BUFFER_TOO_SMALL.
+//   - query helpers that grow their buffers when nbhd answers NBHD_STATUS_BUFFER_TOO_SMALL, and
+//     the tree's nodes, tree order and node weight sums as vectors sized the same way.
 //
 // It adds no behaviour: every function is one C call (or one retry after
 // NBHD_STATUS_BUFFER_TOO_SMALL), so the C header's documentation applies unchanged. It depends on
@@ -67,6 +68,43 @@ inline nbhd_stats stats(const nbhd_tree* tree) {
     nbhd_stats s{};
     check(nbhd_tree_stats(tree, &s), "nbhd_tree_stats");
     return s;
+}
+
+/// Calls `f(buffer, capacity, &count)` with no buffer to learn the size, then once with a
+/// buffer of that size (nbhd answers the first call with NBHD_STATUS_BUFFER_TOO_SMALL).
+template <class V, class F>
+std::vector<V> sized(const char* call, F&& f) {
+    std::size_t n = 0;
+    nbhd_status s = f(static_cast<V*>(nullptr), 0, &n);
+    std::vector<V> out(n);
+    if (s == NBHD_STATUS_BUFFER_TOO_SMALL) s = f(out.data(), n, &n);
+    check(s, call);
+    out.resize(n);
+    return out;
+}
+
+/// The tree's nodes in preorder (nbhd_tree_nodes).
+inline std::vector<nbhd_node> nodes(const nbhd_tree* tree) {
+    return sized<nbhd_node>("nbhd_tree_nodes", [&](nbhd_node* b, std::size_t cap, std::size_t* n) {
+        return nbhd_tree_nodes(tree, b, cap, n);
+    });
+}
+
+/// The caller indices in tree order (nbhd_tree_order): a node's points are
+/// `order[node.start .. node.end - 1]`.
+inline std::vector<std::uint32_t> tree_order(const nbhd_tree* tree) {
+    return sized<std::uint32_t>("nbhd_tree_order",
+                                [&](std::uint32_t* b, std::size_t cap, std::size_t* n) {
+                                    return nbhd_tree_order(tree, b, cap, n);
+                                });
+}
+
+/// Per-node sums of `weights` (one per point given to the build), in the order of nodes()
+/// (nbhd_tree_node_weights).
+inline std::vector<double> node_weights(const nbhd_tree* tree, const std::vector<double>& weights) {
+    return sized<double>("nbhd_tree_node_weights", [&](double* b, std::size_t cap, std::size_t* n) {
+        return nbhd_tree_node_weights(tree, weights.data(), weights.size(), b, cap, n);
+    });
 }
 
 /// The table of `spec` for every stored point, with or without each point in its own row.

@@ -439,6 +439,19 @@ fn c_pair_queries_are_clean_under_valgrind() {
 }
 
 #[test]
+fn c_tree_nodes_match_the_points() {
+    run(Command::new(compiled("nodes_test")), "tests/c/nodes_test");
+}
+
+#[test]
+fn c_tree_nodes_are_clean_under_valgrind() {
+    if let Some(mut cmd) = valgrind() {
+        cmd.arg(compiled("nodes_test"));
+        run(cmd, "valgrind tests/c/nodes_test");
+    }
+}
+
+#[test]
 fn c_smoothing_checks_against_a_sphere() {
     run(Command::new(compiled("smooth_test")), "tests/c/smooth_test");
 }

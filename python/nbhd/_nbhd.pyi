@@ -51,6 +51,7 @@ __all__ = [
     "curvatures",
     "smooth",
     "smooth_robust",
+    "RobustOptions",
     "RobustRun",
     "RobustTile",
     "RankSearch",
@@ -454,8 +455,8 @@ def smooth_robust(
     noise_scale: Optional[bool] = None,
     orientation: OrientationName = "unoriented",
     orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
-    non_finite: NonFinite = "reject",
     outputs: bool = False,
+    non_finite: NonFinite = "reject",
     threads: int = 0,
 ) -> RobustResult: ...
 
@@ -506,11 +507,11 @@ class RobustTileResult(TypedDict):
     outputs: Optional[Outputs]
 
 @final
-class RobustRun:
-    """The state of one robust run between rounds (``nbhd::smooth::robust::RobustRun``)."""
+class RobustOptions:
+    """The options of a robust run: ``smooth_robust``'s keywords but ``non_finite`` and
+    ``threads`` (one list in python/src/robust_options.rs makes both signatures)."""
     def __new__(
         cls,
-        spacing: float,
         *,
         k: int = 24,
         k_plane: int = 48,
@@ -525,7 +526,13 @@ class RobustRun:
         orientation: OrientationName = "unoriented",
         orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
         outputs: bool = False,
-    ) -> RobustRun: ...
+    ) -> RobustOptions: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
+
+@final
+class RobustRun:
+    """The state of one robust run between rounds (``nbhd::smooth::robust::RobustRun``)."""
+    def __new__(cls, spacing: float, options: RobustOptions) -> RobustRun: ...
     @property
     def epsilon(self) -> float: ...
     def round(self) -> RobustRound: ...
@@ -554,20 +561,7 @@ class RobustTile:
         owned: Sequence[bool],
         lo: Sequence[float],
         hi: Sequence[float],
-        *,
-        k: int = 24,
-        k_plane: int = 48,
-        epsilon: float = 12.0,
-        epsilon_units: Units = "relative",
-        max_iterations: int = 10,
-        tolerance: float = 0.05,
-        inlier_width: float = 5.0,
-        feature_angle: float = 20.0,
-        tau: float = 1.0,
-        noise_scale: Optional[bool] = None,
-        orientation: OrientationName = "unoriented",
-        orientation_point: Sequence[float] = ...,  # (0.0, 0.0, 0.0)
-        outputs: bool = False,
+        options: RobustOptions,
     ) -> RobustTile: ...
     def nearest(self) -> tuple[F64, npt.NDArray[np.bool_]]: ...
     def set_current(self, generation: int, current: ArrayLike) -> None: ...

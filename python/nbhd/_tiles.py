@@ -333,15 +333,19 @@ def generation_path(out: str, g: int, t: int) -> str:
     return os.path.join(out, f"gen_{g:04d}", f"tile_{t:06d}.npy")
 
 
+def _validity(valid: np.ndarray) -> dict:
+    """Whether every owned point's value of a round is the cloud's, and how many are not."""
+    return {"valid": bool(valid.all()), "invalid": int((~valid).sum())}
+
+
 class RobustTileActor:
     """One tile of a robust run, held on a worker for the whole run (a Dask actor): its
     gathered points and ``nbhd.RobustTile``, which keeps the tile's rows between rounds, and
     the values of the last round for the exact medians. Positions move between tiles through
     the generation files; every decision (rounds, medians, halo growth) is the client's."""
 
-    def __init__(self, spec: Spec, t: int, width: float, options: dict, out: str):
+    def __init__(self, spec: Spec, t: int, width: float, options, out: str):
         self.spec, self.t, self.options, self.out = spec, t, options, out
-        self.own = owned(spec, t)
         # the generation whose positions of every gathered point came from their owners (a
         # step moves the halo too, but only the owners' positions of it are the cloud's)
         self.synced = 0
@@ -355,7 +359,9 @@ class RobustTileActor:
         self.width = width
         self.gathered = len(idx)
         owned_mask = self.owner == self.t
-        self.tile = nbhd.RobustTile(pts, owned_mask, lo, hi, **self.options)
+        # the caller indices the tile owns, ascending: read with the halo, not once more
+        self.own = idx[owned_mask]
+        self.tile = nbhd.RobustTile(pts, owned_mask, lo, hi, self.options)
 
     def _proxy(self, g):
         """The positions of generation ``g`` of every gathered point, from their owners' files."""
@@ -373,9 +379,8 @@ class RobustTileActor:
     def grow(self, generation):
         """Gathers the tile again with twice the halo, at the proxy of ``generation``."""
         self._gather(2.0 * self.width)
-        if generation > 0:
-            self.tile.set_current(generation, self._proxy(generation))
-        self.synced = generation
+        self.synced = 0  # a tile gathered anew holds the input
+        self._to(generation)
         return self.width
 
     def nearest(self):
@@ -384,8 +389,7 @@ class RobustTileActor:
         base = os.path.join(self.out, f"nearest_{self.t:06d}")
         np.save(base + ".idx.npy", self.own)
         np.save(base + ".nearest.npy", near)
-        return {"tile": self.t, "path": base, "valid": bool(valid.all()),
-                "invalid": int((~valid).sum()), "halo": self.width}
+        return {"tile": self.t, "path": base, "halo": self.width, **_validity(valid)}
 
     def round(self, round):
         """One round; the part's summary with the first digit counts of its values."""
@@ -400,9 +404,8 @@ class RobustTileActor:
             tmp = path + ".tmp.npy"
             np.save(tmp, self.tile.owned_points())
             os.replace(tmp, path)
-        valid = part["valid"]
         return {
-            "tile": self.t, "valid": bool(valid.all()), "invalid": int((~valid).sum()),
+            "tile": self.t, **_validity(part["valid"]),
             "halo": self.width, "count": part["count"], "max_len": part["max_len"],
             "min_narrow": part["min_narrow"], "moved_sq": part["moved_sq"].to_bytes(),
             "n_values": len(self.values),

@@ -454,12 +454,15 @@ class TiledCloud:
             import distributed
 
             client = distributed.get_client()
-        options = dict(k=k, k_plane=k_plane, epsilon=epsilon, epsilon_units=epsilon_units,
-                       max_iterations=max_iterations, tolerance=tolerance,
-                       inlier_width=inlier_width, feature_angle=feature_angle, tau=tau,
-                       noise_scale=noise_scale, orientation=orientation,
-                       orientation_point=tuple(orientation_point), outputs=outputs)
-        return RobustJob(self, options, self._out(out, "robust"), client).run()
+        import nbhd
+
+        options = nbhd.RobustOptions(
+            k=k, k_plane=k_plane, epsilon=epsilon, epsilon_units=epsilon_units,
+            max_iterations=max_iterations, tolerance=tolerance, inlier_width=inlier_width,
+            feature_angle=feature_angle, tau=tau, noise_scale=noise_scale,
+            orientation=orientation, orientation_point=tuple(orientation_point),
+            outputs=outputs)
+        return RobustJob(self, options, k_plane, self._out(out, "robust"), client).run()
 
 
 def _first_robust_halo(spec, t, k_plane):
@@ -517,8 +520,11 @@ class RobustJob:
     client: ``nbhd.RobustRun`` decides every round; each tile is a
     :class:`nbhd._tiles.RobustTileActor` on a worker. ``status`` says where the run is."""
 
-    def __init__(self, cloud, options, out, client):
+    def __init__(self, cloud, options, k_plane, out, client):
+        """``options``: the run's ``nbhd.RobustOptions``, made with ``k_plane`` (which sizes
+        the first halos)."""
         self.cloud, self.options, self.out, self.client = cloud, options, out, client
+        self.k_plane = k_plane
         # rounds taken, halos grown, and owned values used although their tile said they are
         # not the cloud's (none unless _halo_ok is overridden)
         self.status = {"round": None, "generation": 0, "grown": 0, "rounds": 0, "invalid": 0}
@@ -527,7 +533,7 @@ class RobustJob:
         spec = self.cloud.spec
         futures = [
             self.client.submit(_tiles.RobustTileActor, spec, t,
-                               _first_robust_halo(spec, t, self.options["k_plane"]),
+                               _first_robust_halo(spec, t, self.k_plane),
                                self.options, self.out, actor=True, pure=False)
             for t in range(self.cloud.tiles)
         ]
@@ -561,7 +567,7 @@ class RobustJob:
         import nbhd
 
         self.actors = self._actors()
-        run = nbhd.RobustRun(self._spacing(), **self.options)
+        run = nbhd.RobustRun(self._spacing(), self.options)
         while (r := run.round())["kind"] != "finish":
             self.status.update(round=r["kind"], generation=r["generation"])
             parts = self._each(lambda a, r=r: a.round(r), r["generation"])

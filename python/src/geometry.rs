@@ -1,7 +1,8 @@
 //! Normals, curvatures and smoothing (`nbhd::smooth`, thesis Chapter 2) on an (n, 3) array:
-//! the options of `SmoothOptions` / `RobustOptions` as keyword arguments, the per-point outputs
-//! (`PointOutput`) as numpy arrays. The points are read as float64 (the library computes the
-//! geometry in f64); the GIL is released while the library runs.
+//! the options of `SmoothOptions` as keyword arguments (those of `RobustOptions` are in
+//! `robust_options.rs`), the per-point outputs (`PointOutput`) as numpy arrays. The points are
+//! read as float64 (the library computes the geometry in f64); the GIL is released while the
+//! library runs.
 
 use glam::DVec3;
 use nbhd::geometry::{estimate_normals, NormalOptions};
@@ -285,66 +286,16 @@ pub fn smooth<'py>(
     result_dict(py, &r, true)
 }
 
-/// Smooths an (n, 3) point array with the robust mode (`nbhd.smooth.robust`): normals chosen
-/// among shifted neighbourhoods' planes, weights from distances to the neighbours' tangent
-/// planes scaled by the estimated noise σ̂, and a stopping rule; one default setting for every
-/// shape and noise level.
-///
-/// `noise_scale` (None: the library's default, on) widens the neighbourhoods while the cloud
-/// reads as a ball of noise (noise of about two spacings or more).
-///
-/// Returns the dict of `smooth()` plus `normals` (the robust normals of the last step),
-/// `noise` (σ̂ of each iteration's input, in h), `moved` (RMS displacement per iteration,
-/// in h), `dimension` (the local dimension of each check of the noise scale: 2 a surface, 3
-/// a ball of noise) and `wide_iterations` (the iterations that used the wide
-/// neighbourhoods).
-#[pyfunction]
-#[pyo3(signature = (points, *, k = 24, k_plane = 48, epsilon = 12.0, epsilon_units = "relative",
-                    max_iterations = 10, tolerance = 0.05, inlier_width = 5.0,
-                    feature_angle = 20.0, tau = 1.0, noise_scale = None,
-                    orientation = "unoriented",
-                    orientation_point = [0.0, 0.0, 0.0], non_finite = "reject",
-                    outputs = false, threads = 0))]
-#[allow(clippy::too_many_arguments)]
-pub fn smooth_robust<'py>(
+/// `nbhd::smooth::smooth_robust` on an (n, 3) point array: the dict `smooth_robust` returns
+/// (its keywords are parsed in `robust_options.rs`).
+pub(crate) fn smooth_robust_dict<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
-    k: usize,
-    k_plane: usize,
-    epsilon: f64,
-    epsilon_units: &str,
-    max_iterations: usize,
-    tolerance: f64,
-    inlier_width: f64,
-    feature_angle: f64,
-    tau: f64,
-    noise_scale: Option<bool>,
-    orientation: &str,
-    orientation_point: [f64; 3],
-    non_finite: &str,
-    outputs: bool,
-    threads: usize,
+    opts: &RobustOptions,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let opts = robust_options(
-        k,
-        k_plane,
-        epsilon,
-        epsilon_units,
-        max_iterations,
-        tolerance,
-        inlier_width,
-        feature_angle,
-        tau,
-        noise_scale,
-        orientation,
-        orientation_point,
-        non_finite,
-        outputs,
-        threads,
-    )?;
     let pts = dvec3s(points)?;
     let r = py
-        .detach(|| core::smooth_robust_report(&pts, &opts, &mut |_, _| true))
+        .detach(|| core::smooth_robust_report(&pts, opts, &mut |_, _| true))
         .or_raise()?;
     let d = result_dict(py, &r.result, true)?;
     d.set_item("normals", dvec3_array(py, &r.normals)?)?;
@@ -353,42 +304,4 @@ pub fn smooth_robust<'py>(
     d.set_item("dimension", vec1(py, r.dimension.clone()))?;
     d.set_item("wide_iterations", r.wide_iterations)?;
     Ok(d)
-}
-
-/// The options of the robust mode from the keywords of `smooth_robust` (also those of the tiled
-/// run's `RobustRun` and `RobustTile`).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn robust_options(
-    k: usize,
-    k_plane: usize,
-    epsilon: f64,
-    epsilon_units: &str,
-    max_iterations: usize,
-    tolerance: f64,
-    inlier_width: f64,
-    feature_angle: f64,
-    tau: f64,
-    noise_scale: Option<bool>,
-    orientation: &str,
-    orientation_point: [f64; 3],
-    non_finite: &str,
-    outputs: bool,
-    threads: usize,
-) -> PyResult<RobustOptions> {
-    let defaults = RobustOptions::default();
-    Ok(RobustOptions {
-        k,
-        k_plane,
-        epsilon: options::length(epsilon, epsilon_units)?,
-        max_iterations,
-        tolerance,
-        inlier_width,
-        feature_angle,
-        tau,
-        noise_scale: noise_scale.unwrap_or(defaults.noise_scale),
-        orientation: options::orientation(orientation, orientation_point)?,
-        outputs,
-        non_finite: options::non_finite(non_finite)?,
-        threads,
-    })
 }

@@ -11,6 +11,7 @@ mod geometry;
 mod index;
 mod io;
 mod options;
+mod robust_options;
 mod robust_tiles;
 mod tree;
 
@@ -35,7 +36,8 @@ fn _nbhd(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(geometry::normals, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::curvatures, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::smooth, m)?)?;
-    m.add_function(wrap_pyfunction!(geometry::smooth_robust, m)?)?;
+    m.add_function(wrap_pyfunction!(robust_options::smooth_robust, m)?)?;
+    m.add_class::<robust_options::PyRobustOptions>()?;
     m.add_class::<robust_tiles::PyRobustRun>()?;
     m.add_class::<robust_tiles::PyRobustTile>()?;
     m.add_class::<robust_tiles::PyRankSearch>()?;

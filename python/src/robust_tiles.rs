@@ -17,7 +17,8 @@ use pyo3::types::{PyBytes, PyDict, PyTuple};
 
 use crate::arrays::{dvec3_array, dvec3s, vec1};
 use crate::errors::{value_err, OrRaise};
-use crate::geometry::{outputs_dict, robust_options};
+use crate::geometry::outputs_dict;
+use crate::robust_options::PyRobustOptions;
 
 /// A round as the dict a driver sends to its tiles: `kind` (`start`, `ratio`, `measure`,
 /// `step`, `finish`, `done`), the `generation` it reads, its `rows` (`plain`, `wide`,
@@ -131,46 +132,8 @@ impl PyRobustRun {
     /// A run on a cloud of mean spacing `spacing` (the mean distance of each point to its
     /// nearest other, as `smooth_robust` computes it), with the options of `smooth_robust`.
     #[new]
-    #[pyo3(signature = (spacing, *, k = 24, k_plane = 48, epsilon = 12.0,
-                        epsilon_units = "relative", max_iterations = 10, tolerance = 0.05,
-                        inlier_width = 5.0, feature_angle = 20.0, tau = 1.0, noise_scale = None,
-                        orientation = "unoriented", orientation_point = [0.0, 0.0, 0.0],
-                        outputs = false))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        spacing: f64,
-        k: usize,
-        k_plane: usize,
-        epsilon: f64,
-        epsilon_units: &str,
-        max_iterations: usize,
-        tolerance: f64,
-        inlier_width: f64,
-        feature_angle: f64,
-        tau: f64,
-        noise_scale: Option<bool>,
-        orientation: &str,
-        orientation_point: [f64; 3],
-        outputs: bool,
-    ) -> PyResult<Self> {
-        let options = robust_options(
-            k,
-            k_plane,
-            epsilon,
-            epsilon_units,
-            max_iterations,
-            tolerance,
-            inlier_width,
-            feature_angle,
-            tau,
-            noise_scale,
-            orientation,
-            orientation_point,
-            "reject",
-            outputs,
-            0,
-        )?;
-        let run = RobustRun::new(&options, spacing, Neighbors::default()).or_raise()?;
+    fn new(spacing: f64, options: PyRef<'_, PyRobustOptions>) -> PyResult<Self> {
+        let run = RobustRun::new(&options.options, spacing, Neighbors::default()).or_raise()?;
         Ok(Self { run })
     }
 
@@ -282,49 +245,15 @@ impl PyRobustTile {
     /// `lo`..`hi` (infinite bounds where the cloud ends), in the cloud's order; `owned` (m,)
     /// whether the tile owns each; the options of the run.
     #[new]
-    #[pyo3(signature = (points, owned, lo, hi, *, k = 24, k_plane = 48, epsilon = 12.0,
-                        epsilon_units = "relative", max_iterations = 10, tolerance = 0.05,
-                        inlier_width = 5.0, feature_angle = 20.0, tau = 1.0, noise_scale = None,
-                        orientation = "unoriented", orientation_point = [0.0, 0.0, 0.0],
-                        outputs = false))]
-    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         points: &Bound<'_, PyAny>,
         owned: Vec<bool>,
         lo: [f64; 3],
         hi: [f64; 3],
-        k: usize,
-        k_plane: usize,
-        epsilon: f64,
-        epsilon_units: &str,
-        max_iterations: usize,
-        tolerance: f64,
-        inlier_width: f64,
-        feature_angle: f64,
-        tau: f64,
-        noise_scale: Option<bool>,
-        orientation: &str,
-        orientation_point: [f64; 3],
-        outputs: bool,
+        options: PyRef<'_, PyRobustOptions>,
     ) -> PyResult<Self> {
-        let options = robust_options(
-            k,
-            k_plane,
-            epsilon,
-            epsilon_units,
-            max_iterations,
-            tolerance,
-            inlier_width,
-            feature_angle,
-            tau,
-            noise_scale,
-            orientation,
-            orientation_point,
-            "reject",
-            outputs,
-            0,
-        )?;
+        let options = options.options;
         let input = dvec3s(points)?;
         let region = Region {
             lo: DVec3::from_array(lo),

@@ -171,3 +171,24 @@ def test_an_approximate_median_differs(client, tmp_path, monkeypatch):
     got = tiled(client, tmp_path, pts).assemble()
     names, points = differing(got, ref)
     assert "noise" in names and points > len(pts) // 2
+
+
+def test_robust_options_are_smooth_robusts_keywords_and_pickle():
+    # the options a tiled run sends to its workers: smooth_robust's keywords (but non_finite
+    # and threads) with its defaults, checked when made, and the same after a pickle
+    import inspect
+    import pickle
+
+    ours = inspect.signature(nbhd.RobustOptions).parameters
+    theirs = inspect.signature(nbhd.smooth_robust).parameters
+    assert list(ours) == [p for p in theirs if p not in ("points", "non_finite", "threads")]
+    assert all(ours[p].default == theirs[p].default for p in ours)
+    options = nbhd.RobustOptions(k=10, epsilon=0.5, epsilon_units="absolute", noise_scale=False,
+                                 orientation="toward-point", orientation_point=(1.0, 2.0, 3.0))
+    back = pickle.loads(pickle.dumps(options))
+    assert repr(back) == repr(options)
+    assert "k=10" in repr(back) and "orientation_point=[1.0, 2.0, 3.0]" in repr(back)
+    with pytest.raises(ValueError):
+        nbhd.RobustOptions(epsilon_units="inches")
+    with pytest.raises(TypeError):
+        nbhd.RobustOptions(non_finite="skip")

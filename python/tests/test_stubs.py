@@ -115,10 +115,11 @@ def test_robust_step_api_returns_what_the_stubs_say() -> None:
     fields = stub_typed_dicts()
     pts = sphere(800)
     inf = float("inf")
-    tile = nbhd.RobustTile(pts, [True] * len(pts), [-inf] * 3, [inf] * 3, max_iterations=2)
+    options = nbhd.RobustOptions(max_iterations=2)
+    tile = nbhd.RobustTile(pts, [True] * len(pts), [-inf] * 3, [inf] * 3, options)
     near, valid = tile.nearest()
     assert bool(valid.all())
-    run = nbhd.RobustRun(nbhd.RobustRun.spacing_of_nearest(near), max_iterations=2)
+    run = nbhd.RobustRun(nbhd.RobustRun.spacing_of_nearest(near), options)
     while (r := run.round())["kind"] != "finish":
         assert set(r) <= fields["RobustRound"]
         part = tile.round(r)

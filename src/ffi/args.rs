@@ -3,6 +3,7 @@
 use std::ffi::c_void;
 
 use super::status::FfiError;
+use crate::error::NbhdError;
 
 /// Checks that `p` is not NULL and is aligned for `T`; `arg` names it for the message.
 pub(crate) fn check_ptr<T>(p: *const T, arg: &str) -> Result<(), FfiError> {
@@ -80,6 +81,54 @@ pub(crate) unsafe fn read_slice<'a, T>(
     // SAFETY: non-NULL and aligned (checked above), `count` readable values (caller) whose
     // byte size fits in isize (checked above); only read.
     Ok(unsafe { std::slice::from_raw_parts(p, count) })
+}
+
+/// Writes `values` to `out` if they fit in `capacity`, else BUFFER_TOO_SMALL naming `what`.
+///
+/// # Safety
+/// `out` must be NULL or writable for `capacity` values.
+pub(crate) unsafe fn copy_out<V: Copy>(
+    values: &[V],
+    out: *mut V,
+    capacity: usize,
+    what: &'static str,
+) -> Result<(), FfiError> {
+    if values.len() > capacity {
+        return Err(NbhdError::BufferTooSmall {
+            what,
+            len: capacity,
+            needed: values.len(),
+        }
+        .into());
+    }
+    if !values.is_empty() {
+        check_ptr(out.cast_const(), what)?;
+        // SAFETY: non-NULL and aligned (checked above), writable for `capacity` >=
+        // values.len() values (caller); a fresh Rust slice never overlaps the caller's buffer.
+        unsafe { std::ptr::copy_nonoverlapping(values.as_ptr(), out, values.len()) };
+    }
+    Ok(())
+}
+
+/// Writes `values.len()` to `*count` and `values` to `out` as [`copy_out`] does; a NULL or
+/// misaligned `out` that would be written is refused first, with `*count` left as it was.
+///
+/// # Safety
+/// `out` must be NULL or writable for `capacity` values; `count` checked and writable.
+pub(crate) unsafe fn copy_counted<V: Copy>(
+    values: &[V],
+    out: *mut V,
+    capacity: usize,
+    count: *mut usize,
+    what: &'static str,
+) -> Result<(), FfiError> {
+    if !values.is_empty() && values.len() <= capacity {
+        check_ptr(out.cast_const(), what)?;
+    }
+    // SAFETY: `count` is non-NULL, aligned and writable (caller).
+    unsafe { count.write(values.len()) };
+    // SAFETY: forwarded from the caller.
+    unsafe { copy_out(values, out, capacity, what) }
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 
 use std::ffi::c_void;
 
-use super::args::{check_aligned, check_optional, check_ptr, deref, init_out};
+use super::args::{check_aligned, check_optional, check_ptr, copy_out, deref, init_out};
 use super::dynamic::nbhd_dynamic_tree;
 use super::fields::{c_field, CStruct};
 use super::status::{guard, guard_value, nbhd_status, FfiError};
@@ -31,33 +31,6 @@ unsafe fn slice_of<'a, T: Scalar>(
     check_aligned(p, std::mem::align_of::<T>(), arg)?;
     // SAFETY: non-NULL, aligned for `T` (checked above), `len` readable values (caller).
     Ok(unsafe { std::slice::from_raw_parts(p.cast::<T>(), len) })
-}
-
-/// Writes `values` to `out` if they fit in `capacity`, else BUFFER_TOO_SMALL naming `what`.
-///
-/// # Safety
-/// `out` must be NULL or writable for `capacity` values.
-unsafe fn copy_out<V: Copy>(
-    values: &[V],
-    out: *mut V,
-    capacity: usize,
-    what: &'static str,
-) -> Result<(), FfiError> {
-    if values.len() > capacity {
-        return Err(NbhdError::BufferTooSmall {
-            what,
-            len: capacity,
-            needed: values.len(),
-        }
-        .into());
-    }
-    if !values.is_empty() {
-        check_ptr(out.cast_const(), what)?;
-        // SAFETY: non-NULL and aligned (checked above), writable for `capacity` >=
-        // values.len() values (caller); a fresh Rust slice never overlaps the caller's buffer.
-        unsafe { std::ptr::copy_nonoverlapping(values.as_ptr(), out, values.len()) };
-    }
-    Ok(())
 }
 
 /// All points of the tree inside the closed axis-aligned box `min[j] <= x[j] <= max[j]`

@@ -25,7 +25,7 @@
 #![warn(clippy::undocumented_unsafe_blocks)]
 
 // The header follows the order of these modules (cbindgen reads them in turn): errors first,
-// then every enum, the plain types, the tree, single queries, tables, and normals, curvatures
+// then every enum, the plain types, the tree and its nodes, single queries, tables, and normals, curvatures
 // and smoothing (their shared outputs and callback first). Blank lines keep rustfmt from
 // sorting them.
 pub mod status;
@@ -35,6 +35,8 @@ pub mod enums;
 pub mod types;
 
 pub mod tree;
+
+pub mod nodes;
 
 pub mod persist;
 
@@ -70,6 +72,7 @@ pub use dynamic::*;
 pub use enums::*;
 pub use filter::*;
 pub use in_box::*;
+pub use nodes::*;
 pub use normals::*;
 pub use periodic::*;
 pub use persist::*;
