@@ -84,7 +84,7 @@ pub(crate) unsafe fn query<H: IndexHandle>(
 ) -> nbhd_status {
     guard(func, || {
         // SAFETY: forwarded from the caller.
-        unsafe { query_with(tree, at, nbhd, &QueryOptions::default(), out) }
+        unsafe { query_with(tree, at, nbhd, &QueryOptions::DEFAULT, out) }
     })
 }
 
@@ -169,7 +169,14 @@ unsafe fn run<T: FfiScalar, S: NeighborIndex<T>>(
         },
     };
     T::with_scratch(|found| {
-        tree.search_with(query, nbhd.to_with::<T>(options)?, options, found)?;
+        let nbhd = nbhd.to_with::<T>(options)?;
+        if *options == QueryOptions::DEFAULT {
+            // The plain search, as `KdTree::knn` runs it: same checks, same result, without
+            // resolving the options into a plan on every call (callgrind, docs/speed-log.md).
+            tree.search(query, nbhd, found)?;
+        } else {
+            tree.search_with(query, nbhd, options, found)?;
+        }
         // SAFETY: `count` is non-NULL, aligned and writable (checked by the caller of `run`).
         unsafe { count.write(found.len()) };
         if found.len() > out.capacity {
