@@ -10,8 +10,8 @@
 //! - `search`: up to 160 points of dimension 1 to 5, `f32` or `f64`, whose coordinates come from
 //!   palettes that make ties (few values, copies), neighbouring floats, subnormals, huge values
 //!   whose squared distances overflow to infinity, or arbitrary finite bits; any pivot policy
-//!   and leaf size. The all-point tables (the grouped search: AVX-512 keys and ranks, SSE
-//!   masks, sorting of the first leaf's candidates) of every kind, with and without the point
+//!   and leaf size. The all-point tables (the grouped search: AVX-512 keys and ranks, the
+//!   gathered blocks' distances of `f64` in 3-D in AVX lanes, SSE masks, sorting of the first leaf's candidates) of every kind, with and without the point
 //!   itself, the tables of outside queries, and single queries by coordinates and by stored
 //!   point (their leaf distances of `f64` in 3-D in AVX lanes).
 //! - `robust`: the robust smoothing (its AVX lanes: plane scores, weighted sums, steps, the

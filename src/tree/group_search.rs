@@ -49,7 +49,6 @@ use rows::{KEY_HEAP_MAX_K, SORTED_MAX_K};
 pub(crate) use cells::{CellView, Cells};
 pub(crate) use tables::{batch_table, table, Plan};
 
-use super::kernel::below_mask;
 use super::node::Node;
 use crate::query::result_set::Key32;
 use crate::query::{order, Neighbor, Neighborhood};
@@ -501,7 +500,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
         let (llo, lhi, lmin) = (&part.lo[ni], &part.hi[ni], part.min_id[ni]);
         let (a, b) = (nd.a as usize, nd.b as usize);
         let (bound, worst) = (&mut st.bound, &mut st.worst);
-        let sse = crate::simd::sse();
+        let simd = (crate::simd::sse(), crate::simd::avx());
         for i in 0..m {
             let qi = &mb.q[i];
             if !admits(box_dist(qi, qi, llo, lhi), lmin, bound[i], worst[i]) {
@@ -509,8 +508,7 @@ impl<T: Scalar, const D: usize> Search<'_, T, D> {
             }
             let mut start = a;
             while start < b {
-                let d = part.soa.block_sq_dists(qi, start);
-                let mut hits = below_mask(&d, bound[i], sse);
+                let (d, mut hits) = part.soa.block_sq_dists_below(qi, start, bound[i], simd);
                 if b - start < BLOCK {
                     hits &= (1 << (b - start)) - 1;
                 }

@@ -24,6 +24,77 @@ pub(crate) fn sq_dists_by_dim<'c, T: Scalar, const D: usize, const N: usize>(
     d
 }
 
+/// [`sq_dists_by_dim`] then [`below_mask`]: the squared distances from `q` to a block of `N`
+/// points by dimension (the gathered blocks of the tables), and the bits of those within
+/// `bound`. With `avx` a block of `f64` in 3-D takes [`sq_dists_below_by_dim_f64x3_avx`] (four
+/// points per instruction instead of SSE2's two), the same bits; `avx` must be set only where
+/// [`crate::simd::avx`] said so.
+#[inline(always)]
+pub(crate) fn sq_dists_below_by_dim<'c, T: Scalar, const D: usize, const N: usize>(
+    q: &[T; D],
+    coord: impl Fn(usize) -> &'c [T],
+    bound: T,
+    sse: bool,
+    avx: bool,
+) -> ([T; N], u32) {
+    #[cfg(target_arch = "x86_64")]
+    if avx && D == 3 && N % 4 == 0 && T::TYPE == ScalarType::F64 {
+        debug_assert!(crate::simd::avx());
+        let c: [&[T; N]; 3] = std::array::from_fn(|j| coord(j).try_into().unwrap());
+        let mut d = [T::ZERO; N];
+        // SAFETY: `Scalar` is sealed to f32 and f64 and `T::TYPE` is F64, so `T` is f64 (the
+        // casts keep lengths and alignment); the caller set `avx` only where the processor
+        // has AVX.
+        let mask = unsafe {
+            let q = [q[0].to_f64(), q[1].to_f64(), q[2].to_f64()];
+            let c = c.map(|c| &*(c as *const [T; N]).cast::<[f64; N]>());
+            let out = &mut *(&mut d as *mut [T; N]).cast::<[f64; N]>();
+            sq_dists_below_by_dim_f64x3_avx(&q, c, out, bound.to_f64())
+        };
+        return (d, mask);
+    }
+    let d = sq_dists_by_dim(q, coord);
+    let mask = below_mask(&d, bound, sse);
+    (d, mask)
+}
+
+/// [`sq_dists_below_by_dim`] for `f64` points in 3-D, compiled for AVX: four points at a time
+/// from the three coordinate arrays, `((0 + (qx − x)²) + (qy − y)²) + (qz − z)²` per lane — the
+/// order of [`sq_dists_by_dim`] (adding the first square to zero changes no bit), separate
+/// multiplies and adds, no fused multiply-add — then one compare and movemask per four bits.
+///
+/// # Safety
+/// The processor must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn sq_dists_below_by_dim_f64x3_avx<const N: usize>(
+    q: &[f64; 3],
+    c: [&[f64; N]; 3],
+    d: &mut [f64; N],
+    bound: f64,
+) -> u32 {
+    use std::arch::x86_64::*;
+    let mut mask = 0u32;
+    // SAFETY: AVX is this function's contract; group `g` reads `c[j][4g..4g + 4]` and writes
+    // `d[4g..4g + 4]`, with 4g + 4 ≤ N.
+    unsafe {
+        let b = _mm256_set1_pd(bound);
+        let (qx, qy, qz) = (
+            _mm256_set1_pd(q[0]),
+            _mm256_set1_pd(q[1]),
+            _mm256_set1_pd(q[2]),
+        );
+        for g in 0..N / 4 {
+            let tx = _mm256_sub_pd(qx, _mm256_loadu_pd(c[0].as_ptr().add(4 * g)));
+            let ty = _mm256_sub_pd(qy, _mm256_loadu_pd(c[1].as_ptr().add(4 * g)));
+            let tz = _mm256_sub_pd(qz, _mm256_loadu_pd(c[2].as_ptr().add(4 * g)));
+            mask |= sum_squares_below([tx, ty, tz], b, d.as_mut_ptr().add(4 * g)) << (4 * g);
+        }
+    }
+    mask
+}
+
 /// Squared distances from `q` (its first `D` coordinates) to the points of `points`, packed
 /// `[x0, y0, z0, x1, …]` as the tree keeps them (at most `N` points), into the first entries of
 /// `d`. Four points at a time: the compiler turns a group into vector arithmetic over its
@@ -136,13 +207,7 @@ unsafe fn sq_dists_below_f64x3_avx<const N: usize>(
             let tx = _mm256_sub_pd(qx, _mm256_blend_pd::<0b1010>(r0, r1));
             let ty = _mm256_sub_pd(qy, _mm256_shuffle_pd::<0b0101>(r0, r2));
             let tz = _mm256_sub_pd(qz, _mm256_blend_pd::<0b1010>(r1, r2));
-            let s = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(tx, tx), _mm256_mul_pd(ty, ty)),
-                _mm256_mul_pd(tz, tz),
-            );
-            _mm256_storeu_pd(d.as_mut_ptr().add(4 * g), s);
-            let within = _mm256_cmp_pd::<_CMP_LE_OQ>(s, b);
-            mask |= (_mm256_movemask_pd(within) as u32) << (4 * g);
+            mask |= sum_squares_below([tx, ty, tz], b, d.as_mut_ptr().add(4 * g)) << (4 * g);
         }
     }
     for i in 4 * groups..n {
@@ -151,6 +216,32 @@ unsafe fn sq_dists_below_f64x3_avx<const N: usize>(
         mask |= u32::from(s <= bound) << i;
     }
     mask
+}
+
+/// The squared distances `(tx² + ty²) + tz²` of a group of four points from their coordinate
+/// differences — separate multiplies and adds, the portable order and bits — stored at `out`,
+/// and the four bits of those within `b`.
+///
+/// # Safety
+/// The processor must support AVX; `out` must be valid for writing four `f64`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn sum_squares_below(
+    [tx, ty, tz]: [std::arch::x86_64::__m256d; 3],
+    b: std::arch::x86_64::__m256d,
+    out: *mut f64,
+) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX and the four writable slots at `out` are this function's contract.
+    unsafe {
+        let s = _mm256_add_pd(
+            _mm256_add_pd(_mm256_mul_pd(tx, tx), _mm256_mul_pd(ty, ty)),
+            _mm256_mul_pd(tz, tz),
+        );
+        _mm256_storeu_pd(out, s);
+        _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(s, b)) as u32
+    }
 }
 
 /// Bit `p` set where `d[p] ≤ bound` (`N` ≤ 32, a multiple of 4): with `sse`
@@ -296,6 +387,39 @@ mod tests {
                     assert_eq!(bits(&a[..n]), bits(&plain[..n]), "n {n} spread {spread}");
                     assert_eq!(ma & low(n), mb & low(n), "n {n} bound {bound}");
                     assert_eq!(u64::from(ma) >> n, 0, "bits past the block, n {n}");
+                }
+            }
+        }
+    }
+
+    /// The AVX by-dimension kernel of `f64` in 3-D (the tables' gathered blocks) gives the
+    /// portable distances and mask, bit for bit: bounds exactly on points, between them, zero
+    /// and infinite; squares that overflow or underflow; infinite padding.
+    #[test]
+    fn the_by_dim_avx_kernel_matches_the_portable_one() {
+        if !crate::simd::avx() {
+            return;
+        }
+        let coord = |i: usize| ((i * 2_654_435_761) % 1000) as f64 * 0.37 - 150.0;
+        for spread in [1.0, 1e-160, 1e155, 1e-310] {
+            let mut soa: [Vec<f64>; 3] =
+                std::array::from_fn(|j| (0..16).map(|i| coord(3 * i + j) * spread).collect());
+            soa[0][15] = f64::INFINITY;
+            let q = [coord(5000) * spread, coord(5001) * spread, coord(5002)];
+            let plain: [f64; 16] = sq_dists_by_dim(&q, |j| &soa[j][..]);
+            let mut bounds = vec![0.0, f64::INFINITY, f64::MAX, 1.0];
+            bounds.extend(plain.iter().copied());
+            bounds.extend(plain.iter().map(|&x| x * 0.999));
+            for bound in bounds {
+                for sse in [true, false] {
+                    let (a, ma) =
+                        sq_dists_below_by_dim::<f64, 3, 16>(&q, |j| &soa[j][..], bound, sse, true);
+                    let (b, mb) =
+                        sq_dists_below_by_dim::<f64, 3, 16>(&q, |j| &soa[j][..], bound, sse, false);
+                    let bits = |d: &[f64]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&a), bits(&plain), "spread {spread}");
+                    assert_eq!(bits(&b), bits(&plain), "spread {spread}");
+                    assert_eq!(ma, mb, "spread {spread} bound {bound}");
                 }
             }
         }

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use super::BLOCK;
 use crate::scalar::Scalar;
-use crate::tree::kernel::sq_dists_by_dim;
+use crate::tree::kernel::sq_dists_below_by_dim;
 use crate::tree::node::Node;
 use crate::tree::search::TreeView;
 
@@ -38,10 +38,24 @@ impl<T: Scalar, const D: usize> Soa<T, D> {
         Self { stride, v }
     }
 
-    /// Squared distances from `q` to the points at tree positions `start..start + BLOCK`.
+    /// Squared distances from `q` to the points at tree positions `start..start + BLOCK`, and
+    /// the bits of those within `bound` (`sse`, `avx` as in `tree/kernel.rs`,
+    /// [`sq_dists_below_by_dim`]).
     #[inline(always)]
-    pub(super) fn block_sq_dists(&self, q: &[T; D], start: usize) -> [T; BLOCK] {
-        sq_dists_by_dim(q, |j| &self.v[j * self.stride + start..][..BLOCK])
+    pub(super) fn block_sq_dists_below(
+        &self,
+        q: &[T; D],
+        start: usize,
+        bound: T,
+        (sse, avx): (bool, bool),
+    ) -> ([T; BLOCK], u32) {
+        sq_dists_below_by_dim(
+            q,
+            |j| &self.v[j * self.stride + start..][..BLOCK],
+            bound,
+            sse,
+            avx,
+        )
     }
 }
 

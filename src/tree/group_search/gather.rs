@@ -26,10 +26,10 @@
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
 use super::avx512;
 use super::rows::GroupKey;
-use super::{below_mask, box_dist, Members, Search, BLOCK, GROUP};
+use super::{box_dist, Members, Search, BLOCK, GROUP};
 use crate::scalar::Scalar;
 use crate::table::RowsChunk;
-use crate::tree::kernel::sq_dists_by_dim;
+use crate::tree::kernel::sq_dists_below_by_dim;
 #[cfg(all(target_arch = "x86_64", rustc_1_89))]
 use std::any::Any;
 use std::ops::Range;
@@ -134,6 +134,9 @@ pub(super) struct Gather<T, K, const D: usize> {
     /// Whether a member's keys come from the AVX-512 loop (`f32` rows on a processor that has
     /// it, see `avx512.rs`).
     avx512: bool,
+    /// Whether a member's distances take the AVX loop of `f64` in 3-D (`tree/kernel.rs`) on a
+    /// processor that has it.
+    avx: bool,
 }
 
 impl<T: Scalar, K: GroupKey<T>, const D: usize> Gather<T, K, D> {
@@ -168,6 +171,7 @@ impl<T: Scalar, K: GroupKey<T>, const D: usize> Gather<T, K, D> {
             stack: Vec::new(),
             runs: Vec::new(),
             avx512: avx512_keys::<T, K>(),
+            avx: crate::simd::avx(),
         }
     }
 
@@ -378,10 +382,40 @@ impl<T: Scalar, K: GroupKey<T>, const D: usize> Gather<T, K, D> {
         if let Some(n) = self.keys_within_avx512(qi, self_id, bound) {
             return n;
         }
+        #[cfg(target_arch = "x86_64")]
+        if self.avx {
+            // SAFETY: `avx` is set only where the processor has AVX (`crate::simd::avx`).
+            return unsafe { self.keys_within_avx(qi, self_id, bound) };
+        }
+        self.keys_by_blocks(qi, self_id, bound, false)
+    }
+
+    /// [`Gather::keys_by_blocks`] compiled for AVX, so that the AVX distances of `f64` in 3-D
+    /// (`tree/kernel.rs`) inline into its loop instead of being a call per block (a call per
+    /// block cost the 1M cube's `f64` k = 10 table a billion instructions, docs/speed-log.md
+    /// round 14).
+    ///
+    /// # Safety
+    /// The processor must support AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn keys_within_avx(&mut self, qi: &[T; D], self_id: u32, bound: T) -> usize {
+        self.keys_by_blocks(qi, self_id, bound, true)
+    }
+
+    /// [`Gather::keys_within`] a block of [`BLOCK`] gathered points at a time (`avx`: the
+    /// distances of `f64` in 3-D in AVX lanes, set only where the processor has AVX).
+    #[inline(always)]
+    fn keys_by_blocks(&mut self, qi: &[T; D], self_id: u32, bound: T, avx: bool) -> usize {
         let (mut n, count, sse) = (0, self.ids.len(), crate::simd::sse());
         for start in (0..count).step_by(BLOCK) {
-            let d: [T; BLOCK] = sq_dists_by_dim(qi, |j| &self.coords[j][start..start + BLOCK]);
-            let mut hits = below_mask(&d, bound, sse);
+            let (d, mut hits) = sq_dists_below_by_dim::<T, D, BLOCK>(
+                qi,
+                |j| &self.coords[j][start..start + BLOCK],
+                bound,
+                sse,
+                avx,
+            );
             if count - start < BLOCK {
                 // the padding is infinitely far, yet within an infinite bound
                 hits &= (1 << (count - start)) - 1;
