@@ -2,11 +2,15 @@
 // denoising protocol"), in one process, on one thread, each cloud given to every method in the
 // same run, the order of the methods rotating from cloud to cloud.
 //
-//   bench_denoise DIR CLOUD...
+//   bench_denoise [--methods M,M...] DIR CLOUD...
 //
 // Reads DIR/CLOUD.noisy.f64 (raw little-endian double triples, as examples/denoise_protocol.rs
 // --prepare writes them) and writes, per method M, DIR/CLOUD.M.f64 (the smoothed points, in the
-// input's order) and DIR/CLOUD.M.s (the wall-clock seconds of the call). Methods:
+// input's order) and DIR/CLOUD.M.s (the wall-clock seconds of the call); it prints the wall-clock
+// and the process CPU seconds of each call (one thread each, so the CPU time is the method's own
+// work, less disturbed than the wall clock by other processes on a shared machine). --methods runs
+// only the methods listed (all three by default), e.g. to count one method's instructions under
+// valgrind against a run with `--methods none` (reading the cloud and its spacing only). Methods:
 //   robust  nbhd_smooth_robust, nbhd_robust_options_default() with threads = 1 (the call includes
 //           nbhd's neighbourhood search and spacing estimate).
 //   mls     pcl::MovingLeastSquares<PointXYZ, PointXYZ>, search radius 5h, polynomial order 2, one
@@ -27,6 +31,7 @@
 #include <CGAL/jet_smooth_point_set.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -38,6 +43,13 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// The CPU seconds the process has used so far.
+double cpu_seconds() {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
 using Points = std::vector<double>;  // x, y, z per point
 
 Points read_f64(const std::string& path) {
@@ -127,33 +139,48 @@ Points jet(const Points& in, double) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc < 3) {
-        std::fprintf(stderr, "usage: bench_denoise DIR CLOUD...\n");
-        return 2;
-    }
-    const std::string dir = argv[1];
     struct Method {
         const char* name;
         std::function<Points(const Points&, double)> run;
     };
-    const std::vector<Method> methods = {{"robust", robust}, {"mls", mls}, {"jet", jet}};
+    const std::vector<Method> all = {{"robust", robust}, {"mls", mls}, {"jet", jet}};
+    std::vector<Method> methods = all;
+    int first = 1;
+    if (argc > 2 && std::string(argv[1]) == "--methods") {
+        const std::string list = "," + std::string(argv[2]) + ",";
+        methods.clear();
+        for (const Method& m : all)
+            if (list.find("," + std::string(m.name) + ",") != std::string::npos) methods.push_back(m);
+        if (methods.empty() && list != ",none,") {
+            std::fprintf(stderr, "bench_denoise: --methods takes robust, mls, jet or none, comma-separated\n");
+            return 2;
+        }
+        first = 3;
+    }
+    if (argc < first + 2) {
+        std::fprintf(stderr, "usage: bench_denoise [--methods M,M...] DIR CLOUD...\n");
+        return 2;
+    }
+    const std::string dir = argv[first];
     try {
-        for (int c = 2; c < argc; ++c) {
+        for (int c = first + 1; c < argc; ++c) {
             const std::string base = dir + "/" + argv[c];
             const Points in = read_f64(base + ".noisy.f64");
             const double h = mean_spacing(to_pcl(in));
             std::printf("%s: %zu points, h = %.5g;", argv[c], in.size() / 3, h);
             for (std::size_t m = 0; m < methods.size(); ++m) {
                 const Method& method = methods[(m + std::size_t(c)) % methods.size()];
+                const double cpu0 = cpu_seconds();
                 auto t0 = Clock::now();
                 Points out = method.run(in, h);
                 double s = std::chrono::duration<double>(Clock::now() - t0).count();
+                const double cpu = cpu_seconds() - cpu0;
                 for (double v : out)
                     if (!std::isfinite(v)) throw std::runtime_error(std::string(method.name) + ": a non-finite point");
                 if (out.size() != in.size()) throw std::runtime_error(std::string(method.name) + ": point count changed");
                 write_f64(base + "." + method.name + ".f64", out);
                 std::ofstream(base + "." + method.name + ".s") << s << "\n";
-                std::printf(" %s %.3f s", method.name, s);
+                std::printf(" %s %.3f s (cpu %.3f s)", method.name, s, cpu);
             }
             std::printf("\n");
             std::fflush(stdout);

@@ -300,6 +300,75 @@ fn pairs_with_eps_keep_the_neighbours_an_ulp_beyond_the_radius() {
     }
 }
 
+/// Euclidean pairs in 3-D clouds of a few hundred points, where `pairs_with` answers by the
+/// grouped searches (a growing index: the other index's points as its grouped batch; a static
+/// tree against itself: its own table): the brute force's pairs and keys bit for bit for every
+/// pivot policy, leaves of 3 and 16, 1 and 2 threads, f32 and f64 — also with a growing tree
+/// with removed points (empty rows, caller indices with gaps) as the other side.
+fn check_grouped_pairs<T: Scalar>(seed: u64) {
+    let mut rng = Rng::new(seed);
+    let sizes = [T::INFINITY; 3];
+    let metric = Metric::Euclidean;
+    for kind in 0..3 {
+        let a: Vec<T> = cloud(kind, 400, 3, &mut rng)
+            .iter()
+            .map(|&x| T::from_f64(x))
+            .collect();
+        let b: Vec<T> = cloud(kind, 300, 3, &mut rng)
+            .iter()
+            .map(|&x| T::from_f64(x))
+            .collect();
+        let removed: Vec<u32> = (0..300).filter(|j| j % 7 == 3).collect();
+        let ga = static_and_growing(&a, 3, None, PivotPolicy::ALL[1]).1;
+        let mut gb = static_and_growing(&b, 3, None, PivotPolicy::ALL[0]).1;
+        gb.remove(&removed).unwrap();
+        for pivot in PivotPolicy::ALL {
+            for leaf_size in [3, 16] {
+                let opts = BuildOptions {
+                    pivot,
+                    leaf_size,
+                    ..BuildOptions::default()
+                };
+                let ta = KdTree::from_flat(&a, 3, &opts).unwrap();
+                let tb = KdTree::from_flat(&b, 3, &opts).unwrap();
+                for r in [0.0, L / 8.0, L / 4.0, L / 2.0] {
+                    let r = T::from_f64(r);
+                    let bound = metric.key_of(r);
+                    let what = format!("kind {kind} {pivot:?} leaf {leaf_size} r {r}");
+                    let exact = QueryOptions::default();
+                    let one = ta.pairs(r, &table(exact, 1)).unwrap();
+                    assert_eq!(
+                        rows_of(&one),
+                        brute(&a, &a, 3, &sizes, metric, bound, true),
+                        "{what}"
+                    );
+                    assert_eq!(ta.pairs(r, &table(exact, 2)).unwrap(), one, "{what}");
+                    let with = ta.pairs_with(&tb, r, &table(exact, 2)).unwrap();
+                    let want = brute(&a, &b, 3, &sizes, metric, bound, false);
+                    assert_eq!(rows_of(&with), want, "pairs_with: {what}");
+                    let grown = ga.pairs_with(&tb, r, &table(exact, 2)).unwrap();
+                    assert_eq!(grown, with, "growing pairs_with: {what}");
+                    let own = ta.pairs_with(&ta, r, &table(exact, 2)).unwrap();
+                    let all = brute(&a, &a, 3, &sizes, metric, bound, false);
+                    assert_eq!(rows_of(&own), all, "pairs_with itself: {what}");
+                    let gapped = ta.pairs_with(&gb, r, &table(exact, 1)).unwrap();
+                    let want: Vec<Vec<(u32, T)>> = want
+                        .into_iter()
+                        .map(|row| row.into_iter().filter(|(j, _)| j % 7 != 3).collect())
+                        .collect();
+                    assert_eq!(rows_of(&gapped), want, "pairs_with removed: {what}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn euclidean_pairs_on_the_grouped_paths_equal_the_brute_force() {
+    check_grouped_pairs::<f64>(21);
+    check_grouped_pairs::<f32>(22);
+}
+
 #[test]
 fn empty_indexes_have_no_pairs() {
     let opts = BuildOptions::default();

@@ -4,7 +4,7 @@ is a plain Euclidean radius, inclusive; rows are ordered by (sq_dist, index) and
 any thread count."""
 
 import os
-from typing import Any, Literal, Optional, Sequence, TypedDict, Union, final
+from typing import Any, Literal, Optional, Sequence, TypedDict, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -84,6 +84,14 @@ class Table:
     n_points: int
     def __len__(self) -> int: ...
     def row(self, i: int) -> tuple[U32, Floats]: ...
+    @overload
+    def coordinates(
+        self, *, stacked: Literal[False] = False
+    ) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
+        """The row and the column of every entry, row after row (scipy.sparse's COO form)."""
+    @overload
+    def coordinates(self, *, stacked: Literal[True]) -> npt.NDArray[np.intp]:
+        """The (entries, 2) array of every entry's (row, column)."""
     def row_lengths(self) -> npt.NDArray[np.uint64]: ...
     def to_csr(self, *, distances: bool = False) -> Any:
         """A ``scipy.sparse.csr_matrix`` (rows, n_points) of the keys (squared distances for

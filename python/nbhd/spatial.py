@@ -90,9 +90,10 @@ def _row_ids(table: Table) -> np.ndarray:
 
 
 def _rows_as_lists(offsets: np.ndarray, indices: np.ndarray) -> list[list[int]]:
-    """Compressed rows as Python lists of ints."""
-    cuts = np.asarray(offsets[1:-1], dtype=np.intp)
-    return [part.tolist() for part in np.split(indices.astype(np.intp), cuts)]
+    """Compressed rows as Python lists of ints (one conversion of all indices, then slices)."""
+    flat = indices.tolist()
+    starts = offsets.tolist()
+    return [flat[a:b] for a, b in zip(starts[:-1], starts[1:])]
 
 
 class cKDTreeNode:
@@ -316,9 +317,12 @@ class cKDTree:
         if ranks.size == 0 or ranks.min() < 1:
             raise ValueError("k must be at least 1")
         threads = _threads(workers)
-        d, i = self._nearest(q, int(ranks.max()), eps, p, distance_upper_bound, threads)
-        d = d[:, ranks - 1].reshape(lead + (len(ranks),))
-        i = i[:, ranks - 1].reshape(lead + (len(ranks),))
+        kmax = int(ranks.max())
+        d, i = self._nearest(q, kmax, eps, p, distance_upper_bound, threads)
+        if len(ranks) != kmax or (ranks != np.arange(1, kmax + 1)).any():
+            d, i = d[:, ranks - 1], i[:, ranks - 1]
+        d = d.reshape(lead + (len(ranks),))
+        i = i.reshape(lead + (len(ranks),))
         if squeeze:
             d, i = d[..., 0], i[..., 0]
             if not lead:
@@ -330,6 +334,12 @@ class cKDTree:
     ) -> tuple[np.ndarray, np.ndarray]:
         """The kmax nearest of each row of q, padded with (inf, n): (N, kmax) arrays."""
         rows = len(q)
+        if rows and self.n >= kmax and np.isinf(bound) and bound > 0:
+            # every row full: nbhd's arrays, converted in place where they can be
+            found, keys = self._tree.knn(q, kmax, p=p, eps=eps, threads=threads)
+            if p == 2:
+                return np.sqrt(keys, out=keys), found.astype(np.intp)
+            return _distances(keys, p), found.astype(np.intp)
         d = np.full((rows, kmax), np.inf)
         i = np.full((rows, kmax), self.n, dtype=np.intp)
         if rows == 0 or self.n == 0 or not bound > 0:
@@ -366,7 +376,9 @@ class cKDTree:
         ``return_length`` their numbers instead (intp, an int for one point). ``eps``: every
         point within r / (1 + eps) is returned and none beyond r (1 + eps)."""
         q, lead = self._queries(x)
-        radii = np.broadcast_to(np.asarray(r, dtype=np.float64), lead).ravel()
+        radii = np.asarray(r, dtype=np.float64)
+        if radii.ndim:
+            radii = np.broadcast_to(radii, lead).ravel()
         offsets, indices = self._ball_rows(q, radii, p, eps, _threads(workers), return_length)
         if return_length:
             lengths = np.diff(offsets).astype(np.intp).reshape(lead)
@@ -387,8 +399,17 @@ class cKDTree:
         threads: int,
         lengths_only: bool,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Rows (offsets, indices ascending) of the points within radii[j] of q[j]: one batch
-        query per distinct radius."""
+        """Rows (offsets, indices ascending) of the points within radii[j] of q[j] (radii a
+        scalar array: the one radius of every query): one batch query per distinct radius."""
+        if radii.ndim == 0:
+            table = self._tree.radius(q, float(radii), sorted=False, p=p, eps=eps, threads=threads)
+            assert isinstance(table, Table)  # a batch's rows (2-D queries)
+            offsets = table.offsets.astype(np.intp)
+            if lengths_only or not len(table.indices):
+                return offsets, np.empty(0, dtype=np.intp)
+            index = table.indices.astype(np.intp)
+            order = np.lexsort((index, _row_ids(table)))
+            return offsets, index[order]
         lengths = np.zeros(len(q), dtype=np.intp)
         parts: list[tuple[np.ndarray, np.ndarray]] = []
         for radius in np.unique(radii):
@@ -426,10 +447,10 @@ class cKDTree:
         if output_type not in ("set", "ndarray"):
             raise ValueError("Invalid output type")
         table = self._tree.pairs(r, p=p, eps=eps)
-        i, j = _row_ids(table), table.indices.astype(np.intp)
         if output_type == "set":
+            i, j = table.coordinates()
             return set(zip(i.tolist(), j.tolist()))
-        return np.column_stack((i, j)).reshape(-1, 2)
+        return table.coordinates(stacked=True)
 
     # ---- counts and distances between two trees ----------------------------------------------
 
@@ -515,8 +536,9 @@ class cKDTree:
         if output_type not in ("dok_matrix", "coo_matrix", "dict", "ndarray"):
             raise ValueError("Invalid output type")
         table = self._tree.pairs_with(self._other(other, "sparse_distance_matrix"), max_distance, p=p)
-        i, j = _row_ids(table), table.indices.astype(np.intp)
-        v = _distances(table.sq_dists, p)
+        i, j = table.coordinates()
+        v = table.sq_dists
+        v = np.sqrt(v, out=v) if p == 2 else _distances(v, p)  # the table is this call's own
         if output_type == "dict":
             return dict(zip(zip(i.tolist(), j.tolist()), v.tolist()))
         if output_type == "ndarray":

@@ -3,11 +3,11 @@
 
 use nbhd::handle::AnyIndex;
 use nbhd::{NbhdError, NeighborTable, Scalar};
-use numpy::{Element, PyArray1};
+use numpy::{Element, PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::arrays::{check_rows, float_array, vec1, Dtype, Points};
+use crate::arrays::{check_rows, float_array, vec1, vec2, Dtype, Points};
 use crate::errors::{value_err, OrRaise};
 use crate::index::{dtype, index_pymethods};
 use crate::options;
@@ -267,6 +267,34 @@ impl PyTable {
         let idx = self.indices.bind(py).get_item(&slice)?;
         let d2 = self.sq_dists.bind(py).get_item(&slice)?;
         PyTuple::new(py, [idx, d2])
+    }
+
+    /// The entries' coordinates, row after row: `(rows, cols)`, the row and the column (the
+    /// neighbour's index) of every entry as intp arrays — scipy.sparse's COO form, whose data
+    /// are `sq_dists`. With `stacked=True` one (entries, 2) intp array of `(row, col)` pairs
+    /// instead (scipy's `query_pairs(output_type='ndarray')`).
+    #[pyo3(signature = (*, stacked = false))]
+    fn coordinates<'py>(&self, py: Python<'py>, stacked: bool) -> PyResult<Bound<'py, PyAny>> {
+        let indices = self.indices.bind(py).cast::<PyArray1<u32>>()?.readonly();
+        let cols = indices.as_slice()?;
+        let total = cols.len();
+        let rows = self.starts.windows(2).enumerate();
+        if stacked {
+            let mut both: Vec<isize> = Vec::with_capacity(2 * total);
+            for (i, w) in rows {
+                for &j in &cols[w[0]..w[1]] {
+                    both.extend_from_slice(&[i as isize, j as isize]);
+                }
+            }
+            return Ok(vec2(py, both, total, 2)?.into_any());
+        }
+        let mut of_row: Vec<isize> = Vec::with_capacity(total);
+        for (i, w) in rows {
+            of_row.resize(w[1], i as isize);
+        }
+        let of_col: Vec<isize> = cols.iter().map(|&j| j as isize).collect();
+        let pair = [vec1(py, of_row).into_any(), vec1(py, of_col).into_any()];
+        Ok(PyTuple::new(py, pair)?.into_any())
     }
 
     /// Number of entries in each row (uint64).

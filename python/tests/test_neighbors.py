@@ -148,6 +148,22 @@ def test_radius_table_to_csr_matches_sparse_distance_matrix(cloud):
     np.testing.assert_array_equal(sq.data, table.sq_dists)
 
 
+def test_table_coordinates_are_the_entries_row_by_row(cloud):
+    table = nbhd.KdTree(cloud).neighborhoods(radius=0.07)
+    rows, cols = table.coordinates()
+    assert rows.dtype == np.intp and cols.dtype == np.intp
+    want = [(i, j) for i in range(len(table)) for j in table.row(i)[0].tolist()]
+    assert list(zip(rows.tolist(), cols.tolist())) == want
+    stacked = table.coordinates(stacked=True)
+    assert stacked.shape == (len(want), 2) and stacked.dtype == np.intp
+    np.testing.assert_array_equal(stacked, np.array(want).reshape(-1, 2))
+    csr = table.to_csr()
+    np.testing.assert_array_equal(csr.tocoo().row, rows)  # the same order as scipy's COO
+    empty = nbhd.KdTree(cloud).radius(cloud[:0], 0.07)
+    assert [a.shape for a in empty.coordinates()] == [(0,), (0,)]
+    assert empty.coordinates(stacked=True).shape == (0, 2)
+
+
 @pytest.mark.parametrize("pivot", PIVOTS)
 def test_every_pivot_and_median_gives_the_same_rows(cloud, pivot):
     ref = nbhd.KdTree(cloud).neighborhoods(k=9)

@@ -17,7 +17,7 @@
 use rayon::prelude::*;
 
 use super::search::answer_with;
-use super::tables::search_each_held;
+use super::tables::{region_order, search_each_held};
 use super::NeighborIndex;
 use crate::error::{NbhdError, Result};
 use crate::metric::Measure;
@@ -41,12 +41,58 @@ pub(super) fn pairs<T: Scalar, I: NeighborIndex<T>>(
     // r / (1 + eps) — every pair within r·(1 + eps) (`NeighborIndex::pairs`)
     plan.measure.scale = 1.0;
     with_threads(options.threads, || {
+        // (the grouped table of every point, halved, measured slower than this on the 1M
+        // cube: it finds every pair twice; python/benchmarks/vs_scipy.py)
         search_each_held(index, index, &plan, true, |i, row| {
             row.retain(|nb| nb.index > i);
             row.sort_unstable_by_key(|nb| nb.index);
         })
     })?
 }
+
+/// `table` with every row ordered by index (ascending `j`; the keys move with their indices),
+/// in place: the rows of the grouped paths come in their own order. One parallel pass on the
+/// current pool, blocks of [`ROWS_PER_BLOCK`] rows each.
+fn sorted_by_index<T: Scalar>(table: NeighborTable<T>) -> NeighborTable<T> {
+    let (offsets, mut indices, mut keys) = table.into_parts();
+    let rows = offsets.len() - 1;
+    // the blocks' disjoint parts of the entries, cut in row order
+    let mut parts = Vec::with_capacity(rows.div_ceil(ROWS_PER_BLOCK));
+    let (mut rest_i, mut rest_k) = (&mut indices[..], &mut keys[..]);
+    for lo in (0..rows).step_by(ROWS_PER_BLOCK) {
+        let hi = (lo + ROWS_PER_BLOCK).min(rows);
+        let (block_i, next_i) = rest_i.split_at_mut(offsets[hi] - offsets[lo]);
+        let (block_k, next_k) = rest_k.split_at_mut(offsets[hi] - offsets[lo]);
+        parts.push((&offsets[lo..=hi], block_i, block_k));
+        (rest_i, rest_k) = (next_i, next_k);
+    }
+    parts
+        .into_par_iter()
+        .for_each(|(starts, block_i, block_k)| {
+            let mut row: Vec<(u32, T)> = Vec::new();
+            for w in starts.windows(2) {
+                let (a, b) = (w[0] - starts[0], w[1] - starts[0]);
+                row.clear();
+                row.extend(
+                    block_i[a..b]
+                        .iter()
+                        .copied()
+                        .zip(block_k[a..b].iter().copied()),
+                );
+                row.sort_unstable_by_key(|&(j, _)| j);
+                for (&(j, key), (oi, ok)) in row
+                    .iter()
+                    .zip(block_i[a..b].iter_mut().zip(&mut block_k[a..b]))
+                {
+                    (*oi, *ok) = (j, key);
+                }
+            }
+        });
+    NeighborTable::from_parts(offsets, indices, keys).expect("the same offsets")
+}
+
+/// Rows per parallel block of [`sorted_by_index`].
+const ROWS_PER_BLOCK: usize = 4096;
 
 /// [`NeighborIndex::pairs_with`].
 pub(super) fn pairs_with<T: Scalar, I: NeighborIndex<T>, O: NeighborIndex<T>>(
@@ -60,16 +106,69 @@ pub(super) fn pairs_with<T: Scalar, I: NeighborIndex<T>, O: NeighborIndex<T>>(
         radius,
         sorted: false,
     })?;
-    // row j: the points of `index` near point j of `other`, found by `index`'s own search
-    let by_other = with_threads(options.threads, || {
-        search_each_held(index, other, &plan, false, |_, _| {})
-    })??;
-    transpose(&by_other, index.source_len())
+    with_threads(options.threads, || {
+        if plan.plain && index.period().is_none() {
+            // the index against itself (scipy's `sparse_distance_matrix(self, r)`): its own
+            // grouped table, every point in its own row; a key is the same from either end
+            // of a pair (each coordinate difference is negated exactly, then squared)
+            if std::ptr::addr_eq(index, other) {
+                if let Some(all) = index.grouped_table(plan.nbhd, false) {
+                    return Ok(sorted_by_index(all?));
+                }
+            }
+            if let Some(found) = grouped_of_held(index, other, plan.nbhd) {
+                // row r: the points of `index` near the r-th held point of `other` (ids[r])
+                let (ids, by_other) = found?;
+                return transpose(&by_other, index.source_len(), |r| ids[r]);
+            }
+        }
+        // row j: the points of `index` near point j of `other`, found by `index`'s own search
+        let by_other = search_each_held(index, other, &plan, false, |_, _| {})?;
+        transpose(&by_other, index.source_len(), |j| j as u32)
+    })?
 }
 
-/// The table whose row `i` holds `(j, key)` for every entry `(i, key)` of row `j` of `table`,
-/// `rows` rows (every index of `table` below it), rows ordered by `j` (a counting sort).
-fn transpose<T: Scalar>(table: &NeighborTable<T>, rows: usize) -> Result<NeighborTable<T>> {
+/// The neighbourhoods in `index` of the points held by `other`, by `index`'s grouped batch
+/// path if it has one for them ([`NeighborIndex::grouped_batch`]): the caller indices of
+/// `other`'s held points, ascending, and the table of their rows in that order. `None` when
+/// there is no such path (or `other` holds no point). On the current pool.
+fn grouped_of_held<T: Scalar, I: NeighborIndex<T>, O: NeighborIndex<T>>(
+    index: &I,
+    other: &O,
+    nbhd: Neighborhood<T>,
+) -> Option<Result<(Vec<u32>, NeighborTable<T>)>> {
+    let d = other.dim();
+    let (ids, packed) = other.with_stored(|stored| {
+        // the held points by caller index: `at[j]` is j's stored position + 1 (0: not held)
+        let mut at = vec![0u32; other.source_len()];
+        for w in 0..stored.len {
+            at[(stored.at)(w).0 as usize] = w as u32 + 1;
+        }
+        let ids: Vec<u32> = (0..at.len() as u32)
+            .filter(|&j| at[j as usize] > 0)
+            .collect();
+        let mut packed = Vec::with_capacity(ids.len() * d);
+        for &j in &ids {
+            packed.extend_from_slice((stored.at)(at[j as usize] as usize - 1).1);
+        }
+        (ids, packed)
+    });
+    if ids.is_empty() {
+        return None;
+    }
+    let (order, keys) = region_order(index, &packed);
+    let table = index.grouped_batch(&packed, &order, &keys, nbhd)?;
+    Some(table.map(|t| (ids, t)))
+}
+
+/// The table whose row `i` holds `(j_of(r), key)` for every entry `(i, key)` of row `r` of
+/// `table`, `rows` rows (every index of `table` below it); `j_of` ascending in `r`, so each row
+/// comes out ordered by `j` (a counting sort).
+fn transpose<T: Scalar>(
+    table: &NeighborTable<T>,
+    rows: usize,
+    j_of: impl Fn(usize) -> u32,
+) -> Result<NeighborTable<T>> {
     let total = table.total();
     let mut offsets = vec![0usize; rows + 1];
     for &i in table.indices() {
@@ -89,10 +188,11 @@ fn transpose<T: Scalar>(table: &NeighborTable<T>, rows: usize) -> Result<Neighbo
     keys.try_reserve_exact(total).map_err(oom)?;
     keys.resize(total, T::ZERO);
     let mut next = offsets[..rows].to_vec();
-    for j in 0..table.len() {
-        for (&i, &key) in table.indices_of(j).iter().zip(table.sq_dists_of(j)) {
+    for r in 0..table.len() {
+        let j = j_of(r);
+        for (&i, &key) in table.indices_of(r).iter().zip(table.sq_dists_of(r)) {
             let at = &mut next[i as usize];
-            indices[*at] = j as u32;
+            indices[*at] = j;
             keys[*at] = key;
             *at += 1;
         }

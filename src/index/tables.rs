@@ -158,7 +158,10 @@ fn packed_queries<T: Scalar>(queries: &PointsView<'_>) -> Result<Vec<T>> {
 /// The positions of the packed `queries` ordered by the region each falls into
 /// ([`NeighborIndex::region_key`]), ties by position (a counting sort: two passes over the
 /// queries), and those keys in that order.
-fn region_order<T: Scalar, I: NeighborIndex<T>>(index: &I, queries: &[T]) -> (Vec<u32>, Vec<u32>) {
+pub(super) fn region_order<T: Scalar, I: NeighborIndex<T>>(
+    index: &I,
+    queries: &[T],
+) -> (Vec<u32>, Vec<u32>) {
     let d = index.dim();
     let n = queries.len() / d;
     if index.is_empty() {
