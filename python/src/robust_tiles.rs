@@ -292,6 +292,20 @@ impl PyRobustTile {
         self.tile()?.set_current(generation, &current).or_raise()
     }
 
+    /// Sets the proxy of generation `at` on which the run's rows shrank, (m, 3) in the tile's
+    /// order, for a tile gathered at a later generation.
+    fn set_shrink(&mut self, at: usize, proxy: &Bound<'_, PyAny>) -> PyResult<()> {
+        let proxy = dvec3s(proxy)?;
+        self.tile()?.set_shrink(at, &proxy).or_raise()
+    }
+
+    /// Sets the normals of the step into the current generation, (m, 3) in the tile's order,
+    /// for a tile gathered after that step (its `finish` returns and reads them).
+    fn set_normals(&mut self, normals: &Bound<'_, PyAny>) -> PyResult<()> {
+        let normals = dvec3s(normals)?;
+        self.tile()?.set_normals(&normals).or_raise()
+    }
+
     /// Computes `round` (a dict of `RobustRun.round`) and returns the owned points' part: a
     /// dict of `count`, `valid` (per owned point), `values` (distance ratios or plane
     /// distances, for the median), `moved_sq` (an `ExactSum`), `max_len` and `min_narrow`.
@@ -318,6 +332,13 @@ impl PyRobustTile {
     fn owned_points<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let pts = self.tile()?.owned_points();
         Ok(dvec3_array(py, &pts)?.into_any())
+    }
+
+    /// The owned points' normals of the last step, (m, 3) in the tile's order ((0, 3) before
+    /// a step).
+    fn owned_normals<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let normals = self.tile()?.owned_normals();
+        Ok(dvec3_array(py, &normals)?.into_any())
     }
 
     /// The last round (`finish`): a dict of the owned points' `points`, `normals`, `outputs`
