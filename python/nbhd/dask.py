@@ -446,7 +446,7 @@ class TiledCloud:
         drives the rounds of ``nbhd.RobustRun``; each round is one task per tile, which
         gathers the tile and its halo, searches its rows again and reads the positions of
         the round's generation from the owners' files, so a worker holds one tile at a time
-        (a per-worker memory limit far below the cloud is enough); every round's medians are
+        (its memory is bounded by a tile's working set, not by the cloud); every round's medians are
         reduced exactly (``nbhd.RankSearch`` over the tiles' value files, never gathered). A
         cloud cut with ``non_finite="skip"`` has holes: they are refused here unless
         ``non_finite="skip"``, and then keep their rows with NaN normals and outputs, as on
