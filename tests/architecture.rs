@@ -449,8 +449,18 @@ fn python_classes_share_one_definition_of_each_query() {
             );
             continue;
         }
-        // the query methods of the tree classes; other classes (the robust mode's step API in
-        // robust_tiles.rs) may have a `to_bytes` of their own
+        // the query methods of the tree classes; the robust mode's step API (robust_tiles.rs)
+        // has its own bytes methods, written once in bytes_pymethods! for its three classes
+        if rel == "robust_tiles.rs" {
+            assert!(text.contains("macro_rules! bytes_pymethods"));
+            for name in ["to_bytes", "from_bytes", "__reduce__"] {
+                assert_eq!(
+                    text.matches(&format!("fn {name}")).count(),
+                    1,
+                    "python/src/robust_tiles.rs: `{name}` is written once, in bytes_pymethods!"
+                );
+            }
+        }
         if !text.contains("KdTree") {
             continue;
         }

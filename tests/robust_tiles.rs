@@ -4,7 +4,10 @@
 //! the region is unbounded on the cloud's outer sides), runs the rounds of `RobustRun` over
 //! `RobustTile::gathered` tiles, reduces their parts with `reduce` (exact selections across the
 //! tiles) and exchanges the owned points' positions after every step. A tile whose part is not
-//! valid everywhere is gathered again with twice the halo. The result — points, normals,
+//! valid everywhere is gathered again with twice the halo. A driver may also keep no tile
+//! between rounds: each round then gathers every tile anew and gives it the proxy of the round's
+//! generation, the proxy its rows shrank on and the last step's normals (the stateless tasks of
+//! `nbhd.dask`). The result — points, normals,
 //! outputs and every figure of the report — must be the bits of `smooth_robust_report`. Two
 //! negative controls show the comparison can fail: a halo too narrow whose invalid parts are
 //! used anyway, and the median of the tiles' medians in place of the exact median.
@@ -14,7 +17,7 @@ use nbhd::geometry::neighbors::mean_spacing;
 use nbhd::shapes::{add_noise, sample, Cube, CylinderPlane, NoiseKind};
 use nbhd::smooth::robust::{
     median, reduce, smooth_robust_report, Region, RobustOptions, RobustReport, RobustRun,
-    RobustTile, Round, TilePart,
+    RobustTile, Round, RowSet, TilePart,
 };
 use nbhd::smooth::{Neighbors, SmoothResult};
 use nbhd::NonFinitePolicy;
@@ -28,13 +31,59 @@ struct Control {
     grow: bool,
     /// The negative control: the median of the tiles' medians instead of the exact median.
     median_of_medians: bool,
+    /// Gather every tile anew for every round (a driver that keeps nothing between rounds).
+    fresh: bool,
 }
 
 const EXACT: Control = Control {
     halo: 6.0,
     grow: true,
     median_of_medians: false,
+    fresh: false,
 };
+
+/// What a tile gathered anew needs besides its input: the positions of every generation so
+/// far (by the cloud's index) and the normals of the last step.
+struct History {
+    generations: Vec<Vec<DVec3>>,
+    normals: Vec<DVec3>,
+}
+
+impl History {
+    /// Tile `cell` gathered anew with `halo` and given what `round` reads.
+    fn gather(&self, points: &[DVec3], mid: DVec3, cell: usize, halo: f64, round: &Round) -> Tile {
+        let mut t = gather(points, mid, cell, halo);
+        let of = |v: &[DVec3]| -> Vec<DVec3> { t.gathered.iter().map(|&i| v[i]).collect() };
+        let (generation, rows) = match *round {
+            Round::Ratio { generation } => (generation, RowSet::Wide),
+            Round::Measure { generation, rows }
+            | Round::Step {
+                generation, rows, ..
+            }
+            | Round::Finish {
+                generation, rows, ..
+            } => (generation, rows),
+            _ => (0, RowSet::Plain),
+        };
+        let current = of(&self.generations[generation]);
+        let shrink = match rows {
+            RowSet::Shrunk { at } => Some((at, of(&self.generations[at]))),
+            _ => None,
+        };
+        let normals =
+            (matches!(round, Round::Finish { .. }) && generation > 0).then(|| of(&self.normals));
+        if generation > 0 {
+            t.tile.set_current(generation, &current).unwrap();
+        }
+        if let Some((at, proxy)) = shrink {
+            t.tile.set_shrink(at, &proxy).unwrap();
+        }
+        if let Some(normals) = normals {
+            t.tile.set_normals(&normals).unwrap();
+        }
+        t
+    }
+}
 
 /// One tile: the cloud's indices of its gathered points (ascending) and of its owned ones.
 struct Tile {
@@ -138,9 +187,18 @@ fn tiled(points: &[DVec3], options: &RobustOptions, ctl: Control) -> Tiled {
     .unwrap();
     let eps = run.epsilon();
     let mut current = points.clone();
+    let mut history = History {
+        generations: vec![points.clone()],
+        normals: vec![DVec3::NAN; n],
+    };
     let mut generation = 0;
     loop {
         let round = run.round();
+        if ctl.fresh {
+            for t in &mut tiles {
+                *t = history.gather(&points, mid, t.cell, t.halo, &round);
+            }
+        }
         if matches!(round, Round::Finish { .. }) {
             break;
         }
@@ -149,9 +207,7 @@ fn tiled(points: &[DVec3], options: &RobustOptions, ctl: Control) -> Tiled {
             loop {
                 let part = t.tile.round(&round, options, eps).unwrap();
                 if ctl.grow && !part.all_valid() {
-                    *t = gather(&points, mid, t.cell, 2.0 * t.halo);
-                    let proxy: Vec<DVec3> = t.gathered.iter().map(|&i| current[i]).collect();
-                    t.tile.set_current(generation, &proxy).unwrap();
+                    *t = history.gather(&points, mid, t.cell, 2.0 * t.halo, &round);
                     grown += 1;
                     continue;
                 }
@@ -177,7 +233,11 @@ fn tiled(points: &[DVec3], options: &RobustOptions, ctl: Control) -> Tiled {
                 for (&i, p) in t.owned.iter().zip(t.tile.owned_points()) {
                     current[i] = p;
                 }
+                for (&i, p) in t.owned.iter().zip(t.tile.owned_normals()) {
+                    history.normals[i] = p;
+                }
             }
+            history.generations.push(current.clone());
             for t in &mut tiles {
                 let proxy: Vec<DVec3> = t.gathered.iter().map(|&i| current[i]).collect();
                 t.tile.set_current(generation, &proxy).unwrap();
@@ -268,9 +328,13 @@ fn differences(a: &RobustReport, b: &RobustReport) -> usize {
     a.iter().zip(&b).filter(|(x, y)| x != y).count()
 }
 
-fn assert_tiled_equals_one_machine(points: &[DVec3], options: &RobustOptions) -> Tiled {
+fn assert_tiled_equals_one_machine(
+    points: &[DVec3],
+    options: &RobustOptions,
+    ctl: Control,
+) -> Tiled {
     let one = one_machine(points, options);
-    let t = tiled(points, options, EXACT);
+    let t = tiled(points, options, ctl);
     assert_eq!(t.invalid, 0);
     let (a, b) = (bits(&t.report), bits(&one));
     for (x, y) in a.iter().zip(&b) {
@@ -293,7 +357,15 @@ fn tiles_equal_one_machine_at_three_noise_levels() {
     // widens the rows and shrinks them back on the proxy (see `src/smooth/tests.rs`)
     for (noise, n) in [(0.3, 12_000), (1.0, 12_000), (3.0, 12_000), (5.0, 12_000)] {
         let p = noisy_cube(n, noise, 39);
-        let t = assert_tiled_equals_one_machine(&p, &RobustOptions::default());
+        let t = assert_tiled_equals_one_machine(&p, &RobustOptions::default(), EXACT);
+        if noise >= 1.0 {
+            // the same with every tile gathered anew for every round
+            let fresh = Control {
+                fresh: true,
+                ..EXACT
+            };
+            assert_tiled_equals_one_machine(&p, &RobustOptions::default(), fresh);
+        }
         let r = &t.report;
         assert!(!r.moved.is_empty(), "{noise}h: iterations ran");
         if noise == 5.0 {
@@ -330,13 +402,23 @@ fn tiles_equal_one_machine_with_duplicates_holes_and_f32() {
         non_finite: NonFinitePolicy::Skip,
         ..RobustOptions::default()
     };
-    assert_tiled_equals_one_machine(&p, &skip);
+    assert_tiled_equals_one_machine(&p, &skip, EXACT);
+    let fresh = Control {
+        fresh: true,
+        ..EXACT
+    };
+    // with the outputs, which read the last step's normals given to the fresh tiles
+    let outputs = RobustOptions {
+        outputs: true,
+        ..skip
+    };
+    assert_tiled_equals_one_machine(&p, &outputs, fresh);
     // single precision input, converted to f64 exactly on both sides
     let single: Vec<DVec3> = p
         .iter()
         .map(|q| Vec3::new(q.x as f32, q.y as f32, q.z as f32).as_dvec3())
         .collect();
-    assert_tiled_equals_one_machine(&single, &skip);
+    assert_tiled_equals_one_machine(&single, &skip, EXACT);
 }
 
 #[test]
@@ -344,7 +426,7 @@ fn an_outlier_grows_its_tiles_halo_and_stays_identical() {
     let mut p = noisy_cube(8_000, 0.3, 5);
     // far from the cube, beside one tile: its row reaches across the cloud
     p.push(DVec3::new(3.0, 2.5, 0.0));
-    let t = assert_tiled_equals_one_machine(&p, &RobustOptions::default());
+    let t = assert_tiled_equals_one_machine(&p, &RobustOptions::default(), EXACT);
     assert!(t.grown > 0);
 }
 

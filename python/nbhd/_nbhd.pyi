@@ -43,6 +43,16 @@ class VoxelGrid(TypedDict):
     offsets: npt.NDArray[np.uint64]
     members: U32
 
+class AerialTile(TypedDict):
+    positions: F64
+    classification: npt.NDArray[np.uint8]
+    return_number: npt.NDArray[np.uint8]
+    number_of_returns: npt.NDArray[np.uint8]
+    gps_time: F64
+    intensity: npt.NDArray[np.uint16]
+    point_source_id: npt.NDArray[np.uint16]
+    scan_angle: npt.NDArray[np.int16]
+
 __all__ = [
     "KdTree",
     "Table",
@@ -58,6 +68,7 @@ __all__ = [
     "DigitCounts",
     "ExactSum",
     "voxel_grid",
+    "aerial_tile",
     "read",
     "write",
     "_reads_in_place",
@@ -573,8 +584,11 @@ class RobustTile:
     ) -> RobustTile: ...
     def nearest(self) -> tuple[F64, npt.NDArray[np.bool_]]: ...
     def set_current(self, generation: int, current: ArrayLike) -> None: ...
+    def set_shrink(self, at: int, proxy: ArrayLike) -> None: ...
+    def set_normals(self, normals: ArrayLike) -> None: ...
     def round(self, round: RobustRound) -> RobustPart: ...
     def owned_points(self) -> F64: ...
+    def owned_normals(self) -> F64: ...
     def finish(self, round: RobustRound) -> RobustTileResult: ...
 
 @final
@@ -624,6 +638,22 @@ class CloudFile(TypedDict):
     format: Literal["PLY", "PCD", "OBJ", "LAS", "XYZ"]
     source_precision: Optional[Literal["single", "double"]]
     text_columns: Optional[list[str]]
+
+def aerial_tile(
+    x0: float,
+    y0: float,
+    x1: float,
+    y1: float,
+    *,
+    seed: int = 39,
+    density: float = 16.0,
+    swath: float = 400.0,
+    overlap: float = 0.3,
+    noise: float = 0.025,
+    strip_offset: float = 0.03,
+    outliers: float = 1e-5,
+) -> AerialTile:
+    """The seeded synthetic aerial survey's points whose pulses fall in [x0, x1) x [y0, y1)."""
 
 def voxel_grid(
     points: ArrayLike,

@@ -298,7 +298,7 @@ def partial_sum(parts, a: int, b: int, carry: float) -> float:
     return float(acc[-1])
 
 
-# --- the robust smoothing: one stateful tile per Dask actor (python/DASK.md) ----------------
+# --- the robust smoothing: one task per tile and round, holding nothing between rounds ------
 
 
 def gather_robust(spec: Spec, t: int, width: float):
@@ -334,9 +334,23 @@ def gather_robust(spec: Spec, t: int, width: float):
     return idx[order], pts, owner, at, lo.tolist(), hi.tolist()
 
 
-def generation_path(out: str, g: int, t: int) -> str:
-    """Where tile ``t`` keeps its owned points' positions after ``g`` steps (owned order)."""
-    return os.path.join(out, f"gen_{g:04d}", f"tile_{t:06d}.npy")
+def generation_path(out: str, g: int, t: int, what: str = "points") -> str:
+    """Where tile ``t`` keeps its owned points' positions after ``g`` steps (``what``
+    ``"points"``), or the normals of the step into them (``"normals"``), in owned order."""
+    return os.path.join(out, f"gen_{g:04d}", f"{what}_{t:06d}.npy")
+
+
+def values_path(out: str, t: int) -> str:
+    """Where tile ``t`` keeps its owned values of the last round (for the exact median)."""
+    return os.path.join(out, "values", f"tile_{t:06d}.npy")
+
+
+def _save(path: str, array) -> None:
+    """``array`` written to ``path`` complete or not at all (a temporary name, then renamed)."""
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    tmp = path + ".tmp.npy"
+    np.save(tmp, array)
+    os.replace(tmp, path)
 
 
 def _validity(valid: np.ndarray) -> dict:
@@ -344,101 +358,104 @@ def _validity(valid: np.ndarray) -> dict:
     return {"valid": bool(valid.all()), "invalid": int((~valid).sum())}
 
 
-class RobustTileActor:
-    """One tile of a robust run, held on a worker for the whole run (a Dask actor): its
-    gathered points and ``nbhd.RobustTile``, which keeps the tile's rows between rounds, and
-    the values of the last round for the exact medians. Positions move between tiles through
-    the generation files; every decision (rounds, medians, halo growth) is the client's."""
+class RobustGather:
+    """Tile ``t`` of a robust run gathered with a halo of ``width`` into an
+    ``nbhd.RobustTile``, given what the round it is made for reads besides the input: the
+    positions of the round's generation, those its rows shrank on, and before the finish the
+    last step's normals, each read from the owners' generation files. A task makes one per
+    round and keeps nothing afterwards, so a worker holds one tile's working set at a time,
+    however large the cloud."""
 
-    def __init__(self, spec: Spec, t: int, width: float, options, out: str):
-        self.spec, self.t, self.options, self.out = spec, t, options, out
-        # the generation whose positions of every gathered point came from their owners (a
-        # step moves the halo too, but only the owners' positions of it are the cloud's)
-        self.synced = 0
-        self.values = np.empty(0)
-        self._gather(width)
-
-    def _gather(self, width):
+    def __init__(self, spec: Spec, t: int, width: float, options, out: str, round=None):
         import nbhd
 
-        idx, pts, self.owner, self.at, lo, hi = gather_robust(self.spec, self.t, width)
-        self.width = width
-        self.gathered = len(idx)
-        owned_mask = self.owner == self.t
-        # the caller indices the tile owns, ascending: read with the halo, not once more
-        self.own = idx[owned_mask]
-        self.tile = nbhd.RobustTile(pts, owned_mask, lo, hi, self.options)
+        idx, pts, self.owner, self.at, lo, hi = gather_robust(spec, t, width)
+        self.t, self.out, self.width, self.gathered = t, out, width, len(idx)
+        mine = self.owner == t
+        self.own = idx[mine]
+        self.tile = nbhd.RobustTile(pts, mine, lo, hi, options)
+        if round is None:
+            return
+        g = round["generation"]
+        if g:
+            self.tile.set_current(g, self._of_owners(g))
+        at = round.get("shrunk_at")
+        if round.get("rows") == "shrunk" and at != g:
+            self.tile.set_shrink(at, self._of_owners(at) if at else pts)
+        if round["kind"] == "finish" and g:
+            self.tile.set_normals(self._of_owners(g, "normals"))
 
-    def _proxy(self, g):
-        """The positions of generation ``g`` of every gathered point, from their owners' files."""
-        proxy = np.empty((len(self.owner), 3), np.float64)
+    def _of_owners(self, g: int, what: str = "points"):
+        """Generation ``g``'s ``what`` of every gathered point, from their owners' files."""
+        values = np.empty((len(self.owner), 3), np.float64)
         for u in np.unique(self.owner):
             sel = self.owner == u
-            proxy[sel] = np.load(generation_path(self.out, g, int(u)), mmap_mode="r")[self.at[sel]]
-        return proxy
+            path = generation_path(self.out, g, int(u), what)
+            values[sel] = np.load(path, mmap_mode="r")[self.at[sel]]
+        return values
 
-    def _to(self, g):
-        if g != self.synced:
-            self.tile.set_current(g, self._proxy(g))
-            self.synced = g
 
-    def grow(self, generation):
-        """Gathers the tile again with twice the halo, at the proxy of ``generation``."""
-        self._gather(2.0 * self.width)
-        self.synced = 0  # a tile gathered anew holds the input
-        self._to(generation)
-        return self.width
+def robust_nearest(spec: Spec, t: int, width: float, options, out: str) -> dict:
+    """Task: the owned points' nearest squared distances, written for the spacing's sums."""
+    tile = RobustGather(spec, t, width, options, out)
+    near, valid = tile.tile.nearest()
+    base = os.path.join(out, f"nearest_{t:06d}")
+    np.save(base + ".idx.npy", tile.own)
+    np.save(base + ".nearest.npy", near)
+    return {"tile": t, "path": base, "halo": width, "rows": len(tile.own), **_validity(valid)}
 
-    def nearest(self):
-        """The owned points' nearest squared distances, written for the spacing's sums."""
-        near, valid = self.tile.nearest()
-        base = os.path.join(self.out, f"nearest_{self.t:06d}")
-        np.save(base + ".idx.npy", self.own)
-        np.save(base + ".nearest.npy", near)
-        return {"tile": self.t, "path": base, "halo": self.width, **_validity(valid)}
 
-    def round(self, round):
-        """One round; the part's summary with the first digit counts of its values."""
-        import nbhd
+def robust_round(spec: Spec, t: int, width: float, options, out: str, round) -> dict:
+    """Task: one round of tile ``t``. Its owned values go to its values file, a step's
+    positions and normals to the next generation's files; returns the part's summary with
+    the first digit counts of its values."""
+    import nbhd
 
-        self._to(round["generation"])
-        part = self.tile.round(round)
-        self.values = part["values"]
-        if round["kind"] == "step":
-            path = generation_path(self.out, round["generation"] + 1, self.t)
-            os.makedirs(os.path.dirname(path), exist_ok=True)
-            tmp = path + ".tmp.npy"
-            np.save(tmp, self.tile.owned_points())
-            os.replace(tmp, path)
-        return {
-            "tile": self.t, **_validity(part["valid"]),
-            "halo": self.width, "count": part["count"], "max_len": part["max_len"],
-            "min_narrow": part["min_narrow"], "moved_sq": part["moved_sq"].to_bytes(),
-            "n_values": len(self.values),
-            "counts": nbhd.RankSearch(0).digit_counts(self.values).to_bytes(),
-        }
+    tile = RobustGather(spec, t, width, options, out, round)
+    part = tile.tile.round(round)
+    values = part["values"]
+    _save(values_path(out, t), values)
+    if round["kind"] == "step":
+        g = round["generation"] + 1
+        _save(generation_path(out, g, t), tile.tile.owned_points())
+        _save(generation_path(out, g, t, "normals"), tile.tile.owned_normals())
+    return {
+        "tile": t, **_validity(part["valid"]), "rows": len(tile.own),
+        "halo": width, "count": part["count"], "max_len": part["max_len"],
+        "min_narrow": part["min_narrow"], "moved_sq": part["moved_sq"].to_bytes(),
+        "n_values": len(values),
+        "counts": nbhd.RankSearch(0).digit_counts(values).to_bytes(),
+    }
 
-    def digit_counts(self, search: bytes) -> bytes:
-        import nbhd
 
-        return nbhd.RankSearch.from_bytes(search).digit_counts(self.values).to_bytes()
+def robust_counts(out: str, t: int, search: bytes) -> bytes:
+    """Task: tile ``t``'s digit counts of its last values for the search state ``search``."""
+    import nbhd
 
-    def matching_values(self, search: bytes):
-        import nbhd
+    values = np.load(values_path(out, t), mmap_mode="r")
+    return nbhd.RankSearch.from_bytes(search).digit_counts(values).to_bytes()
 
-        return nbhd.RankSearch.from_bytes(search).matching_values(self.values)
 
-    def finish(self, round, path):
-        """The last round: the owned points' points, normals and outputs written to ``path``."""
-        self._to(round["generation"])
-        r = self.tile.finish(round)
-        arrays = {"idx": self.own, "points": r["points"], "normals": r["normals"]}
-        for key, v in (r["outputs"] or {}).items():
-            arrays["outputs." + key] = v
-        _write(path, **arrays)
-        self.tile = None
-        return {"tile": self.t, "path": path, "rows": len(self.own), "halo": self.width,
-                "points": self.gathered, "valid": bool(r["valid"].all())}
+def robust_matching(out: str, t: int, search: bytes):
+    """Task: tile ``t``'s last values in the bucket of the search state ``search``."""
+    import nbhd
+
+    values = np.load(values_path(out, t), mmap_mode="r")
+    return nbhd.RankSearch.from_bytes(search).matching_values(values)
+
+
+def robust_finish(spec: Spec, t: int, width: float, options, out: str, round):
+    """Task: the last round, the owned points' points, normals and outputs written to
+    ``out/tile_<t>.npz``."""
+    path = os.path.join(out, f"tile_{t:06d}.npz")
+    tile = RobustGather(spec, t, width, options, out, round)
+    r = tile.tile.finish(round)
+    arrays = {"idx": tile.own, "points": r["points"], "normals": r["normals"]}
+    for key, v in (r["outputs"] or {}).items():
+        arrays["outputs." + key] = v
+    _write(path, **arrays)
+    return {"tile": t, "path": path, "rows": len(tile.own), "halo": width,
+            "points": tile.gathered, **_validity(r["valid"])}
 
 
 def partial_sum_finite(parts, a: int, b: int, carry):

@@ -21,9 +21,13 @@ a chain of tasks (:meth:`TiledCloud.spacing`): the same bits.
 
 from __future__ import annotations
 
+import concurrent.futures
 import json
 import math
 import os
+import shutil
+import threading
+import time
 from collections import namedtuple
 from dataclasses import asdict
 
@@ -432,18 +436,23 @@ class TiledCloud:
                       max_iterations=10, tolerance=0.05, inlier_width=5.0, feature_angle=20.0,
                       tau=1.0, noise_scale=None, orientation="unoriented",
                       orientation_point=(0.0, 0.0, 0.0), non_finite="reject", outputs=False,
-                      out=None, client=None):
+                      out=None, client=None, compute=True, progress=None):
         """``nbhd.smooth_robust(points, ...)`` on the tiles, identical to the last bit: the
         arrays ``points``, ``normals`` and with ``outputs`` ``outputs.<name>``, and the run's
         figures (``noise``, ``moved``, ``dimension``, ``wide_iterations``, ``spacing``,
         ``epsilon``, ``lambda``, ``min_neighbors``) in :meth:`RobustResult.assemble`.
 
-        Needs a ``distributed`` client (``client``, default the current one): each tile is an
-        actor that keeps its rows on its worker for the whole run; the client drives the rounds
-        of ``nbhd.RobustRun`` and reduces every round's medians exactly
-        (``nbhd.RankSearch`` over the tiles' values, never gathered). A cloud cut with
-        ``non_finite="skip"`` has holes: they are refused here unless ``non_finite="skip"``,
-        and then keep their rows with NaN normals and outputs, as on one machine."""
+        Needs a ``distributed`` client (``client``, default the current one): the client
+        drives the rounds of ``nbhd.RobustRun``; each round is one task per tile, which
+        gathers the tile and its halo, searches its rows again and reads the positions of
+        the round's generation from the owners' files, so a worker holds one tile at a time
+        (its memory is bounded by a tile's working set, not by the cloud); every round's medians are
+        reduced exactly (``nbhd.RankSearch`` over the tiles' value files, never gathered). A
+        cloud cut with ``non_finite="skip"`` has holes: they are refused here unless
+        ``non_finite="skip"``, and then keep their rows with NaN normals and outputs, as on
+        one machine. ``compute=False`` returns the unstarted :class:`RobustJob` (progress,
+        cancellation); ``progress`` is called with the job's ``status`` after every tile
+        task."""
         self._orientation(orientation)
         if non_finite not in ("reject", "skip"):
             raise ValueError(f"unknown non_finite {non_finite!r}; expected 'reject' or 'skip'")
@@ -462,7 +471,9 @@ class TiledCloud:
             feature_angle=feature_angle, tau=tau, noise_scale=noise_scale,
             orientation=orientation, orientation_point=tuple(orientation_point),
             outputs=outputs)
-        return RobustJob(self, options, k_plane, self._out(out, "robust"), client).run()
+        job = RobustJob(self, options, k_plane, max_iterations, self._out(out, "robust"), client,
+                        progress)
+        return job.run() if compute else job
 
 
 def _first_robust_halo(spec, t, k_plane):
@@ -493,11 +504,11 @@ def _merge_counts(counts):
     return merged
 
 
-def _exact_rank(actors, parts, rank):
+def _exact_rank(job, parts, rank):
     """The value of rank ``rank`` among the values of the tiles' last round, exactly
     (``nbhd.RankSearch``): the first digit counts come with the round's parts; each further
-    round asks every tile for its counts in the bucket found so far, and once that bucket is
-    small, for its values in it."""
+    round is one task per tile reading its values file, for its counts in the bucket found so
+    far, and once that bucket is small, for its values in it."""
     import nbhd
 
     search = nbhd.RankSearch(rank)
@@ -508,71 +519,193 @@ def _exact_rank(actors, parts, rank):
             return value
         state = search.to_bytes()
         if step == "counts":
-            futures = [a.digit_counts(state) for a in actors]
-            search.feed_counts(_merge_counts([f.result() for f in futures]))
+            search.feed_counts(_merge_counts(job._each_value(_tiles.robust_counts, state)))
         else:
-            futures = [a.matching_values(state) for a in actors]
-            search.feed_values(np.concatenate([f.result() for f in futures]))
+            search.feed_values(np.concatenate(job._each_value(_tiles.robust_matching, state)))
 
 
 class RobustJob:
     """One robust run on a tiled cloud (:meth:`TiledCloud.smooth_robust`), driven from the
-    client: ``nbhd.RobustRun`` decides every round; each tile is a
-    :class:`nbhd._tiles.RobustTileActor` on a worker. ``status`` says where the run is."""
+    client: ``nbhd.RobustRun`` decides every round; each round is one task per tile that
+    gathers its tile, computes the round and writes the owned values to files, holding
+    nothing afterwards (python/DASK.md). With ``compute=False`` the job is returned
+    unstarted: :meth:`submit` starts it in a thread of the client, :attr:`status` says where
+    it is (round, tiles done, points/s, an ETA), :meth:`cancel` stops it and :meth:`result`
+    waits for the :class:`RobustResult`."""
 
-    def __init__(self, cloud, options, k_plane, out, client):
+    def __init__(self, cloud, options, k_plane, max_iterations, out, client, progress=None):
         """``options``: the run's ``nbhd.RobustOptions``, made with ``k_plane`` (which sizes
-        the first halos)."""
+        the first halos) and ``max_iterations`` (which bounds the ETA); ``progress``: called
+        with :attr:`status` on the client after every tile task."""
         self.cloud, self.options, self.out, self.client = cloud, options, out, client
-        self.k_plane = k_plane
-        # rounds taken, halos grown, and owned values used although their tile said they are
-        # not the cloud's (none unless _halo_ok is overridden)
-        self.status = {"round": None, "generation": 0, "grown": 0, "rounds": 0, "invalid": 0}
+        spec = cloud.spec
+        self.widths = [_first_robust_halo(spec, t, k_plane) for t in range(cloud.tiles)]
+        self.max_iterations = max_iterations
+        self.progress = progress
+        self._cancelled = threading.Event()
+        self._lock = threading.Lock()
+        self._futures = []
+        self._thread = None
+        self._outcome = None
+        # rounds taken, halos grown, owned values used although their tile said they are not
+        # the cloud's (none unless _halo_ok is overridden); the progress figures
+        self.status = {"round": None, "generation": 0, "iteration": 0, "grown": 0,
+                       "rounds": 0, "invalid": 0, "tiles": cloud.tiles, "tiles_done": 0,
+                       "points_per_s": 0.0, "eta_s": None, "cancelled": False}
+        self._points = 0  # owned points of the tile tasks finished
+        self._rounds_done = 0  # rounds of tile tasks finished (with their selections after)
 
-    def _actors(self):
-        spec = self.cloud.spec
-        futures = [
-            self.client.submit(_tiles.RobustTileActor, spec, t,
-                               _first_robust_halo(spec, t, self.k_plane),
-                               self.options, self.out, actor=True, pure=False)
-            for t in range(self.cloud.tiles)
-        ]
-        return [f.result() for f in futures]
+    # --- running, progress, cancellation ------------------------------------------------
 
-    def _each(self, call, generation):
-        """``call(actor)`` on every tile; a tile whose part fails :func:`_halo_ok` is gathered
-        again with twice the halo and asked again."""
-        parts = [f.result() for f in [call(a) for a in self.actors]]
-        for t, part in enumerate(parts):
-            while not _halo_ok(part):
-                self.actors[t].grow(generation).result()
-                self.status["grown"] += 1
-                part = call(self.actors[t]).result()
+    def submit(self):
+        """Starts the run in a thread of the client (once); returns the job."""
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._main, daemon=True)
+            self._thread.start()
+        return self
+
+    def _main(self):
+        try:
+            self._outcome = (True, self.run())
+        except BaseException as e:  # handed to result()
+            self._outcome = (False, e)
+
+    def cancel(self):
+        """Stops the run: the tiles of the current round not yet finished are cancelled and
+        no further round starts; :meth:`result` then raises ``CancelledError``. A tile task
+        already running finishes its round and writes complete files (the rule of
+        :class:`TileJob`)."""
+        self._cancelled.set()
+        with self._lock:
+            futures = list(self._futures)
+        if futures:
+            self.client.cancel(futures)
+
+    def result(self, timeout=None):
+        """The :class:`RobustResult` of a submitted job (waits; raises what the run raised,
+        ``CancelledError`` when cancelled), or the run itself when not submitted."""
+        if self._thread is None:
+            return self.run()
+        self._thread.join(timeout)
+        if self._thread.is_alive():
+            raise TimeoutError(f"the robust run is still going after {timeout} s")
+        ok, value = self._outcome
+        if not ok:
+            raise value
+        return value
+
+    def _check(self):
+        if self._cancelled.is_set():
+            self.status["cancelled"] = True
+            raise concurrent.futures.CancelledError("the robust run was cancelled")
+
+    def _tick(self, started, rows):
+        """One tile task done: the counts, points/s over the run, and the ETA — the current
+        round's remaining tiles at its pace so far, plus at most the rounds the run may still
+        take (three an iteration up to ``max_iterations``, and the finish) at the mean pace of
+        the rounds done: an upper bound, as the run may stop early."""
+        st = self.status
+        st["tiles_done"] += 1
+        self._points += rows
+        now = time.monotonic()
+        st["points_per_s"] = self._points / max(now - self._t0, 1e-9)
+        spent = now - started
+        left = spent / st["tiles_done"] * (st["tiles"] - st["tiles_done"])
+        if st["round"] == "finish":
+            more = 0
+        else:
+            more = 3 * max(self.max_iterations - st["iteration"], 0) + 1
+            more += st["round"] == "nearest"  # the start round is still to come
+        done = self._rounds_done
+        mean = (started - self._t0) / done if done else spent
+        st["eta_s"] = left + more * mean
+        if self.progress is not None:
+            self.progress(dict(st))
+
+    # --- the rounds -----------------------------------------------------------------------
+
+    def _each(self, fn, *args):
+        """``fn(spec, t, width, options, out, *args)`` as one task per tile; a tile whose part
+        fails :func:`_halo_ok` is gathered again with twice the halo and run again."""
+        import distributed
+
+        self._check()
+        st = self.status
+        st["tiles_done"], started = 0, time.monotonic()
+
+        def submit(t):
+            return self.client.submit(fn, self._spec, t, self.widths[t], self.options,
+                                      self.out, *args, pure=False)
+
+        tile_of = {}
+        with self._lock:
+            for t in range(self.cloud.tiles):
+                f = submit(t)
+                tile_of[f.key] = t
+                self._futures.append(f)
+        parts = [None] * self.cloud.tiles
+        pending = distributed.as_completed(list(self._futures))
+        for f in pending:
+            self._check()
+            part = f.result()
+            t = tile_of[f.key]
+            if not _halo_ok(part):
+                self.widths[t] *= 2.0
+                st["grown"] += 1
+                g = submit(t)
+                tile_of[g.key] = t
+                with self._lock:
+                    self._futures.append(g)
+                pending.add(g)
+                continue
+            st["invalid"] += part["invalid"]
             parts[t] = part
-            self.status["invalid"] += part["invalid"]
+            self._tick(started, part["rows"])
+        with self._lock:
+            self._futures = []
+        self._rounds_done += 1
         return parts
+
+    def _each_value(self, fn, search):
+        """``fn(out, t, search)`` as one task per tile (a step of an exact selection)."""
+        self._check()
+        with self._lock:
+            self._futures = [self.client.submit(fn, self.out, t, search, pure=False)
+                             for t in range(self.cloud.tiles)]
+            futures = list(self._futures)
+        values = self.client.gather(futures)
+        with self._lock:
+            self._futures = []
+        return values
 
     def _spacing(self):
         """h as ``smooth_robust`` computes it: every owned point's nearest squared distance
         (the tiles' plain rows), summed in caller order by a chain of tasks."""
-        parts = self._each(lambda a: a.nearest(), 0)
-        n, block, carry = self.cloud.n, 4_000_000, (0.0, 0)
+        self.status.update(round="nearest")
+        parts = self._each(_tiles.robust_nearest)
+        # blocks of 500,000 rows: a task's arrays stay a few MB, far below a worker's limit
+        n, block, carry = self.cloud.n, 500_000, (0.0, 0)
         for a in range(0, n, block):
             carry = dask.delayed(_tiles.partial_sum_finite, pure=False)(
                 parts, a, min(a + block, n), carry)
         total, count = self.client.compute(carry).result()
+        for p in parts:
+            for suffix in (".idx.npy", ".nearest.npy"):
+                os.remove(p["path"] + suffix)
         return total / count if count else 0.0
 
     def run(self):
+        """Runs every round here (see :meth:`submit` for a run in the background)."""
         import nbhd
 
-        self.actors = self._actors()
+        self._t0 = time.monotonic()
+        self._spec = self.client.scatter(self.cloud.spec, broadcast=True)
         run = nbhd.RobustRun(self._spacing(), self.options)
         while (r := run.round())["kind"] != "finish":
             self.status.update(round=r["kind"], generation=r["generation"])
-            parts = self._each(lambda a, r=r: a.round(r), r["generation"])
+            parts = self._each(_tiles.robust_round, r)
             total = sum(p["n_values"] for p in parts)
-            median = _exact_rank(self.actors, parts, run.median_rank(total)) if total else None
+            median = _exact_rank(self, parts, run.median_rank(total)) if total else None
             moved = nbhd.ExactSum()
             for p in parts:
                 moved.merge(nbhd.ExactSum.from_bytes(p["moved_sq"]))
@@ -582,24 +715,21 @@ class RobustJob:
                      median=median, moved_sq=moved)
             self.status["rounds"] += 1
             if r["kind"] == "step":
-                self._drop_generation(r["generation"])
+                self.status["iteration"] += 1
+                if run.round().get("shrunk_at") != r["generation"]:
+                    self._drop_generation(r["generation"])
         self.status.update(round="finish", generation=r["generation"])
-        futures = [a.finish(r, os.path.join(self.out, f"tile_{t:06d}.npz"))
-                   for t, a in enumerate(self.actors)]
-        parts = [f.result() for f in futures]
-        self._drop_generation(r["generation"])
-        self.actors = None
+        parts = self._each(_tiles.robust_finish, r)
+        for g in range(r["generation"] + 1):
+            self._drop_generation(g)
+        shutil.rmtree(os.path.join(self.out, "values"), ignore_errors=True)
         result = RobustResult(self.cloud.spec, parts, run.report())
         result.status = self.status
         return result
 
     def _drop_generation(self, g):
         """Generation ``g``'s files, read by no later round."""
-        d = os.path.join(self.out, f"gen_{g:04d}")
-        if os.path.isdir(d):
-            for f in os.listdir(d):
-                os.remove(os.path.join(d, f))
-            os.rmdir(d)
+        shutil.rmtree(os.path.join(self.out, f"gen_{g:04d}"), ignore_errors=True)
 
 
 class TileJob:

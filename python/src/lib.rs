@@ -13,6 +13,7 @@ mod io;
 mod options;
 mod robust_options;
 mod robust_tiles;
+mod shapes;
 mod tree;
 
 use pyo3::prelude::*;
@@ -45,6 +46,7 @@ fn _nbhd(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<robust_tiles::PyExactSum>()?;
     m.add_function(wrap_pyfunction!(robust_tiles::_skipped_outputs, m)?)?;
     m.add_function(wrap_pyfunction!(filter::voxel_grid, m)?)?;
+    m.add_function(wrap_pyfunction!(shapes::aerial_tile, m)?)?;
     m.add_function(wrap_pyfunction!(io::read, m)?)?;
     m.add_function(wrap_pyfunction!(io::write, m)?)?;
     m.add_function(wrap_pyfunction!(_reads_in_place, m)?)?;

@@ -292,6 +292,20 @@ impl PyRobustTile {
         self.tile()?.set_current(generation, &current).or_raise()
     }
 
+    /// Sets the proxy of generation `at` on which the run's rows shrank, (m, 3) in the tile's
+    /// order, for a tile gathered at a later generation.
+    fn set_shrink(&mut self, at: usize, proxy: &Bound<'_, PyAny>) -> PyResult<()> {
+        let proxy = dvec3s(proxy)?;
+        self.tile()?.set_shrink(at, &proxy).or_raise()
+    }
+
+    /// Sets the normals of the step into the current generation, (m, 3) in the tile's order,
+    /// for a tile gathered after that step (its `finish` returns and reads them).
+    fn set_normals(&mut self, normals: &Bound<'_, PyAny>) -> PyResult<()> {
+        let normals = dvec3s(normals)?;
+        self.tile()?.set_normals(&normals).or_raise()
+    }
+
     /// Computes `round` (a dict of `RobustRun.round`) and returns the owned points' part: a
     /// dict of `count`, `valid` (per owned point), `values` (distance ratios or plane
     /// distances, for the median), `moved_sq` (an `ExactSum`), `max_len` and `min_narrow`.
@@ -318,6 +332,13 @@ impl PyRobustTile {
     fn owned_points<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let pts = self.tile()?.owned_points();
         Ok(dvec3_array(py, &pts)?.into_any())
+    }
+
+    /// The owned points' normals of the last step, (m, 3) in the tile's order ((0, 3) before
+    /// a step).
+    fn owned_normals<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let normals = self.tile()?.owned_normals();
+        Ok(dvec3_array(py, &normals)?.into_any())
     }
 
     /// The last round (`finish`): a dict of the owned points' `points`, `normals`, `outputs`
@@ -356,6 +377,41 @@ pub fn _skipped_outputs(py: Python<'_>, count: usize) -> PyResult<Bound<'_, PyDi
     outputs_dict(py, &vec![nbhd::smooth::PointOutput::skipped(); count])
 }
 
+/// Emits the one `#[pymethods]` block of a class that wraps a state of the step API held in
+/// its field `$field` of type `$ty` (which has `to_bytes` and `from_bytes`): the class's own
+/// methods (`own`) and the three that carry the state between processes — `to_bytes`,
+/// `from_bytes` and `__reduce__` (a pickle is the bytes) — written here once for all three
+/// classes (PyO3 takes one `#[pymethods]` block per class; see `index_pymethods!` in
+/// `index.rs`).
+macro_rules! bytes_pymethods {
+    ($class:ident, $field:ident : $ty:ident, { $($own:tt)* }) => {
+        #[pymethods]
+        impl $class {
+            $($own)*
+
+            /// The state as bytes (`from_bytes` reads them back, in any process).
+            fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+                PyBytes::new(py, &self.$field.to_bytes())
+            }
+
+            /// The state of `to_bytes`.
+            #[staticmethod]
+            fn from_bytes(bytes: &[u8]) -> PyResult<Self> {
+                Ok(Self {
+                    $field: $ty::from_bytes(bytes).or_raise()?,
+                })
+            }
+
+            fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+                let py = slf.py();
+                let from = slf.get_type().getattr("from_bytes")?;
+                let bytes = slf.borrow().to_bytes(py);
+                PyTuple::new(py, [from, PyTuple::new(py, [bytes])?.into_any()])
+            }
+        }
+    };
+}
+
 /// An exact selection across parts (`nbhd::select::radix::RankSearch` of f64): the value of
 /// rank `rank` among values spread over parts that are never gathered.
 #[pyclass(module = "nbhd._nbhd", name = "RankSearch")]
@@ -364,8 +420,7 @@ pub struct PyRankSearch {
     search: RankSearch<f64>,
 }
 
-#[pymethods]
-impl PyRankSearch {
+bytes_pymethods!(PyRankSearch, search: RankSearch, {
     #[new]
     fn new(rank: u64) -> Self {
         Self {
@@ -411,25 +466,7 @@ impl PyRankSearch {
         let v = values_of(values)?;
         self.search.feed_values(&v).or_raise()
     }
-
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &self.search.to_bytes())
-    }
-
-    #[staticmethod]
-    fn from_bytes(bytes: &[u8]) -> PyResult<Self> {
-        Ok(Self {
-            search: RankSearch::from_bytes(bytes).or_raise()?,
-        })
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-        let py = slf.py();
-        let from = slf.get_type().getattr("from_bytes")?;
-        let bytes = slf.borrow().to_bytes(py);
-        PyTuple::new(py, [from, PyTuple::new(py, [bytes])?.into_any()])
-    }
-}
+});
 
 /// One part's (or several parts' merged) counts of a `RankSearch` round.
 #[pyclass(module = "nbhd._nbhd", name = "DigitCounts")]
@@ -438,8 +475,7 @@ pub struct PyDigitCounts {
     counts: DigitCounts,
 }
 
-#[pymethods]
-impl PyDigitCounts {
+bytes_pymethods!(PyDigitCounts, counts: DigitCounts, {
     /// Adds another part's counts of the same round.
     fn merge(&mut self, other: &PyDigitCounts) -> PyResult<()> {
         self.counts.merge(&other.counts).or_raise()
@@ -450,25 +486,7 @@ impl PyDigitCounts {
     fn total(&self) -> u64 {
         self.counts.total()
     }
-
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &self.counts.to_bytes())
-    }
-
-    #[staticmethod]
-    fn from_bytes(bytes: &[u8]) -> PyResult<Self> {
-        Ok(Self {
-            counts: DigitCounts::from_bytes(bytes).or_raise()?,
-        })
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-        let py = slf.py();
-        let from = slf.get_type().getattr("from_bytes")?;
-        let bytes = slf.borrow().to_bytes(py);
-        PyTuple::new(py, [from, PyTuple::new(py, [bytes])?.into_any()])
-    }
-}
+});
 
 /// An exactly rounded sum of f64 values whose value does not depend on their order or split
 /// (`nbhd::sum::ExactSum`).
@@ -478,8 +496,7 @@ pub struct PyExactSum {
     sum: ExactSum,
 }
 
-#[pymethods]
-impl PyExactSum {
+bytes_pymethods!(PyExactSum, sum: ExactSum, {
     #[new]
     fn new() -> Self {
         Self::default()
@@ -501,22 +518,4 @@ impl PyExactSum {
     fn value(&self) -> f64 {
         self.sum.value()
     }
-
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &self.sum.to_bytes())
-    }
-
-    #[staticmethod]
-    fn from_bytes(bytes: &[u8]) -> PyResult<Self> {
-        Ok(Self {
-            sum: ExactSum::from_bytes(bytes).or_raise()?,
-        })
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-        let py = slf.py();
-        let from = slf.get_type().getattr("from_bytes")?;
-        let bytes = slf.borrow().to_bytes(py);
-        PyTuple::new(py, [from, PyTuple::new(py, [bytes])?.into_any()])
-    }
-}
+});

@@ -5,6 +5,8 @@ level that widens the rows, and an outlier whose tile must widen its halo. Two n
 show the comparison can fail: halos too narrow whose invalid values are used anyway, and the
 median of the tiles' medians in place of the exact median."""
 
+import concurrent.futures
+
 import numpy as np
 import pytest
 
@@ -141,11 +143,11 @@ def test_a_narrow_halo_differs(client, tmp_path, monkeypatch):
 
 def test_an_approximate_median_differs(client, tmp_path, monkeypatch):
     # what a naive port would do: σ̂ and the noise scale from the median of the tiles' medians
-    def median_of_medians(actors, parts, rank):
+    def median_of_medians(job, parts, rank):
         everything = nbhd.RankSearch(0).to_bytes()  # no digit fixed: every value matches
         medians = []
-        for a in actors:
-            v = np.sort(a.matching_values(everything).result())
+        for v in job._each_value(ndask._tiles.robust_matching, everything):
+            v = np.sort(v)
             if len(v):
                 medians.append(v[len(v) // 2])
         return float(np.sort(medians)[len(medians) // 2])
@@ -156,6 +158,41 @@ def test_an_approximate_median_differs(client, tmp_path, monkeypatch):
     got = tiled(client, tmp_path, pts).assemble()
     names, points = differing(got, ref)
     assert "noise" in names and points > len(pts) // 2
+
+
+def test_robust_progress_and_cancel(client, tmp_path):
+    # compute=False: the job unstarted; progress after every tile task, the same result
+    pts = cube(8_000, 1.0, seed=29)
+    cloud = ndask.tile_array(da.from_array(pts, chunks=(5_000, 3)), str(tmp_path / "store"),
+                             grid=(2, 2, 1))
+    seen = []
+    job = cloud.smooth_robust(client=client, compute=False, progress=seen.append)
+    assert job.status["round"] is None and not seen
+    r = job.submit().result(timeout=600)
+    assert differing(r.assemble(), nbhd.smooth_robust(pts)) == ([], 0)
+    rounds = [s["round"] for s in seen]
+    assert rounds[:4] == ["nearest"] * 4 and rounds[-4:] == ["finish"] * 4
+    assert {"start", "measure", "step"} <= set(rounds)
+    # every round reports each of its 4 tiles once, in order
+    assert [s["tiles_done"] for s in seen] == [1, 2, 3, 4] * (len(seen) // 4)
+    assert all(s["tiles"] == 4 and s["points_per_s"] > 0 for s in seen)
+    assert all(s["eta_s"] > 0 for s in seen[:-1]) and seen[-1]["eta_s"] == 0
+    assert seen[-1]["iteration"] == len(r.report["moved"])
+
+    # cancelled from the progress callback at the first step round's first tile: the run
+    # stops there, writes no result, and the cluster stays usable
+    def stop(status):
+        if status["round"] == "step":
+            stopped.cancel()
+
+    stopped = cloud.smooth_robust(client=client, compute=False, progress=stop,
+                                  out=str(tmp_path / "cancelled"))
+    with pytest.raises(concurrent.futures.CancelledError):
+        stopped.submit().result(timeout=600)
+    assert stopped.status["cancelled"]
+    assert stopped.status["round"] == "step" and stopped.status["iteration"] == 0
+    assert not list((tmp_path / "cancelled").glob("tile_*.npz"))
+    assert client.submit(sum, [1, 2], pure=False).result(timeout=60) == 3
 
 
 def test_robust_options_are_smooth_robusts_keywords_and_pickle():

@@ -10,6 +10,7 @@
 //! The thesis' benchmark sizes (Fig. 8.2) are provided as [`COSTA_SIZES`],
 //! [`CYLINDER_SIZES`] and [`TORUS_SIZES`].
 
+pub mod aerial;
 mod analytic;
 pub mod datasets;
 pub mod mesh;

@@ -46,6 +46,12 @@ pub struct RobustTile<'a> {
     state: Option<State>,
     /// A proxy given before the first round ([`RobustTile::set_current`]), in local order.
     pending: Option<(usize, Vec<DVec3>)>,
+    /// The normals of the last step, given before the first round
+    /// ([`RobustTile::set_normals`]), in local order.
+    pending_normals: Option<Vec<DVec3>>,
+    /// The proxy the run's rows shrank on, with its generation ([`RobustTile::set_shrink`]),
+    /// in local order.
+    shrink: Option<(usize, Vec<DVec3>)>,
 }
 
 /// The rows of a tile and the proxy they are measured on, in the k-d tree's order.
@@ -137,6 +143,8 @@ impl<'a> RobustTile<'a> {
             owned: None,
             state: None,
             pending: None,
+            pending_normals: None,
+            shrink: None,
         }
     }
 
@@ -169,6 +177,8 @@ impl<'a> RobustTile<'a> {
             owned: Some(owned),
             state: None,
             pending: None,
+            pending_normals: None,
+            shrink: None,
         })
     }
 
@@ -227,6 +237,11 @@ impl<'a> RobustTile<'a> {
         } else {
             RowSet::Wide
         };
+        let normals = self
+            .pending_normals
+            .take()
+            .map(|local| order.iter().map(|&o| local[o as usize]).collect())
+            .unwrap_or_default();
         self.state = Some(State {
             set,
             rows,
@@ -235,7 +250,7 @@ impl<'a> RobustTile<'a> {
             generation,
             measured_on: None,
             planes: None,
-            normals: Vec::new(),
+            normals,
             reach,
             owned_at,
         });
@@ -257,15 +272,28 @@ impl<'a> RobustTile<'a> {
             return Err(out_of_turn("a round of another generation"));
         }
         if let (RowSet::Shrunk { at }, RowSet::Wide) = (set, st.set) {
-            // the wide rows' first `k_plane` as sorted on the proxy of `at`
-            if at != generation {
-                return Err(out_of_turn(
-                    "the rows shrink on the proxy of another generation",
-                ));
-            }
+            // the wide rows' first `k_plane` as sorted on the proxy of `at`: the current one,
+            // or the one given to a tile gathered after the shrink
+            let current = if at == generation {
+                None
+            } else {
+                let Some((_, local)) = self.shrink.take().filter(|(g, _)| *g == at) else {
+                    return Err(out_of_turn(
+                        "the rows shrink on the proxy of another generation",
+                    ));
+                };
+                let proxy = st.order.iter().map(|&o| local[o as usize]).collect();
+                Some(std::mem::replace(&mut st.cur, proxy))
+            };
+            st.generation = at;
             st.measure(eps);
             st.rows.shrink(k_plane);
             st.set = set;
+            if let Some(cur) = current {
+                st.cur = cur;
+                st.generation = generation;
+                st.measured_on = None;
+            }
         }
         st.measure(eps);
         Ok(())
@@ -308,14 +336,63 @@ impl<'a> RobustTile<'a> {
         Ok(())
     }
 
+    /// Sets the normals of the step into the current generation, in local order, for a tile
+    /// gathered after that step (a driver that keeps no tile between rounds): the
+    /// [`RobustTile::finish`] of a run that stepped takes them (the owned points' are the
+    /// ones it returns and its outputs read).
+    ///
+    /// # Errors
+    ///
+    /// [`NbhdError::InvalidOption`] when `normals` has another length than the input.
+    pub fn set_normals(&mut self, normals: &[DVec3]) -> Result<()> {
+        if normals.len() != self.input.len() {
+            return Err(out_of_turn("normals of another length"));
+        }
+        match &mut self.state {
+            Some(st) => st.normals = st.order.iter().map(|&o| normals[o as usize]).collect(),
+            None => self.pending_normals = Some(normals.to_vec()),
+        }
+        Ok(())
+    }
+
+    /// Sets the proxy of generation `at`, in local order, on which the run's wide rows shrank
+    /// ([`RowSet::Shrunk`]), for a tile gathered at a later generation: its wide rows are
+    /// searched on the input, sorted on this proxy and cut to `k_plane` as the run's were.
+    ///
+    /// # Errors
+    ///
+    /// [`NbhdError::InvalidOption`] when `proxy` has another length than the input.
+    pub fn set_shrink(&mut self, at: usize, proxy: &[DVec3]) -> Result<()> {
+        if proxy.len() != self.input.len() {
+            return Err(out_of_turn("a shrink proxy of another length"));
+        }
+        self.shrink = Some((at, proxy.to_vec()));
+        Ok(())
+    }
+
     /// The owned points of the current proxy, in local order.
     pub fn owned_points(&self) -> Vec<DVec3> {
+        self.owned_of(|st| &st.cur)
+    }
+
+    /// The owned points' normals of the last step (empty before a step), in local order.
+    pub fn owned_normals(&self) -> Vec<DVec3> {
+        self.owned_of(|st| &st.normals)
+    }
+
+    /// The owned points' entries of a per-point array of the state (stored order), in local
+    /// order; empty when the array is.
+    fn owned_of(&self, of: impl Fn(&State) -> &Vec<DVec3>) -> Vec<DVec3> {
         let Some(st) = &self.state else {
             return Vec::new();
         };
+        let values = of(st);
+        if values.is_empty() {
+            return Vec::new();
+        }
         match &st.owned_at {
-            None => super::in_input_order(&st.cur, &st.order),
-            Some(at) => at.iter().map(|&s| st.cur[s as usize]).collect(),
+            None => super::in_input_order(values, &st.order),
+            Some(at) => at.iter().map(|&s| values[s as usize]).collect(),
         }
     }
 
@@ -469,8 +546,9 @@ impl<'a> RobustTile<'a> {
         else {
             return Err(out_of_turn("a round that is not the last"));
         };
-        let no_step = self.state.as_ref().is_none_or(|st| st.normals.is_empty());
-        if no_step || options.outputs {
+        let no_step = self.pending_normals.is_none()
+            && self.state.as_ref().is_none_or(|st| st.normals.is_empty());
+        if no_step || options.outputs || self.state.is_none() {
             self.rows_on(rows, generation, eps, options.k_plane)?;
         }
         let st = self.state.as_mut().expect("rows measured");
