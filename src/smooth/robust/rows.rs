@@ -206,32 +206,20 @@ impl Rows {
     }
 }
 
-/// The scratch of the row sorts of one worker: a row's squared distances and stored positions
-/// in the row's former order, and its [`SlotKey`]s, sorted by [`RowSort::row`].
+/// The scratch of the row sorts of one worker: a row's keys, sorted by [`RowSort::row`].
 #[derive(Default)]
 struct RowSort {
-    keys: Vec<SlotKey>,
-    spare: Vec<SlotKey>,
-    sq_dist: Vec<f64>,
-    ids: Vec<u32>,
-    /// The bits of a key that hold the (truncated) squared distance.
-    high: SlotKey,
+    keys: Vec<RowKey>,
+    spare: Vec<RowKey>,
     buckets: Vec<u32>,
     counts: Vec<u32>,
 }
 
-/// A row entry as one integer: the bits of its squared distance (non-negative, so they order
-/// as the distance does) with the lowest ones replaced by the entry's slot in the row's former
-/// order. Keys order by the truncated distance, and the slot makes them distinct; entries whose
-/// truncated distances are equal (ties, and distances within a few ulps) are then put in the
-/// exact `(sq_dist, caller's index)` order of `src/query/order.rs` ([`RowSort::exact`]). Half
-/// the width of that order's keys, and the caller's index is looked up only for those.
-type SlotKey = u64;
-
 impl RowSort {
     /// Sorts one row of stored positions by `(sq_dist, caller's index)`, the one order of
     /// `src/query/order.rs`, with `sq_dist(j)` the squared distance of stored point `j`; keeps
-    /// the row's keys and distances ([`RowSort::within`]).
+    /// the row's [`RowKey`]s, sorted. The keys are compared as integers: one comparison per
+    /// pair instead of a distance comparison and, on ties, two lookups of caller's indices.
     ///
     /// Rows are nearly sorted after a step that moved points by a fraction of a spacing, so an
     /// insertion sort is about one pass; after a step of a spacing or more (the first ones on
@@ -241,78 +229,25 @@ impl RowSort {
     /// distance instead ([`RowSort::distribute`]). The keys are distinct, so both give the same
     /// order.
     fn row(&mut self, index: &mut [u32], sq_dist: impl Fn(usize) -> f64, order: &[u32]) {
-        let n = index.len();
-        let slot_bits = usize::BITS - n.saturating_sub(1).leading_zeros();
-        self.high = !0 << slot_bits;
-        self.ids.clear();
-        self.ids.extend_from_slice(index);
-        self.sq_dist.clear();
-        self.sq_dist
-            .extend(index.iter().map(|&j| sq_dist(j as usize)));
-        let high = self.high;
         self.keys.clear();
         self.keys.extend(
-            self.sq_dist
+            index
                 .iter()
-                .enumerate()
-                .map(|(slot, d)| (d.to_bits() & high) | slot as SlotKey),
+                .map(|&j| row_key(sq_dist(j as usize), order[j as usize], j)),
         );
+        let n = self.keys.len();
         let descents = self.keys.windows(2).filter(|w| w[1] < w[0]).count();
         if SHUFFLED * descents > n || !insertion_sort(&mut self.keys, SORT_MOVES * n) {
             self.distribute();
         }
-        // keys of equal truncated distances lie side by side now: rare, so looked for first
-        let tie = self
-            .keys
-            .windows(2)
-            .fold(false, |tie, w| tie | ((w[0] ^ w[1]) & high == 0));
-        if tie {
-            self.exact(order);
-        }
         for (j, &k) in index.iter_mut().zip(&self.keys) {
-            *j = self.ids[self.slot(k)];
-        }
-    }
-
-    /// The slot of a key: the entry's place in the row's former order.
-    #[inline(always)]
-    fn slot(&self, key: SlotKey) -> usize {
-        (key & !self.high) as usize
-    }
-
-    /// The exact key of `src/query/order.rs` of the entry of `key`.
-    fn exact_key(&self, key: SlotKey, order: &[u32]) -> u128 {
-        let slot = self.slot(key);
-        crate::query::order::key64(self.sq_dist[slot], order[self.ids[slot] as usize])
-    }
-
-    /// Puts each run of keys sorted by truncated distance whose truncated distances are equal
-    /// in the exact order: an insertion sort that moves keys only within such runs (the keys
-    /// are in order of their truncated distances already).
-    fn exact(&mut self, order: &[u32]) {
-        let high = self.high;
-        for i in 1..self.keys.len() {
-            let item = self.keys[i];
-            if item & high != self.keys[i - 1] & high {
-                continue;
-            }
-            let exact = self.exact_key(item, order);
-            let mut j = i;
-            while j > 0
-                && self.keys[j - 1] & high == item & high
-                && exact < self.exact_key(self.keys[j - 1], order)
-            {
-                self.keys[j] = self.keys[j - 1];
-                j -= 1;
-            }
-            self.keys[j] = item;
+            *j = k as u32;
         }
     }
 
     /// How many keys of the sorted row lie within the squared distance `sq_radius`.
     fn within(&self, sq_radius: f64) -> usize {
-        self.keys
-            .partition_point(|&k| self.sq_dist[self.slot(k)] <= sq_radius)
+        self.keys.partition_point(|&k| sq_dist_of(k) <= sq_radius)
     }
 
     /// Sorts the keys by distributing them into as many buckets as there are keys, of equal
@@ -320,25 +255,24 @@ impl RowSort {
     /// then moves keys only within a bucket: about one key per bucket on a surface (the
     /// squared distance of the j-th neighbour grows about like j) and in a ball of noise (like
     /// j^(2/3)), so a pass over the row, where a comparison sort takes n log n comparisons.
-    /// The bucket `min(⌊d · n / (SPAN · mean)⌋, n − 1)` of the truncated distance `d` never
-    /// decreases as the key grows (each rounding is monotone), so the buckets are in order;
-    /// squared distances beyond [`SPAN`] times the mean (candidates that moved away) share the
-    /// last bucket, and rows of copies of a point or of an infinite mean the first: those are
-    /// sorted by insertion alone.
+    /// The bucket `min(⌊d · n / (SPAN · mean)⌋, n − 1)` never decreases as `d` grows (each
+    /// rounding is monotone), so the buckets are in order; squared distances beyond [`SPAN`]
+    /// times the mean (candidates that moved away) share the last bucket, and rows of copies
+    /// of a point or of an infinite mean the first: those are sorted by insertion alone.
     fn distribute(&mut self) {
         let n = self.keys.len();
-        let mean = self.sq_dist.iter().sum::<f64>() / n as f64;
+        let mean = self.keys.iter().map(|&k| sq_dist_of(k)).sum::<f64>() / n as f64;
         let scale = if mean > 0.0 {
             n as f64 / (SPAN * mean)
         } else {
             0.0
         };
-        let (last, high) = (n.saturating_sub(1) as u32, self.high);
+        let last = n.saturating_sub(1) as u32;
         self.buckets.clear();
         self.buckets.extend(
             self.keys
                 .iter()
-                .map(|&k| ((f64::from_bits(k & high) * scale) as u32).min(last)),
+                .map(|&k| ((sq_dist_of(k) * scale) as u32).min(last)),
         );
         self.counts.clear();
         self.counts.resize(n + 1, 0);
@@ -359,9 +293,26 @@ impl RowSort {
     }
 }
 
+/// A row entry as one integer that orders as `(sq_dist, caller's index)`: the key of
+/// `src/query/order.rs` above the stored position (which the caller's index determines, so it
+/// never decides the order).
+type RowKey = u128;
+
+/// The [`RowKey`] of stored point `j` (the caller's `caller`) at squared distance `sq_dist`.
+#[inline(always)]
+fn row_key(sq_dist: f64, caller: u32, j: u32) -> RowKey {
+    (crate::query::order::key64(sq_dist, caller) << 32) | RowKey::from(j)
+}
+
+/// The squared distance of a [`RowKey`].
+#[inline(always)]
+fn sq_dist_of(key: RowKey) -> f64 {
+    crate::query::order::unkey64::<f64>(key >> 32).0
+}
+
 /// Sorts `keys` by insertion while that takes at most `budget` moves; false (the keys left
 /// partly sorted, each key still once) once it would take more.
-fn insertion_sort(keys: &mut [SlotKey], budget: usize) -> bool {
+fn insertion_sort(keys: &mut [RowKey], budget: usize) -> bool {
     let mut budget = budget;
     for i in 1..keys.len() {
         let item = keys[i];
@@ -436,15 +387,12 @@ mod tests {
         let order: Vec<u32> = (0..n).map(|j| (j * 89) % n).collect();
         let mut sort = RowSort::default();
         // squared distances in steps with ties; all equal; one candidate far away; one at
-        // an infinite distance (coordinates near the end of the range); distances a few ulps
-        // apart, which the keys' truncated distances cannot tell apart
-        let ulps = |j: u32| f64::from_bits(1.0f64.to_bits() + u64::from((j * 37) % 11));
-        let dists: [&dyn Fn(u32) -> f64; 5] = [
+        // an infinite distance (coordinates near the end of the range)
+        let dists: [&dyn Fn(u32) -> f64; 4] = [
             &|j| f64::from(j / 4 + u32::from(j % 5 == 0)),
             &|_| 0.0,
             &|j| if j == 77 { 1e12 } else { f64::from(j % 50) },
             &|j| if j == 3 { f64::INFINITY } else { f64::from(j) },
-            &|j| ulps(j) * f64::from(1 + j / 16),
         ];
         for dist in dists {
             for shuffle in [1u32, 7, 61] {
@@ -460,7 +408,7 @@ mod tests {
                 let got: Vec<(f64, u32)> = sort
                     .keys
                     .iter()
-                    .map(|&k| (sort.sq_dist[sort.slot(k)], sort.ids[sort.slot(k)]))
+                    .map(|&k| (sq_dist_of(k), k as u32))
                     .collect();
                 assert_eq!(got, want, "shuffle {shuffle}");
                 assert!(idx.iter().zip(&want).all(|(&j, w)| j == w.1));
