@@ -276,6 +276,50 @@ def geometry_tile(spec: Spec, t: int, what: str, halo: float, out: str, kwargs: 
     return {"tile": t, "path": out, "rows": len(own), "halo": halo, "points": len(idx)}
 
 
+def outlier_tile(
+    spec: Spec, t: int, k: int, width: float, out: str, tree_options=None, threads=0,
+    batch=BATCH,
+):
+    """Task: the first pass of the statistical outlier filter over tile ``t``: every owned
+    point's mean distance to its ``k`` nearest other points (exact kNN halos,
+    ``nbhd.mean_distances``), written to ``out`` with the owned indices; returns the tile's
+    exact sum of them (``nbhd.ExactSum``), which the client merges into the mean."""
+    import nbhd
+
+    own, _, d2, used = knn_rows(spec, t, k, width, None, tree_options, threads, batch)
+    d = nbhd.mean_distances(d2) if len(own) else np.empty(0)
+    _write(out, idx=own, d=d)
+    total = nbhd.ExactSum()
+    total.add(d)
+    return {"tile": t, "path": out, "rows": len(own), "halo": used, "sum": total}
+
+
+def outlier_spread(path: str, mean: float):
+    """Task: the tile's exact ``Σ (d_i − mean)²`` over the mean distances ``outlier_tile``
+    wrote (``nbhd.squared_deviation_sum``)."""
+    import nbhd
+
+    with np.load(path) as z:
+        return nbhd.squared_deviation_sum(z["d"], mean)
+
+
+def select_tile(spec: Spec, t: int, removed, kept_path: str, threshold: float, store: str):
+    """Task: tile ``t``'s points whose mean distance (``kept_path``, from ``outlier_tile``) is
+    at most ``threshold``, renumbered as rows of the kept points (an index less the number of
+    ``removed`` indices below it) and written as the one piece of tile ``t`` in ``store``.
+    Returns ``(t, count, lo, hi)``."""
+    pts = np.concatenate([np.asarray(p) for _, p in spec.tiles[t].pieces(spec.store)])
+    with np.load(kept_path) as z:
+        idx, keep = z["idx"], z["d"] <= threshold
+    idx, pts = idx[keep], pts[keep]
+    base = piece_path(store, 0, t)
+    np.save(base + ".pts.npy", pts)
+    np.save(base + ".idx.npy", idx - np.searchsorted(removed, idx))
+    if len(pts) == 0:
+        return t, 0, [0.0] * 3, [0.0] * 3
+    return t, len(pts), pts.min(axis=0).tolist(), pts.max(axis=0).tolist()
+
+
 def nearest_of_rows(parts, a: int, b: int):
     """The nearest squared distances the tiles' ``parts`` wrote for the caller rows ``a .. b``
     (each row from the one tile that owns it), NaN for a row no tile wrote."""

@@ -38,7 +38,8 @@ from . import _tiles
 from ._tiles import Spec, Tile, piece_path
 
 __all__ = [
-    "TiledCloud", "TileJob", "TileResult", "RobustJob", "RobustResult", "AssembledTable",
+    "TiledCloud", "TileJob", "TileResult", "KeptResult", "RobustJob", "RobustResult",
+    "AssembledTable",
     "tile_array", "tile_files",
     "open_store",
 ]
@@ -328,6 +329,72 @@ class TiledCloud:
         """The ε-k-neighbourhood table (see :meth:`radius`)."""
         return self.radius(radius, k=k, threads=threads, batch=batch, out=out, compute=compute,
                            **tree_options)
+
+    # --- filters ----------------------------------------------------------------------------
+
+    def remove_statistical_outliers(self, *, k=50, std_ratio=1.0, threads=0, batch=_tiles.BATCH,
+                                    out=None, **tree_options):
+        """``KdTree(points).remove_statistical_outliers(k=k, std_ratio=std_ratio)`` on the
+        tiles, identical: a point is kept when its mean distance to its ``k`` nearest other
+        points is at most ``mean + std_ratio · σ`` over all points. Three passes: one task per
+        tile for the mean distances (exact kNN halos) and their exact sum, merged into the mean;
+        one per tile for the exact sum of squared deviations, merged into σ; the threshold then
+        applies to each tile's file. Both sums are exact (``nbhd.ExactSum``), as the library's
+        own filter takes them, so no order of the tiles changes a bit. Returns a
+        :class:`KeptResult` (``assemble()``: the kept caller indices, ascending;
+        :meth:`TiledCloud.select` makes the kept points a tiled cloud)."""
+        import nbhd
+
+        if not isinstance(k, (int, np.integer)) or k < 1:
+            raise ValueError(f"k must be an integer >= 1, not {k!r}")
+        if k >= self.n:
+            raise ValueError(f"{k} nearest other points need more than {k} points; the cloud "
+                             f"holds {self.n}")
+        if not np.isfinite(std_ratio):
+            raise ValueError(f"std_ratio {std_ratio} is not finite")
+        out = self._out(out, "outliers")
+        spec = self._spec_node()
+        parts = list(dask.compute(*[
+            dask.delayed(_tiles.outlier_tile, pure=False)(
+                spec, t, int(k), _first_halo(self.spec, t, k),
+                os.path.join(out, f"tile_{t:06d}.npz"), tree_options, threads, batch)
+            for t in range(self.tiles)]))
+        total = nbhd.ExactSum()
+        for p in parts:
+            total.merge(p.pop("sum"))
+        mean = total.value() / self.n
+        spread = nbhd.ExactSum()
+        for s in dask.compute(*[dask.delayed(_tiles.outlier_spread, pure=False)(p["path"], mean)
+                                for p in parts]):
+            spread.merge(s)
+        threshold = nbhd.outlier_threshold(mean, spread, self.n, float(std_ratio))
+        return KeptResult(self.n, parts, threshold)
+
+    def select(self, kept, store=None):
+        """The kept points of ``kept`` (a :class:`KeptResult`) as a new :class:`TiledCloud`
+        in a new store (default: a folder beside this one): the tiles keep their places, the
+        rows their order, so its caller order is ``points[kept.assemble()]``'s and everything
+        computed on it equals the one-machine computation on those rows. Each task renumbers
+        its tile's points by the removed indices below them (the removed are few: the list
+        travels, the kept do not)."""
+        if store is None:
+            store = self._out(None, "kept")
+        os.makedirs(store, exist_ok=True)
+        removed = kept.removed()
+        node = dask.delayed(removed, pure=False, traverse=False)
+        spec = self._spec_node()
+        done = dask.compute(*[
+            dask.delayed(_tiles.select_tile, pure=False)(spec, t, node, kept.parts[t]["path"],
+                                                         kept.threshold, store)
+            for t in range(self.tiles)])
+        tiles = [Tile(lo, hi, count, grid_id=t, chunks=[0]) for t, count, lo, hi in done
+                 if count]
+        big = max((max(abs(v) for v in t.lo + t.hi) for t in tiles), default=0.0)
+        cloud = TiledCloud(Spec(self.n - len(removed), self.spec.dtype, tiles, big, store),
+                           store)
+        if cloud.n < 2:
+            raise ValueError("fewer than two points are kept: not a tiled cloud")
+        return cloud
 
     # --- spacing, geometry, smoothing ------------------------------------------------------
 
@@ -841,6 +908,31 @@ class TileResult:
         if sq is None:
             sq = np.empty(0, np.float64)
         return AssembledTable(offsets, indices, sq)
+
+
+class KeptResult(TileResult):
+    """What a filter over the tiles keeps: per tile its owned indices and their mean
+    distances (``parts``) and the ``threshold`` they are held to."""
+
+    def __init__(self, n, parts, threshold):
+        super().__init__("kept", n, parts)
+        self.threshold = threshold
+
+    def _each(self, keep):
+        out = []
+        for p in self.parts:
+            with np.load(p["path"]) as z:
+                idx, d = z["idx"], z["d"]
+                out.append(idx[(d <= self.threshold) == keep])
+        return np.sort(np.concatenate(out)) if out else np.empty(0, np.int64)
+
+    def assemble(self):
+        """The kept caller indices, ascending (uint32, as the one-machine filter returns)."""
+        return self._each(True).astype(np.uint32)
+
+    def removed(self):
+        """The caller indices not kept, ascending."""
+        return self._each(False).astype(np.int64)
 
 
 class RobustResult(TileResult):
