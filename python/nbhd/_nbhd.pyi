@@ -42,6 +42,7 @@ class VoxelGrid(TypedDict):
     nearest: U32
     offsets: npt.NDArray[np.uint64]
     members: U32
+    cells: npt.NDArray[np.int64]
 
 class AerialTile(TypedDict):
     positions: F64

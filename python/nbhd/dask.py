@@ -38,7 +38,8 @@ from . import _tiles
 from ._tiles import Spec, Tile, piece_path
 
 __all__ = [
-    "TiledCloud", "TileJob", "TileResult", "KeptResult", "RobustJob", "RobustResult",
+    "TiledCloud", "TileJob", "TileResult", "KeptResult", "VoxelResult", "RobustJob",
+    "RobustResult",
     "AssembledTable",
     "tile_array", "tile_files",
     "open_store",
@@ -395,6 +396,35 @@ class TiledCloud:
         if cloud.n < 2:
             raise ValueError("fewer than two points are kept: not a tiled cloud")
         return cloud
+
+    def voxel_grid(self, leaf, *, min_points_per_voxel=0, threads=0, out=None):
+        """``nbhd.voxel_grid(points, leaf, ...)`` on the tiles, identical: every occupied voxel's
+        centroid (PCL's arithmetic in the cloud's type), members, nearest member and voxel
+        numbers. Each tile task computes the voxels whose smallest caller index it owns on the
+        tile plus a halo of one voxel edge, so each voxel is whole in exactly one tile. The
+        whole cloud's grid (its lowest voxel numbers, and the refusal of a leaf too small for
+        its extent, with the one-machine message) comes from the tiles' boxes. Returns a
+        :class:`VoxelResult`: ``assemble()`` gives the dict ``nbhd.voxel_grid`` returns,
+        ``cloud()`` the centroids as a tiled cloud in that order."""
+        import nbhd
+
+        leaf = [float(leaf)] if np.ndim(leaf) == 0 else [float(v) for v in leaf]
+        lo = np.min([t.lo for t in self.spec.tiles], axis=0)
+        hi = np.max([t.hi for t in self.spec.tiles], axis=0)
+        # the grid of the whole cloud: nbhd's own checks and voxel numbers of its box's corners
+        corners = nbhd.voxel_grid(np.array([lo, hi], self.dtype), leaf)["cells"]
+        low, high = corners.min(axis=0), corners.max(axis=0)
+        mul = [1]
+        for a in range(len(low) - 1):  # Python integers: no overflow below 2^64 voxels
+            mul.append(mul[-1] * (int(high[a]) - int(low[a]) + 1))
+        out = self._out(out, "voxels")
+        spec = self._spec_node()
+        parts = dask.compute(*[
+            dask.delayed(_tiles.voxel_tile, pure=False)(
+                spec, t, leaf, int(min_points_per_voxel), low.tolist(), mul,
+                os.path.join(out, f"tile_{t:06d}.npz"), threads)
+            for t in range(self.tiles)])
+        return VoxelResult(self, list(parts), out)
 
     # --- spacing, geometry, smoothing ------------------------------------------------------
 
@@ -933,6 +963,74 @@ class KeptResult(TileResult):
     def removed(self):
         """The caller indices not kept, ascending."""
         return self._each(False).astype(np.int64)
+
+
+class VoxelResult(TileResult):
+    """The voxels of :meth:`TiledCloud.voxel_grid`, per tile (``parts``: ``path``, ``voxels``)."""
+
+    def __init__(self, cloud, parts, out):
+        super().__init__("voxels", sum(p["voxels"] for p in parts), parts)
+        self._cloud = cloud
+        self._out = out
+
+    def assemble(self):
+        """The dict ``nbhd.voxel_grid(points, ...)`` returns, in memory: ``centroids``,
+        ``nearest``, ``offsets``, ``members``, ``cells``, in ascending linear voxel index."""
+        loaded = [dict(np.load(p["path"])) for p in self.parts]
+        key = np.concatenate([z["key"] for z in loaded])
+        order = np.argsort(key, kind="stable")
+        counts = np.concatenate([z["counts"] for z in loaded])
+        starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        members = np.concatenate([z["members"] for z in loaded])
+        runs = [members[starts[v]:starts[v + 1]] for v in order]
+        return {
+            "centroids": np.concatenate([z["centroids"] for z in loaded])[order],
+            "nearest": np.concatenate([z["nearest"] for z in loaded])[order].astype(np.uint32),
+            "offsets": np.concatenate([[0], np.cumsum(counts[order])]).astype(np.uint64),
+            "members": (np.concatenate(runs) if runs else members).astype(np.uint32),
+            "cells": np.concatenate([z["cells"] for z in loaded])[order],
+        }
+
+    def cloud(self, store=None, buckets=None):
+        """The centroids as a new :class:`TiledCloud` (default store: a folder beside the
+        cloud's) whose caller order is the voxels' — ``assemble()["centroids"]``'s — without
+        gathering them: the voxels' ranks come from a sort over ``buckets`` ranges of keys
+        (default: one per tile), cut at quantiles of the tiles' key samples, one task each,
+        then one task per tile writes its piece."""
+        cloud = self._cloud
+        if store is None:
+            store = cloud._out(None, "voxel-cloud")
+        os.makedirs(store, exist_ok=True)
+        paths = [p["path"] for p in self.parts]
+        sample = np.sort(np.concatenate([np.asarray(p["sample"], np.uint64)
+                                         for p in self.parts]))
+        b = max(1, min(buckets or len(paths), len(sample)))
+        cuts = [int(c) for c in np.unique(sample[(np.arange(1, b) * len(sample)) // b])]
+        bounds = [0] + cuts + [2**64]
+        starts = self._starts(cuts)
+        ranks = [os.path.join(self._out, f"bucket_{i:06d}") for i in range(len(bounds) - 1)]
+        dask.compute(*[
+            dask.delayed(_tiles.voxel_ranks, pure=False)(paths, bounds[i], bounds[i + 1],
+                                                         starts[i], ranks[i])
+            for i in range(len(ranks))])
+        done = dask.compute(*[
+            dask.delayed(_tiles.voxel_piece, pure=False)(paths[t], t, ranks, store)
+            for t in range(len(paths))])
+        tiles = [Tile(lo, hi, count, grid_id=t, chunks=[0]) for t, count, lo, hi in done
+                 if count]
+        big = max((max(abs(v) for v in t.lo + t.hi) for t in tiles), default=0.0)
+        if self.n < 2:
+            raise ValueError("fewer than two voxels: not a tiled cloud")
+        return TiledCloud(Spec(self.n, cloud.spec.dtype, tiles, big, store), store)
+
+    def _starts(self, cuts):
+        """The number of voxels below each bucket's first key: each tile's keys counted below
+        every cut (its key file mapped, not read)."""
+        below = np.zeros(len(cuts), np.int64)
+        for p in self.parts:
+            k = np.load(p["path"] + ".key.npy", mmap_mode="r")
+            below += np.searchsorted(k, np.asarray(cuts, np.uint64))
+        return [0] + below.tolist()
 
 
 class RobustResult(TileResult):

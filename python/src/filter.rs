@@ -47,6 +47,7 @@ fn grid_dict<'py, T: Scalar + Element>(
     let offsets: Vec<u64> = grid.offsets.iter().map(|&o| o as u64).collect();
     d.set_item("offsets", vec1(py, offsets))?;
     d.set_item("members", vec1(py, grid.members))?;
+    d.set_item("cells", vec2(py, grid.cells, voxels, dim)?)?;
     Ok(d)
 }
 
@@ -64,7 +65,9 @@ fn grid_dict<'py, T: Scalar + Element>(
 /// uint32: each voxel's row nearest its centroid, ties by the smaller index — original rows,
 /// whose attributes can be kept with `attrs[nearest]`), and `offsets` ((v + 1,) uint64) with
 /// `members` (uint32): voxel i's rows are `members[offsets[i]:offsets[i + 1]]`, ascending
-/// (Open3D's `voxel_down_sample_and_trace`).
+/// (Open3D's `voxel_down_sample_and_trace`), and `cells` ((v, d) int64: each voxel's numbers
+/// ⌊x · (1/leaf)⌋ along each coordinate, which do not depend on the other points: voxels of
+/// parts of a cloud line up by them).
 #[pyfunction]
 #[pyo3(signature = (points, leaf, *, min_points_per_voxel = 0, threads = 0))]
 pub fn voxel_grid<'py>(

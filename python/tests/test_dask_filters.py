@@ -101,3 +101,43 @@ def test_the_filter_steps_are_the_library_filter(rng):
                           tree.remove_statistical_outliers(k=7, std_ratio=1.5))
     with pytest.raises(ValueError):
         nbhd.mean_distances(np.zeros((4, 0)))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_voxel_grid_on_tiles_equals_one_machine(client, tmp_path, dtype):
+    pts = noisy(dtype, n=30_000, seed=9)
+    # points exactly on voxel borders and on the tiles' cut planes (x = 0 here)
+    pts[:500, 0] = 0.0
+    pts[500:800, 2] = np.float32(0.25)
+    cloud = ndask.tile_array(da.from_array(pts, chunks=(7_000, 3)), str(tmp_path / "s"),
+                             grid=(3, 2, 1))
+    for leaf, minimum in [(0.05, 0), ([0.08, 0.03, 0.125], 3)]:
+        want = nbhd.voxel_grid(pts, leaf, min_points_per_voxel=minimum)
+        res = cloud.voxel_grid(leaf, min_points_per_voxel=minimum)
+        got = res.assemble()
+        assert got.keys() == want.keys()
+        for key in want:
+            assert got[key].dtype == want[key].dtype, key
+            assert got[key].tobytes() == want[key].tobytes(), (leaf, key)
+    # the centroids as a tiled cloud, in the voxels' order: its tables are the one-machine ones
+    sub = res.cloud(store=str(tmp_path / "voxels"), buckets=5)
+    assert sub.n == len(want["nearest"]) and sub.dtype == pts.dtype
+    table = sub.knn(5).assemble()
+    ref = nbhd.KdTree(want["centroids"]).neighborhoods(k=5)
+    assert np.array_equal(table.offsets, ref.offsets)
+    assert np.array_equal(table.indices, ref.indices)
+    assert table.sq_dists.tobytes() == ref.sq_dists.tobytes()
+
+
+def test_voxel_grid_refusals_are_the_library_ones(client, tmp_path):
+    pts = noisy(np.float32, n=3000)
+    pts[0] = (1e6, 0.0, 0.0)  # an extent that a tiny leaf cannot number in float32
+    cloud = ndask.tile_array(da.from_array(pts, chunks=(1000, 3)), str(tmp_path / "s"),
+                             grid=(2, 1, 1))
+    with pytest.raises(ValueError) as tiled:
+        cloud.voxel_grid(1e-3)
+    with pytest.raises(ValueError) as one:
+        nbhd.voxel_grid(pts, 1e-3)
+    assert str(tiled.value) == str(one.value)
+    with pytest.raises(ValueError, match="leaf"):
+        cloud.voxel_grid(-1.0)
