@@ -368,7 +368,7 @@ fn robust_finite(
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
     let mut tile = RobustTile::whole(points, neighbors);
-    let h = RobustRun::spacing_of_nearest(tile.nearest(options.k_plane)?.0);
+    let h = RobustRun::spacing_of_nearest(tile.nearest(options)?.0);
     let mut run = RobustRun::new(options, h, neighbors)?;
     let eps = run.epsilon();
     // the generation whose rows were last re-measured, for the progress of 'Neighbors'
