@@ -166,7 +166,7 @@ fn tiled(points: &[DVec3], options: &RobustOptions, ctl: Control) -> Tiled {
     let mut nearest = vec![None; n];
     for t in &mut tiles {
         loop {
-            let (near, valid) = t.tile.nearest(options.k_plane).unwrap();
+            let (near, valid) = t.tile.nearest(options).unwrap();
             if ctl.grow && !valid.iter().all(|&v| v) {
                 *t = gather(&points, mid, t.cell, 2.0 * t.halo);
                 grown += 1;
@@ -483,8 +483,8 @@ fn the_reach_flags_only_values_that_are_the_whole_clouds() {
             (l.min(q), h.max(q))
         });
     let mut t = gather(&p, (lo + hi) / 2.0, 0, 4.0 * h0);
-    let (near, _) = whole.nearest(options.k_plane).unwrap();
-    t.tile.nearest(options.k_plane).unwrap();
+    let (near, _) = whole.nearest(&options).unwrap();
+    t.tile.nearest(&options).unwrap();
     let mut run = RobustRun::new(
         &options,
         RobustRun::spacing_of_nearest(near),

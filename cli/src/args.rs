@@ -1,12 +1,14 @@
 //! Command-line arguments that several commands share: the input file and its format, the
-//! precision of written files, how the k-d tree is built, how normals are oriented, and the
-//! parsers of lengths (`6h`), curvatures (`0.2/h`) and vectors (`x,y,z`).
+//! precision of written files, how the k-d tree is built, how normals are oriented, the robust
+//! smoothing's options, and the parsers of lengths (`6h`), curvatures (`0.2/h`) and vectors
+//! (`x,y,z`).
 
 use crate::error::Result;
 use glam::DVec3;
 use nbhd::geometry::{Orientation, OrientationKind};
 use nbhd::io::{Format, PointCloud};
 use nbhd::names::OptionName;
+use nbhd::smooth::robust::RobustOptions;
 use nbhd::smooth::{Curvature, Length};
 use nbhd::{BuildOptions, MedianAlgorithm, NonFinitePolicy, PivotPolicy};
 use std::path::PathBuf;
@@ -104,6 +106,86 @@ impl PrecisionArgs {
         nbhd::io::WriteOptions {
             precision: self.get(),
             ..nbhd::io::WriteOptions::default()
+        }
+    }
+}
+
+/// The robust smoothing's own options (`nbhd::smooth::robust`), for `smooth` and `tiles`: the
+/// wide neighbourhood, the iterations and their stopping rule, the inlier weight, the feature
+/// angle and the noise scale.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RobustArgs {
+    /// Robust: size of the wide neighbourhood the candidate planes are fitted and scored on
+    /// (≥ k) [default: 48]: planes that tell a face from the chamfer across an edge at noise
+    /// of about one spacing; tripled by itself, as k, while the cloud reads as a ball of noise
+    #[arg(long)]
+    pub k_plane: Option<usize>,
+
+    /// Robust: at most this many iterations [default: 10]; the stopping rule usually ends
+    /// earlier (2–4 on clean or smooth clouds, 6–9 on flat faces or strong noise)
+    #[arg(long)]
+    pub iterations: Option<usize>,
+
+    /// Robust: stop once an iteration lowered the noise estimate by less than this fraction
+    /// [default: 0.05]; one value for every noise level (a clean cloud stops after one
+    /// iteration); 0 runs all --iterations
+    #[arg(long, allow_hyphen_values = true)]
+    pub tolerance: Option<f64>,
+
+    /// Robust: width of the inlier weight of plane distances, in units of the estimated noise
+    /// [default: 5], so the same value suits every noise level; larger smooths across
+    /// structured noise the estimate does not see (sensor ripples), smaller keeps finer detail
+    #[arg(long, allow_hyphen_values = true)]
+    pub inlier_width: Option<f64>,
+
+    /// Robust: angle in degrees between normals at which neighbours count as across a feature
+    /// [default: 20]: for every shape; smaller keeps the edges of machined parts sharper but
+    /// lets strongly curved surfaces drift outward slightly
+    #[arg(long, allow_hyphen_values = true)]
+    pub feature_angle: Option<f64>,
+
+    /// Robust: scale the neighbourhoods from the noise [default: true]: while the cloud reads
+    /// as a ball of noise (noise of about two spacings or more, as in dense scans of noisy
+    /// sensors), iterate with k and --k-plane tripled; clouds with noise up to about 1.5
+    /// spacings are smoothed the same either way. false keeps k and --k-plane as given
+    #[arg(long)]
+    pub noise_scale: Option<bool>,
+}
+
+impl RobustArgs {
+    /// Each option's flag and whether it was given.
+    pub fn given(&self) -> [(&'static str, bool); 6] {
+        [
+            ("--k-plane", self.k_plane.is_some()),
+            ("--iterations", self.iterations.is_some()),
+            ("--tolerance", self.tolerance.is_some()),
+            ("--inlier-width", self.inlier_width.is_some()),
+            ("--feature-angle", self.feature_angle.is_some()),
+            ("--noise-scale", self.noise_scale.is_some()),
+        ]
+    }
+
+    /// The library's options with these and `k`, ε (`radius`) and τ (`tau`), the library's
+    /// defaults for what is not given, and the per-point outputs on (orientation set later).
+    pub fn options(
+        &self,
+        k: Option<usize>,
+        radius: Option<Length>,
+        tau: Option<f64>,
+    ) -> RobustOptions {
+        let d = RobustOptions::default();
+        RobustOptions {
+            k: k.unwrap_or(d.k),
+            k_plane: self.k_plane.unwrap_or(d.k_plane),
+            epsilon: radius.unwrap_or(d.epsilon),
+            max_iterations: self.iterations.unwrap_or(d.max_iterations),
+            tolerance: self.tolerance.unwrap_or(d.tolerance),
+            inlier_width: self.inlier_width.unwrap_or(d.inlier_width),
+            feature_angle: self.feature_angle.unwrap_or(d.feature_angle),
+            tau: tau.unwrap_or(d.tau),
+            noise_scale: self.noise_scale.unwrap_or(d.noise_scale),
+            outputs: true,
+            ..d
         }
     }
 }

@@ -92,6 +92,7 @@ enum Command {
     /// (max(|k1|,|k2|), 'Max Princ'), which MeshLab and CloudCompare colour by.
     Curvature(commands::geometry::Args),
     Smooth(commands::smooth::Args),
+    Tiles(commands::tiles::Args),
     Bench(commands::bench::Args),
     Info(commands::info::Args),
     Convert(commands::convert::Args),
@@ -129,6 +130,7 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Normals(a)) => commands::geometry::run(a, What::Normals, &out),
         Some(Command::Curvature(a)) => commands::geometry::run(a, What::Curvature, &out),
         Some(Command::Smooth(a)) => commands::smooth::run(a, &out),
+        Some(Command::Tiles(a)) => commands::tiles::run(a, &out),
         Some(Command::Bench(a)) => commands::bench::run(a, &out),
         Some(Command::Info(a)) => commands::info::run(a, &out),
         Some(Command::Convert(a)) => commands::convert::run(a, &out),

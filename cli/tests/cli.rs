@@ -1541,3 +1541,131 @@ fn saved_trees_are_loaded_by_the_neighbour_commands_and_checked() {
         assert!(stderr(&o).contains(bad.as_str()), "{}", stderr(&o));
     }
 }
+
+/// A noisy terrain of `n` points over 60 x 40 (z a smooth relief, noise 0.05), as three tiles
+/// cut along x, each in its own order, with two NaN points in the middle tile; written as PLY
+/// double files, and their concatenation in tile order as one file. Returns the tiles' paths
+/// and the whole file's.
+fn terrain_tiles(name: &str, n: usize) -> (Vec<String>, String) {
+    let mut s = 0x2545f4914f6cdd1du64;
+    let mut r = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut tiles = vec![Vec::new(); 3];
+    for _ in 0..n {
+        let (x, y) = (60.0 * r(), 40.0 * r());
+        let z = (x / 9.0).sin() * (y / 7.0).cos() + 0.05 * (r() + r() + r() - 1.5);
+        tiles[((x / 20.0) as usize).min(2)].push([x, y, z]);
+    }
+    tiles[1].insert(7, [f64::NAN; 3]);
+    tiles[1].push([f64::NAN, 0.0, 0.0]);
+    let opts = nbhd::io::WriteOptions {
+        precision: nbhd::io::Precision::Double,
+        ..Default::default()
+    };
+    let mut paths = Vec::new();
+    for (t, pts) in tiles.iter().enumerate() {
+        let p = tmp(&format!("{name}-{t}.ply"));
+        let cloud = nbhd::io::PointCloud::from_positions(pts.clone());
+        nbhd::io::write(std::path::Path::new(&p), &cloud, &opts).unwrap();
+        paths.push(p);
+    }
+    let whole = tmp(&format!("{name}-whole.ply"));
+    let cloud = nbhd::io::PointCloud::from_positions(tiles.concat());
+    nbhd::io::write(std::path::Path::new(&whole), &cloud, &opts).unwrap();
+    (paths, whole)
+}
+
+/// Issue 39 item 3: `nbhd tiles` smooths tile by tile (one tile and the points of its
+/// neighbours near it in memory) and writes, bit for bit, what `nbhd smooth` writes for the
+/// tiles' points taken together: positions, normals and every curvature field, NaN points
+/// kept; and on a LAS 1.4 file the same bytes as `nbhd smooth`, every record carried through.
+#[test]
+fn tiles_smooth_as_the_whole_cloud_does() {
+    let (tiles, whole) = terrain_tiles("tiles-terrain", 6000);
+    let want = tmp("tiles-terrain-smoothed.ply");
+    let o = nbhd(&[
+        "smooth",
+        &whole,
+        &want,
+        "--orient",
+        "unoriented",
+        "-p",
+        "double",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let dir = tmp("tiles-terrain-out");
+    let mut args = vec!["tiles", "--out", &dir, "-p", "double", "--json"];
+    args.extend(tiles.iter().map(String::as_str));
+    let o = nbhd(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(summary["points"], 6002);
+    assert_eq!(summary["skipped_non_finite"], 2);
+    let want = nbhd::io::read(&want).unwrap();
+    let mut got = Vec::new();
+    for t in &tiles {
+        let name = std::path::Path::new(t).file_name().unwrap();
+        got.push(nbhd::io::read(std::path::Path::new(&dir).join(name)).unwrap());
+    }
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let flat = |v: &[[f64; 3]]| v.iter().flatten().copied().collect::<Vec<f64>>();
+    let cat = |f: &dyn Fn(&nbhd::io::PointCloud) -> Vec<f64>| {
+        bits(&got.iter().flat_map(f).collect::<Vec<_>>())
+    };
+    assert_eq!(cat(&|c| flat(&c.positions)), bits(&flat(&want.positions)));
+    assert_eq!(
+        cat(&|c| flat(c.normals.as_ref().unwrap())),
+        bits(&flat(want.normals.as_ref().unwrap()))
+    );
+    for f in [
+        "curvature",
+        "k1",
+        "k2",
+        "mean_curvature",
+        "max_abs_curvature",
+    ] {
+        assert_eq!(
+            cat(&|c| c.scalar(f).unwrap().to_vec()),
+            bits(want.scalar(f).unwrap()),
+            "{f}"
+        );
+    }
+    assert_ne!(flat(&got[0].positions), {
+        let c = nbhd::io::read(&tiles[0]).unwrap();
+        flat(&c.positions)
+    });
+
+    // one LAS 1.4 tile: the same file as `nbhd smooth`, records and all
+    let input = data("las/full_fmt6.laz").unwrap();
+    let want = tmp("tiles-fmt6-smoothed.laz");
+    let o = nbhd(&[
+        "smooth",
+        &input,
+        &want,
+        "-k",
+        "8",
+        "--iterations",
+        "2",
+        "--orient",
+        "none",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let dir = tmp("tiles-fmt6-out");
+    let o = nbhd(&[
+        "tiles",
+        &input,
+        "--out",
+        &dir,
+        "-k",
+        "8",
+        "--iterations",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = std::path::Path::new(&dir).join("full_fmt6.laz");
+    assert_eq!(std::fs::read(got).unwrap(), std::fs::read(&want).unwrap());
+}

@@ -475,18 +475,19 @@ class RobustGather:
     """Tile ``t`` of a robust run gathered with a halo of ``width`` into an
     ``nbhd.RobustTile``, given what the round it is made for reads besides the input: the
     positions of the round's generation, those its rows shrank on, and before the finish the
-    last step's normals, each read from the owners' generation files. A task makes one per
-    round and keeps nothing afterwards, so a worker holds one tile's working set at a time,
-    however large the cloud."""
+    last step's normals, each read from the owners' generation files; ``threads`` its worker
+    threads (``nbhd.RobustTile``'s). A task makes one per round and keeps nothing afterwards,
+    so a worker holds one tile's working set at a time, however large the cloud."""
 
-    def __init__(self, spec: Spec, t: int, width: float, options, out: str, round=None):
+    def __init__(self, spec: Spec, t: int, width: float, options, threads: int, out: str,
+                 round=None):
         import nbhd
 
         idx, pts, self.owner, self.at, lo, hi = gather_robust(spec, t, width)
         self.t, self.out, self.width, self.gathered = t, out, width, len(idx)
         mine = self.owner == t
         self.own = idx[mine]
-        self.tile = nbhd.RobustTile(pts, mine, lo, hi, options)
+        self.tile = nbhd.RobustTile(pts, mine, lo, hi, options, threads=threads)
         if round is None:
             return
         g = round["generation"]
@@ -508,9 +509,9 @@ class RobustGather:
         return values
 
 
-def robust_nearest(spec: Spec, t: int, width: float, options, out: str) -> dict:
+def robust_nearest(spec: Spec, t: int, width: float, options, threads: int, out: str) -> dict:
     """Task: the owned points' nearest squared distances, written for the spacing's sums."""
-    tile = RobustGather(spec, t, width, options, out)
+    tile = RobustGather(spec, t, width, options, threads, out)
     near, valid = tile.tile.nearest()
     base = os.path.join(out, f"nearest_{t:06d}")
     np.save(base + ".idx.npy", tile.own)
@@ -518,13 +519,14 @@ def robust_nearest(spec: Spec, t: int, width: float, options, out: str) -> dict:
     return {"tile": t, "path": base, "halo": width, "rows": len(tile.own), **_validity(valid)}
 
 
-def robust_round(spec: Spec, t: int, width: float, options, out: str, round) -> dict:
+def robust_round(spec: Spec, t: int, width: float, options, threads: int, out: str,
+                 round) -> dict:
     """Task: one round of tile ``t``. Its owned values go to its values file, a step's
     positions and normals to the next generation's files; returns the part's summary with
     the first digit counts of its values."""
     import nbhd
 
-    tile = RobustGather(spec, t, width, options, out, round)
+    tile = RobustGather(spec, t, width, options, threads, out, round)
     part = tile.tile.round(round)
     values = part["values"]
     _save(values_path(out, t), values)
@@ -557,11 +559,11 @@ def robust_matching(out: str, t: int, search: bytes):
     return nbhd.RankSearch.from_bytes(search).matching_values(values)
 
 
-def robust_finish(spec: Spec, t: int, width: float, options, out: str, round):
+def robust_finish(spec: Spec, t: int, width: float, options, threads: int, out: str, round):
     """Task: the last round, the owned points' points, normals and outputs written to
     ``out/tile_<t>.npz``."""
     path = os.path.join(out, f"tile_{t:06d}.npz")
-    tile = RobustGather(spec, t, width, options, out, round)
+    tile = RobustGather(spec, t, width, options, threads, out, round)
     r = tile.tile.finish(round)
     arrays = {"idx": tile.own, "points": r["points"], "normals": r["normals"]}
     for key, v in (r["outputs"] or {}).items():

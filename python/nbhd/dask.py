@@ -533,7 +533,7 @@ class TiledCloud:
                       max_iterations=10, tolerance=0.05, inlier_width=5.0, feature_angle=20.0,
                       tau=1.0, noise_scale=None, orientation="unoriented",
                       orientation_point=(0.0, 0.0, 0.0), non_finite="reject", outputs=False,
-                      out=None, client=None, compute=True, progress=None):
+                      threads=0, out=None, client=None, compute=True, progress=None):
         """``nbhd.smooth_robust(points, ...)`` on the tiles, identical to the last bit: the
         arrays ``points``, ``normals`` and with ``outputs`` ``outputs.<name>``, and the run's
         figures (``noise``, ``moved``, ``dimension``, ``wide_iterations``, ``spacing``,
@@ -547,9 +547,10 @@ class TiledCloud:
         reduced exactly (``nbhd.RankSearch`` over the tiles' value files, never gathered). A
         cloud cut with ``non_finite="skip"`` has holes: they are refused here unless
         ``non_finite="skip"``, and then keep their rows with NaN normals and outputs, as on
-        one machine. ``compute=False`` returns the unstarted :class:`RobustJob` (progress,
-        cancellation); ``progress`` is called with the job's ``status`` after every tile
-        task."""
+        one machine. ``threads`` is each task's nbhd threads (0: all cores; 1 with workers of
+        one thread each, so a task holds one thread's buffers). ``compute=False`` returns the
+        unstarted :class:`RobustJob` (progress, cancellation); ``progress`` is called with the
+        job's ``status`` after every tile task."""
         self._orientation(orientation)
         if non_finite not in ("reject", "skip"):
             raise ValueError(f"unknown non_finite {non_finite!r}; expected 'reject' or 'skip'")
@@ -569,21 +570,29 @@ class TiledCloud:
             orientation=orientation, orientation_point=tuple(orientation_point),
             outputs=outputs)
         job = RobustJob(self, options, k_plane, max_iterations, self._out(out, "robust"), client,
-                        progress)
+                        progress, threads)
         return job.run() if compute else job
 
 
+# the volume of the unit ball in 1 and 2 dimensions: a segment, a disc
+_UNIT_BALL = {1: 2.0, 2: np.pi}
+
+
 def _first_robust_halo(spec, t, k_plane):
-    """The first halo of a robust tile: three hops (a step's reach, ``robust/reach.rs``) of the
-    side of a square holding ``k_plane`` points if the tile's points covered its box's two
-    largest extents evenly (a surface: a terrain, a facade). The library checks every owned
-    point's reach; a tile that fails is gathered again with twice the halo."""
+    """The first halo of a robust tile: three hops (a step's reach, ``robust/reach.rs``), each
+    the radius of a disc holding ``k_plane`` points if the tile's points covered its box's two
+    largest extents evenly (a surface: a terrain, a facade), with a third more for the spread
+    of the ``k_plane``-th distances in a random sample: 4 radii. The library checks every
+    owned point's reach; a tile that fails is gathered again with twice the halo. (The side
+    of a square holding ``k_plane`` points, 1.77 radii, gathered 1.8 times a 15,000-point
+    terrain tile's points where this gathers 1.55 times.)"""
     tile = spec.tiles[t]
     ext = np.sort(np.maximum(np.asarray(tile.hi) - np.asarray(tile.lo), 0))[::-1][:2]
     live = ext[ext > 0]
     if len(live) == 0:
         return max(spec.scale * 1e-6, 1e-12)
-    return float(3.0 * (np.prod(live) * k_plane / tile.count) ** (1.0 / len(live)))
+    ball = np.prod(live) * k_plane / (tile.count * _UNIT_BALL[len(live)])
+    return float(4.0 * ball ** (1.0 / len(live)))
 
 
 def _halo_ok(part):
@@ -630,11 +639,14 @@ class RobustJob:
     it is (round, tiles done, points/s, an ETA), :meth:`cancel` stops it and :meth:`result`
     waits for the :class:`RobustResult`."""
 
-    def __init__(self, cloud, options, k_plane, max_iterations, out, client, progress=None):
+    def __init__(self, cloud, options, k_plane, max_iterations, out, client, progress=None,
+                 threads=0):
         """``options``: the run's ``nbhd.RobustOptions``, made with ``k_plane`` (which sizes
         the first halos) and ``max_iterations`` (which bounds the ETA); ``progress``: called
-        with :attr:`status` on the client after every tile task."""
+        with :attr:`status` on the client after every tile task; ``threads``: each tile
+        task's nbhd threads."""
         self.cloud, self.options, self.out, self.client = cloud, options, out, client
+        self.threads = threads
         spec = cloud.spec
         self.widths = [_first_robust_halo(spec, t, k_plane) for t in range(cloud.tiles)]
         self.max_iterations = max_iterations
@@ -722,8 +734,8 @@ class RobustJob:
     # --- the rounds -----------------------------------------------------------------------
 
     def _each(self, fn, *args):
-        """``fn(spec, t, width, options, out, *args)`` as one task per tile; a tile whose part
-        fails :func:`_halo_ok` is gathered again with twice the halo and run again."""
+        """``fn(spec, t, width, options, threads, out, *args)`` as one task per tile; a tile
+        whose part fails :func:`_halo_ok` is gathered again with twice the halo and run again."""
         import distributed
 
         self._check()
@@ -732,7 +744,7 @@ class RobustJob:
 
         def submit(t):
             return self.client.submit(fn, self._spec, t, self.widths[t], self.options,
-                                      self.out, *args, pure=False)
+                                      self.threads, self.out, *args, pure=False)
 
         tile_of = {}
         with self._lock:

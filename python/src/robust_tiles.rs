@@ -243,8 +243,10 @@ fn flags<'py>(
 impl PyRobustTile {
     /// A tile: `points` (m, 3) every finite point of the cloud inside the closed box
     /// `lo`..`hi` (infinite bounds where the cloud ends), in the cloud's order; `owned` (m,)
-    /// whether the tile owns each; the options of the run.
+    /// whether the tile owns each; the options of the run; `threads` the tile's worker
+    /// threads (0: the current pool, a thread per core; 1 in a Dask task of one thread).
     #[new]
+    #[pyo3(signature = (points, owned, lo, hi, options, *, threads = 0))]
     fn new(
         py: Python<'_>,
         points: &Bound<'_, PyAny>,
@@ -252,8 +254,12 @@ impl PyRobustTile {
         lo: [f64; 3],
         hi: [f64; 3],
         options: PyRef<'_, PyRobustOptions>,
+        threads: usize,
     ) -> PyResult<Self> {
-        let options = options.options;
+        let options = RobustOptions {
+            threads,
+            ..options.options
+        };
         let input = dvec3s(points)?;
         let region = Region {
             lo: DVec3::from_array(lo),
@@ -278,9 +284,9 @@ impl PyRobustTile {
         Bound<'py, numpy::PyArray1<f64>>,
         Bound<'py, numpy::PyArray1<bool>>,
     )> {
-        let k_plane = self.options.k_plane;
+        let options = self.options;
         let tile = self.tile()?;
-        let (near, valid) = py.detach(|| tile.nearest(k_plane)).or_raise()?;
+        let (near, valid) = py.detach(|| tile.nearest(&options)).or_raise()?;
         let n = near.len();
         let near: Vec<f64> = near.into_iter().map(|d| d.unwrap_or(f64::NAN)).collect();
         Ok((vec1(py, near), flags(py, valid, n)))

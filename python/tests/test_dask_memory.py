@@ -13,11 +13,22 @@ The comparison reads the per-tile result files one at a time against the one-mac
 this process (never assembling a second whole copy). Two controls show that the comparison can
 fail: one tile computed without its halo differs from the one-machine rows and normals at its
 border, and the comparison counts those rows.
+
+Then the robust smoothing (``TiledCloud.smooth_robust``: one task per tile and round, holding
+one tile at a time, one nbhd thread each) runs on the same cloud under the same limits, two
+iterations (every kind of round, the halos exchanged between iterations, three exact medians),
+and its points, normals and figures must be ``nbhd.smooth_robust``'s to the last bit. The
+one-machine run is made in a process of its own, whose high-water resident set says what the
+whole cloud needs: many times the workers' limit. (Breaking a halo or the median fails
+``test_dask_robust.py``'s controls.)
 """
+
+import json
 
 import os
 import resource
 import shutil
+import subprocess
 import sys
 
 import numpy as np
@@ -44,6 +55,8 @@ PER_TILE = 15_000
 K = 8
 NORMALS = dict(k=8, epsilon=1.5, epsilon_units="absolute")
 SIDE = 1000.0
+# the robust run: iterations (each one a measure and a step round) and each tile task's threads
+ROBUST = dict(max_iterations=2, threads=1)
 
 
 def strip(block, block_info=None):
@@ -82,12 +95,16 @@ def peak_rss():
 @pytest.fixture(scope="module")
 def cluster():
     # the limit as a hard bound: no spilling or pausing (the tasks hold nothing to spill, their
-    # results are files); a worker above 95 % of its limit is killed by its nanny
+    # results are files); a worker above 95 % of its limit is killed by its nanny. Dask's logs
+    # of recent tasks off: kept in every worker (10,000 and 1,000 entries by default), they
+    # grew a worker by about 20 MB over a robust run's thousands of small tasks (python/DASK.md)
     memory = {
         "distributed.worker.memory.target": False,
         "distributed.worker.memory.spill": False,
         "distributed.worker.memory.pause": False,
         "distributed.worker.memory.terminate": 0.95,
+        "distributed.admin.log-length": 0,
+        "distributed.admin.low-level-log-length": 0,
     }
     with dask.config.set(memory):
         cluster = distributed.LocalCluster(
@@ -142,6 +159,35 @@ def array_mismatches(path, ref, keys):
     return int(bad.sum())
 
 
+ONE_MACHINE = """
+import json, sys
+import numpy as np
+import nbhd
+pts = np.load(sys.argv[1])
+r = nbhd.smooth_robust(pts, max_iterations=int(sys.argv[3]))
+for key in ("points", "normals"):
+    np.save(sys.argv[2] + "-" + key + ".npy", r.pop(key))
+r = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in r.items() if k != "outputs"}
+with open("/proc/self/status") as f:
+    r["peak"] = [int(x.split()[1]) * 1024 for x in f if x.startswith("VmHWM:")][0]
+print(json.dumps(r))
+"""
+
+
+def one_machine_robust(pts, tmp_path):
+    """``nbhd.smooth_robust(pts)`` with ``ROBUST``'s iterations, run in a new process: its
+    figures and its peak resident set; its points and normals written to
+    ``tmp_path/robust-{points,normals}.npy``."""
+    src = tmp_path / "terrain.npy"
+    np.save(src, pts)
+    done = subprocess.run([sys.executable, "-c", ONE_MACHINE, str(src), str(tmp_path / "robust"),
+                           str(ROBUST["max_iterations"])],
+                          check=True, capture_output=True, text=True)
+    os.remove(src)
+    r = json.loads(done.stdout.strip().splitlines()[-1])
+    return r, r.pop("peak")
+
+
 def test_exact_under_a_memory_limit_smaller_than_the_cloud(cluster, tmp_path):
     client = cluster
     assert N * 3 * 8 > LIMIT  # the coordinates alone exceed one worker's limit
@@ -187,4 +233,26 @@ def test_exact_under_a_memory_limit_smaller_than_the_cloud(cluster, tmp_path):
     _tiles.geometry_tile(spec, t, "normals", 0.0, ctrl, kw)
     wrong = array_mismatches(ctrl, want, want)
     assert 0 < wrong < spec.tiles[t].count
+    del want, normals, variation, flags
+
+    # the robust smoothing on the tiles, under the same limits
+    rob = cloud.smooth_robust(client=client, **ROBUST)
+    peaks = client.run(peak_rss)
+    assert set(peaks) == workers, "a worker was killed (above its memory limit) and replaced"
+    for addr, peak in peaks.items():
+        assert peak < LIMIT, f"worker {addr} peaked at {peak / 1e6:.1f} MB (robust)"
+    assert sum(p["rows"] for p in rob.parts) == N
+    assert rob.status["invalid"] == 0
+    assert rob.status["iteration"] == ROBUST["max_iterations"]
+
+    # the one-machine run, in a process of its own: what the whole cloud needs
+    ref, peak = one_machine_robust(pts, tmp_path)
+    assert peak > 10 * LIMIT, f"the one-machine robust run peaked at {peak / 1e6:.1f} MB only"
+    for key in ("noise", "moved", "dimension"):
+        assert np.asarray(rob.report[key]).tobytes() == np.asarray(ref[key]).tobytes(), key
+    for key in ("spacing", "epsilon", "lambda", "min_neighbors", "wide_iterations"):
+        assert rob.report[key] == ref[key], key
+    want = {k: np.load(tmp_path / f"robust-{k}.npy", mmap_mode="r") for k in ("points", "normals")}
+    assert sum(array_mismatches(p, want, want) for p in rob.paths) == 0
+    del want
     shutil.rmtree(tmp_path)  # 1.3 GB of tiles and results: not kept among pytest's last runs

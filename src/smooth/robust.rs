@@ -387,7 +387,7 @@ pub(super) fn robust_whole(
     if wide_first {
         tile.search_wide_first();
     }
-    let h = RobustRun::spacing_of_nearest(tile.nearest(options.k_plane)?.0);
+    let h = RobustRun::spacing_of_nearest(tile.nearest(options)?.0);
     let mut run = RobustRun::new(options, h, neighbors)?;
     let eps = run.epsilon();
     // the generation whose rows were last re-measured, for the progress of 'Neighbors'

@@ -11,4 +11,5 @@ pub mod info;
 pub mod neighbors;
 pub mod render;
 pub mod smooth;
+pub mod tiles;
 pub mod tree;

@@ -4,7 +4,7 @@
 
 use crate::args::{
     curvature_text, length_text, named, orientation, parse_curvature, parse_length, parse_orient,
-    parse_vec3, InputArgs, OrientArg, PrecisionArgs,
+    parse_vec3, InputArgs, OrientArg, PrecisionArgs, RobustArgs,
 };
 use crate::error::{Context, Result};
 use crate::output::{num, Output};
@@ -111,41 +111,8 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     pub tau: Option<f64>,
 
-    /// Robust: size of the wide neighbourhood the candidate planes are fitted and scored on
-    /// (≥ k) [default: 48]: planes that tell a face from the chamfer across an edge at noise
-    /// of about one spacing; tripled by itself, as k, while the cloud reads as a ball of noise
-    #[arg(long)]
-    pub k_plane: Option<usize>,
-
-    /// Robust: at most this many iterations [default: 10]; the stopping rule usually ends
-    /// earlier (2–4 on clean or smooth clouds, 6–9 on flat faces or strong noise)
-    #[arg(long)]
-    pub iterations: Option<usize>,
-
-    /// Robust: stop once an iteration lowered the noise estimate by less than this fraction
-    /// [default: 0.05]; one value for every noise level (a clean cloud stops after one
-    /// iteration); 0 runs all --iterations
-    #[arg(long, allow_hyphen_values = true)]
-    pub tolerance: Option<f64>,
-
-    /// Robust: width of the inlier weight of plane distances, in units of the estimated noise
-    /// [default: 5], so the same value suits every noise level; larger smooths across
-    /// structured noise the estimate does not see (sensor ripples), smaller keeps finer detail
-    #[arg(long, allow_hyphen_values = true)]
-    pub inlier_width: Option<f64>,
-
-    /// Robust: angle in degrees between normals at which neighbours count as across a feature
-    /// [default: 20]: for every shape; smaller keeps the edges of machined parts sharper but
-    /// lets strongly curved surfaces drift outward slightly
-    #[arg(long, allow_hyphen_values = true)]
-    pub feature_angle: Option<f64>,
-
-    /// Robust: scale the neighbourhoods from the noise [default: true]: while the cloud reads
-    /// as a ball of noise (noise of about two spacings or more, as in dense scans of noisy
-    /// sensors), iterate with k and --k-plane tripled; clouds with noise up to about 1.5
-    /// spacings are smoothed the same either way. false keeps k and --k-plane as given
-    #[arg(long)]
-    pub noise_scale: Option<bool>,
+    #[command(flatten)]
+    pub robust: RobustArgs,
 
     /// Thesis' methods: number of steps [default: 2 isotropic, 3 anisotropic]
     #[arg(long, short)]
@@ -209,14 +176,7 @@ pub struct Args {
 impl Args {
     /// The options given that the chosen method does not read: an error naming the first.
     fn check_method_options(&self) -> Result<()> {
-        let robust_only = [
-            ("--k-plane", self.k_plane.is_some()),
-            ("--iterations", self.iterations.is_some()),
-            ("--tolerance", self.tolerance.is_some()),
-            ("--inlier-width", self.inlier_width.is_some()),
-            ("--feature-angle", self.feature_angle.is_some()),
-            ("--noise-scale", self.noise_scale.is_some()),
-        ];
+        let robust_only = self.robust.given();
         let thesis_only = [
             ("--steps", self.steps.is_some()),
             ("--constrain-interior", self.constrain_interior.is_some()),
@@ -281,20 +241,7 @@ impl Args {
 
     /// The library's options of the robust method (orientation set later).
     pub fn robust_options(&self) -> RobustOptions {
-        let d = RobustOptions::default();
-        RobustOptions {
-            k: self.k.unwrap_or(d.k),
-            k_plane: self.k_plane.unwrap_or(d.k_plane),
-            epsilon: self.radius.unwrap_or(d.epsilon),
-            max_iterations: self.iterations.unwrap_or(d.max_iterations),
-            tolerance: self.tolerance.unwrap_or(d.tolerance),
-            inlier_width: self.inlier_width.unwrap_or(d.inlier_width),
-            feature_angle: self.feature_angle.unwrap_or(d.feature_angle),
-            tau: self.tau.unwrap_or(d.tau),
-            noise_scale: self.noise_scale.unwrap_or(d.noise_scale),
-            outputs: true,
-            ..d
-        }
+        self.robust.options(self.k, self.radius, self.tau)
     }
 }
 

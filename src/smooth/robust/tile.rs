@@ -204,7 +204,12 @@ impl<'a> RobustTile<'a> {
     /// Each owned point's squared distance to its nearest other point (`None` without one),
     /// in local order, the input of the spacing h; and whether each is right (empty: all).
     /// Searches the plain rows (`k_plane` nearest) and keeps them for [`Round::Start`].
-    pub fn nearest(&mut self, k_plane: usize) -> Result<(Vec<Option<f64>>, Vec<bool>)> {
+    /// Runs on the pool of `options.threads`, as [`RobustTile::round`].
+    pub fn nearest(&mut self, options: &RobustOptions) -> Result<(Vec<Option<f64>>, Vec<bool>)> {
+        crate::parallel::with_threads(options.threads, || self.nearest_here(options.k_plane))?
+    }
+
+    fn nearest_here(&mut self, k_plane: usize) -> Result<(Vec<Option<f64>>, Vec<bool>)> {
         let nearest = self.search(RowSet::Plain, k_plane)?;
         let st = self.state.as_ref().expect("searched");
         let valid = self.owned_valid(st, |r| r.cert());
@@ -442,13 +447,18 @@ impl<'a> RobustTile<'a> {
     }
 
     /// Computes `round` (of the run with `options` and ε = `eps`) over the gathered points and
-    /// returns the owned points' part.
+    /// returns the owned points' part, on the pool of `options.threads` (1: one worker, so a
+    /// tile task of a distributed run holds one thread's buffers).
     ///
     /// # Errors
     ///
     /// [`NbhdError::InvalidOption`] for [`Round::Done`] or a round of another generation than
     /// the tile's proxy; those of the search.
     pub fn round(&mut self, round: &Round, options: &RobustOptions, eps: f64) -> Result<TilePart> {
+        crate::parallel::with_threads(options.threads, || self.round_here(round, options, eps))?
+    }
+
+    fn round_here(&mut self, round: &Round, options: &RobustOptions, eps: f64) -> Result<TilePart> {
         let kp = options.k_plane;
         match *round {
             Round::Start => {
@@ -583,6 +593,16 @@ impl<'a> RobustTile<'a> {
     /// with `lambda`, of the owned points in local order; whether each is right (empty: all).
     #[allow(clippy::type_complexity)]
     pub fn finish(
+        self,
+        round: &Round,
+        options: &RobustOptions,
+        eps: f64,
+    ) -> Result<(Vec<DVec3>, Vec<DVec3>, Vec<PointOutput>, Vec<bool>)> {
+        crate::parallel::with_threads(options.threads, || self.finish_here(round, options, eps))?
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn finish_here(
         mut self,
         round: &Round,
         options: &RobustOptions,
