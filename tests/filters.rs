@@ -1,6 +1,6 @@
 //! Outlier removal against a brute-force reference written here from the definitions (mean
 //! distance to the k nearest other points, threshold mean + α·σ with the sample σ; at least
-//! m other points within an inclusive radius), on seeded sets with planted outliers, NaN
+//! m other points within an inclusive radius; the sums over the points exact), on seeded sets with planted outliers, NaN
 //! points, duplicates and exact distance ties, for f32 and f64 and several thread counts.
 
 mod common;
@@ -10,6 +10,7 @@ use nbhd::filter::{
     radius_outlier_removal, statistical_outlier_removal, RadiusOutlierOptions,
     StatisticalOutlierOptions,
 };
+use nbhd::sum::ExactSum;
 use nbhd::{BuildOptions, KdTree, NbhdError, NonFinitePolicy, PointsView, Scalar};
 
 fn tree<T: Scalar>(coords: &[T], d: usize) -> KdTree<T> {
@@ -55,11 +56,14 @@ fn brute_sor<T: Scalar>(coords: &[T], d: usize, k: usize, alpha: f64) -> Vec<u32
             (i as u32, s / k as f64)
         })
         .collect();
+    // both sums exact, rounded once (the order-independent sums the filter documents)
     let m = dist.len() as f64;
-    let mean = dist.iter().fold(0.0, |a, x| a + x.1) / m;
+    let mean = dist.iter().map(|x| x.1).collect::<ExactSum>().value() / m;
     let var = dist
         .iter()
-        .fold(0.0, |a, x| a + (x.1 - mean) * (x.1 - mean))
+        .map(|x| (x.1 - mean) * (x.1 - mean))
+        .collect::<ExactSum>()
+        .value()
         / (m - 1.0);
     let t = mean + alpha * var.sqrt();
     dist.iter().filter(|x| x.1 <= t).map(|x| x.0).collect()

@@ -12,8 +12,8 @@ use nbhd::filter::{voxel_grid, VoxelGrid, VoxelGridOptions};
 use nbhd::{NbhdError, PointsView};
 use std::collections::BTreeMap;
 
-/// (linear voxel index, centroid, members ascending, nearest member)
-type RefVoxel<T> = (u64, Vec<T>, Vec<u32>, u32);
+/// (linear voxel index, centroid, members ascending, nearest member, voxel numbers ⌊x·inv⌋)
+type RefVoxel<T> = (u64, Vec<T>, Vec<u32>, u32, Vec<i64>);
 
 macro_rules! reference {
     ($name:ident, $t:ty) => {
@@ -71,7 +71,11 @@ macro_rules! reference {
                             near = i;
                         }
                     }
-                    (idx, cen, m, near)
+                    let i0 = m[0] as usize;
+                    let cells = (0..d)
+                        .map(|a| (c[i0 * d + a] * inv[a]).floor() as i64)
+                        .collect();
+                    (idx, cen, m, near, cells)
                 })
                 .collect()
         }
@@ -83,8 +87,14 @@ reference!(reference_f64, f64);
 fn check<T: nbhd::Scalar + PartialEq>(got: &VoxelGrid<T>, want: &[RefVoxel<T>], what: &str) {
     assert_eq!(got.len(), want.len(), "{what}: voxel count");
     assert_eq!(got.offsets.len(), want.len() + 1, "{what}");
-    for (v, (_, cen, m, near)) in want.iter().enumerate() {
+    assert_eq!(got.cells.len(), want.len() * got.dim, "{what}");
+    for (v, (_, cen, m, near, cells)) in want.iter().enumerate() {
         assert_eq!(got.members_of(v), &m[..], "{what}: members of voxel {v}");
+        assert_eq!(
+            got.cells_of(v),
+            &cells[..],
+            "{what}: voxel numbers of voxel {v}"
+        );
         assert_eq!(got.centroid(v), &cen[..], "{what}: centroid of voxel {v}");
         assert_eq!(got.nearest[v], *near, "{what}: nearest of voxel {v}");
     }
@@ -187,6 +197,8 @@ fn borders_and_negative_coordinates() {
     // voxel 1: both points at the same distance from (0.125, 0.125): the smaller index
     assert_eq!(g.nearest, vec![1, 5, 2, 0, 4]);
     assert_eq!(g.source_len, 8);
+    // the voxel numbers ⌊x/0.5⌋, not less the grid's lowest (-1 along x)
+    assert_eq!(g.cells, vec![-1, 0, 0, 0, 1, 0, 2, 0, 0, 1]);
     // a voxel minimum of 2 keeps the first two
     let g2 = voxel_grid::<f64>(&v, &opts(&[0.5], 2, 1)).unwrap();
     assert_eq!(g2.members, vec![1, 3, 5, 6]);

@@ -42,6 +42,7 @@ class VoxelGrid(TypedDict):
     nearest: U32
     offsets: npt.NDArray[np.uint64]
     members: U32
+    cells: npt.NDArray[np.int64]
 
 class AerialTile(TypedDict):
     positions: F64
@@ -68,6 +69,9 @@ __all__ = [
     "DigitCounts",
     "ExactSum",
     "voxel_grid",
+    "mean_distances",
+    "squared_deviation_sum",
+    "outlier_threshold",
     "aerial_tile",
     "read",
     "write",
@@ -627,6 +631,13 @@ class ExactSum:
     @staticmethod
     def from_bytes(bytes: bytes) -> ExactSum: ...
     def __reduce__(self) -> tuple[Any, ...]: ...
+
+def mean_distances(sq_dists: Floats) -> F64:
+    """Each row's mean distance (``(1/k) Σ √d²`` in float64) of an (m, k) array of squared distances."""
+def squared_deviation_sum(d: F64, mean: float) -> ExactSum:
+    """``Σ (d_i − mean)²`` over the mean distances ``d``, exactly summed."""
+def outlier_threshold(mean: float, spread: ExactSum, n: int, std_ratio: float) -> float:
+    """The statistical outlier threshold ``mean + std_ratio · √(spread / (n − 1))``."""
 
 def _skipped_outputs(count: int) -> Outputs: ...
 

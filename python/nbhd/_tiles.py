@@ -276,6 +276,119 @@ def geometry_tile(spec: Spec, t: int, what: str, halo: float, out: str, kwargs: 
     return {"tile": t, "path": out, "rows": len(own), "halo": halo, "points": len(idx)}
 
 
+def outlier_tile(
+    spec: Spec, t: int, k: int, width: float, out: str, tree_options=None, threads=0,
+    batch=BATCH,
+):
+    """Task: the first pass of the statistical outlier filter over tile ``t``: every owned
+    point's mean distance to its ``k`` nearest other points (exact kNN halos,
+    ``nbhd.mean_distances``), written to ``out`` with the owned indices; returns the tile's
+    exact sum of them (``nbhd.ExactSum``), which the client merges into the mean."""
+    import nbhd
+
+    own, _, d2, used = knn_rows(spec, t, k, width, None, tree_options, threads, batch)
+    d = nbhd.mean_distances(d2) if len(own) else np.empty(0)
+    _write(out, idx=own, d=d)
+    total = nbhd.ExactSum()
+    total.add(d)
+    return {"tile": t, "path": out, "rows": len(own), "halo": used, "sum": total}
+
+
+def outlier_spread(path: str, mean: float):
+    """Task: the tile's exact ``Σ (d_i − mean)²`` over the mean distances ``outlier_tile``
+    wrote (``nbhd.squared_deviation_sum``)."""
+    import nbhd
+
+    with np.load(path) as z:
+        return nbhd.squared_deviation_sum(z["d"], mean)
+
+
+def select_tile(spec: Spec, t: int, removed, kept_path: str, threshold: float, store: str):
+    """Task: tile ``t``'s points whose mean distance (``kept_path``, from ``outlier_tile``) is
+    at most ``threshold``, renumbered as rows of the kept points (an index less the number of
+    ``removed`` indices below it) and written as the one piece of tile ``t`` in ``store``.
+    Returns ``(t, count, lo, hi)``."""
+    pts = np.concatenate([np.asarray(p) for _, p in spec.tiles[t].pieces(spec.store)])
+    with np.load(kept_path) as z:
+        idx, keep = z["idx"], z["d"] <= threshold
+    idx, pts = idx[keep], pts[keep]
+    base = piece_path(store, 0, t)
+    np.save(base + ".pts.npy", pts)
+    np.save(base + ".idx.npy", idx - np.searchsorted(removed, idx))
+    if len(pts) == 0:
+        return t, 0, [0.0] * 3, [0.0] * 3
+    return t, len(pts), pts.min(axis=0).tolist(), pts.max(axis=0).tolist()
+
+
+def voxel_tile(spec: Spec, t: int, leaf, min_points: int, low, mul, out: str, threads=0):
+    """Task: the voxels tile ``t`` owns — those whose smallest caller index is one of its
+    points — computed by ``nbhd.voxel_grid`` on the tile plus a halo of one voxel edge (every
+    point of such a voxel lies within an edge of that point, so the voxel is whole: the same
+    members, summed in the same order, as on one machine). Written to ``out`` in ascending
+    linear index of the whole cloud's grid (``low``, ``mul``: its lowest voxel numbers and
+    multipliers): ``key``, ``centroids``, ``nearest``, ``counts``, ``members`` (caller
+    indices), ``cells``. Returns the counts and a sample of the keys (for the ranks)."""
+    import nbhd
+
+    own = owned(spec, t)
+    idx, pts = gather(spec, t, margin(max(leaf), spec))
+    g = nbhd.voxel_grid(pts, leaf, min_points_per_voxel=min_points, threads=threads)
+    off = g["offsets"].astype(np.int64)
+    first = idx[g["members"][off[:-1]].astype(np.int64)]
+    at = np.minimum(np.searchsorted(own, first), len(own) - 1)
+    mine = own[at] == first
+    counts = np.diff(off)[mine]
+    members = idx[g["members"].astype(np.int64)][np.repeat(mine, np.diff(off))]
+    cells = g["cells"][mine]
+    # the grid's order is the last coordinate first, as the whole cloud's: keys ascend
+    key = ((cells - np.asarray(low, np.int64)).astype(np.uint64)
+           * np.asarray(mul, np.uint64)).sum(axis=1, dtype=np.uint64)
+    centroids = g["centroids"][mine]
+    _write(out, key=key, centroids=centroids, nearest=idx[g["nearest"][mine].astype(np.int64)],
+           counts=counts.astype(np.uint64), members=members.astype(np.uint32), cells=cells)
+    np.save(out + ".key.npy", key)
+    step = max(1, len(key) // 64)
+    return {"tile": t, "path": out, "rows": len(own), "halo": max(leaf), "voxels": len(key),
+            "sample": key[::step].tolist()}
+
+
+def voxel_ranks(paths, lo_key, hi_key, start: int, out: str):
+    """Task: the ranks in the whole cloud of the voxels whose keys lie in ``[lo_key, hi_key)``
+    (``start`` voxels have smaller keys): each tile's slice of them, in key order, written
+    one after the other in tile order to ``out`` (``.ranks.npy``, with ``.toff.npy`` the
+    slices' offsets)."""
+    keys, tile_of = [], []
+    for t, p in enumerate(paths):
+        k = np.load(p + ".key.npy", mmap_mode="r")
+        a, b = np.searchsorted(k, [lo_key, hi_key])
+        keys.append(np.asarray(k[a:b]))
+        tile_of.append(np.full(b - a, t, np.int64))
+    keys = np.concatenate(keys)
+    order = np.argsort(keys, kind="stable")
+    rank = np.empty(len(keys), np.int64)
+    rank[order] = start + np.arange(len(keys))
+    np.save(out + ".ranks.npy", rank)  # tile by tile: each tile's slice in its key order
+    np.save(out + ".toff.npy", np.concatenate([[0], np.cumsum([len(x) for x in tile_of])]))
+
+
+def voxel_piece(path: str, t: int, bucket_paths, store: str):
+    """Task: tile ``t``'s voxels as one piece of a new store: their centroids, with their
+    ranks (from every bucket, in key order) as caller indices. Returns ``(t, count, lo, hi)``."""
+    with np.load(path) as z:
+        centroids = z["centroids"]
+    parts = []
+    for b in bucket_paths:
+        toff = np.load(b + ".toff.npy")
+        parts.append(np.load(b + ".ranks.npy", mmap_mode="r")[toff[t]:toff[t + 1]])
+    ranks = np.concatenate(parts) if parts else np.empty(0, np.int64)
+    base = piece_path(store, 0, t)
+    np.save(base + ".pts.npy", centroids)
+    np.save(base + ".idx.npy", ranks)
+    if len(centroids) == 0:
+        return t, 0, [0.0] * 3, [0.0] * 3
+    return t, len(centroids), centroids.min(axis=0).tolist(), centroids.max(axis=0).tolist()
+
+
 def nearest_of_rows(parts, a: int, b: int):
     """The nearest squared distances the tiles' ``parts`` wrote for the caller rows ``a .. b``
     (each row from the one tile that owns it), NaN for a row no tile wrote."""

@@ -38,7 +38,9 @@ from . import _tiles
 from ._tiles import Spec, Tile, piece_path
 
 __all__ = [
-    "TiledCloud", "TileJob", "TileResult", "RobustJob", "RobustResult", "AssembledTable",
+    "TiledCloud", "TileJob", "TileResult", "KeptResult", "VoxelResult", "RobustJob",
+    "RobustResult",
+    "AssembledTable",
     "tile_array", "tile_files",
     "open_store",
 ]
@@ -328,6 +330,101 @@ class TiledCloud:
         """The ε-k-neighbourhood table (see :meth:`radius`)."""
         return self.radius(radius, k=k, threads=threads, batch=batch, out=out, compute=compute,
                            **tree_options)
+
+    # --- filters ----------------------------------------------------------------------------
+
+    def remove_statistical_outliers(self, *, k=50, std_ratio=1.0, threads=0, batch=_tiles.BATCH,
+                                    out=None, **tree_options):
+        """``KdTree(points).remove_statistical_outliers(k=k, std_ratio=std_ratio)`` on the
+        tiles, identical: a point is kept when its mean distance to its ``k`` nearest other
+        points is at most ``mean + std_ratio · σ`` over all points. Three passes: one task per
+        tile for the mean distances (exact kNN halos) and their exact sum, merged into the mean;
+        one per tile for the exact sum of squared deviations, merged into σ; the threshold then
+        applies to each tile's file. Both sums are exact (``nbhd.ExactSum``), as the library's
+        own filter takes them, so no order of the tiles changes a bit. Returns a
+        :class:`KeptResult` (``assemble()``: the kept caller indices, ascending;
+        :meth:`TiledCloud.select` makes the kept points a tiled cloud)."""
+        import nbhd
+
+        if not isinstance(k, (int, np.integer)) or k < 1:
+            raise ValueError(f"k must be an integer >= 1, not {k!r}")
+        if k >= self.n:
+            raise ValueError(f"{k} nearest other points need more than {k} points; the cloud "
+                             f"holds {self.n}")
+        if not np.isfinite(std_ratio):
+            raise ValueError(f"std_ratio {std_ratio} is not finite")
+        out = self._out(out, "outliers")
+        spec = self._spec_node()
+        parts = list(dask.compute(*[
+            dask.delayed(_tiles.outlier_tile, pure=False)(
+                spec, t, int(k), _first_halo(self.spec, t, k),
+                os.path.join(out, f"tile_{t:06d}.npz"), tree_options, threads, batch)
+            for t in range(self.tiles)]))
+        total = nbhd.ExactSum()
+        for p in parts:
+            total.merge(p.pop("sum"))
+        mean = total.value() / self.n
+        spread = nbhd.ExactSum()
+        for s in dask.compute(*[dask.delayed(_tiles.outlier_spread, pure=False)(p["path"], mean)
+                                for p in parts]):
+            spread.merge(s)
+        threshold = nbhd.outlier_threshold(mean, spread, self.n, float(std_ratio))
+        return KeptResult(self.n, parts, threshold)
+
+    def select(self, kept, store=None):
+        """The kept points of ``kept`` (a :class:`KeptResult`) as a new :class:`TiledCloud`
+        in a new store (default: a folder beside this one): the tiles keep their places, the
+        rows their order, so its caller order is ``points[kept.assemble()]``'s and everything
+        computed on it equals the one-machine computation on those rows. Each task renumbers
+        its tile's points by the removed indices below them (the removed are few: the list
+        travels, the kept do not)."""
+        if store is None:
+            store = self._out(None, "kept")
+        os.makedirs(store, exist_ok=True)
+        removed = kept.removed()
+        node = dask.delayed(removed, pure=False, traverse=False)
+        spec = self._spec_node()
+        done = dask.compute(*[
+            dask.delayed(_tiles.select_tile, pure=False)(spec, t, node, kept.parts[t]["path"],
+                                                         kept.threshold, store)
+            for t in range(self.tiles)])
+        tiles = [Tile(lo, hi, count, grid_id=t, chunks=[0]) for t, count, lo, hi in done
+                 if count]
+        big = max((max(abs(v) for v in t.lo + t.hi) for t in tiles), default=0.0)
+        cloud = TiledCloud(Spec(self.n - len(removed), self.spec.dtype, tiles, big, store),
+                           store)
+        if cloud.n < 2:
+            raise ValueError("fewer than two points are kept: not a tiled cloud")
+        return cloud
+
+    def voxel_grid(self, leaf, *, min_points_per_voxel=0, threads=0, out=None):
+        """``nbhd.voxel_grid(points, leaf, ...)`` on the tiles, identical: every occupied voxel's
+        centroid (PCL's arithmetic in the cloud's type), members, nearest member and voxel
+        numbers. Each tile task computes the voxels whose smallest caller index it owns on the
+        tile plus a halo of one voxel edge, so each voxel is whole in exactly one tile. The
+        whole cloud's grid (its lowest voxel numbers, and the refusal of a leaf too small for
+        its extent, with the one-machine message) comes from the tiles' boxes. Returns a
+        :class:`VoxelResult`: ``assemble()`` gives the dict ``nbhd.voxel_grid`` returns,
+        ``cloud()`` the centroids as a tiled cloud in that order."""
+        import nbhd
+
+        leaf = [float(leaf)] if np.ndim(leaf) == 0 else [float(v) for v in leaf]
+        lo = np.min([t.lo for t in self.spec.tiles], axis=0)
+        hi = np.max([t.hi for t in self.spec.tiles], axis=0)
+        # the grid of the whole cloud: nbhd's own checks and voxel numbers of its box's corners
+        corners = nbhd.voxel_grid(np.array([lo, hi], self.dtype), leaf)["cells"]
+        low, high = corners.min(axis=0), corners.max(axis=0)
+        mul = [1]
+        for a in range(len(low) - 1):  # Python integers: no overflow below 2^64 voxels
+            mul.append(mul[-1] * (int(high[a]) - int(low[a]) + 1))
+        out = self._out(out, "voxels")
+        spec = self._spec_node()
+        parts = dask.compute(*[
+            dask.delayed(_tiles.voxel_tile, pure=False)(
+                spec, t, leaf, int(min_points_per_voxel), low.tolist(), mul,
+                os.path.join(out, f"tile_{t:06d}.npz"), threads)
+            for t in range(self.tiles)])
+        return VoxelResult(self, list(parts), out)
 
     # --- spacing, geometry, smoothing ------------------------------------------------------
 
@@ -841,6 +938,99 @@ class TileResult:
         if sq is None:
             sq = np.empty(0, np.float64)
         return AssembledTable(offsets, indices, sq)
+
+
+class KeptResult(TileResult):
+    """What a filter over the tiles keeps: per tile its owned indices and their mean
+    distances (``parts``) and the ``threshold`` they are held to."""
+
+    def __init__(self, n, parts, threshold):
+        super().__init__("kept", n, parts)
+        self.threshold = threshold
+
+    def _each(self, keep):
+        out = []
+        for p in self.parts:
+            with np.load(p["path"]) as z:
+                idx, d = z["idx"], z["d"]
+                out.append(idx[(d <= self.threshold) == keep])
+        return np.sort(np.concatenate(out)) if out else np.empty(0, np.int64)
+
+    def assemble(self):
+        """The kept caller indices, ascending (uint32, as the one-machine filter returns)."""
+        return self._each(True).astype(np.uint32)
+
+    def removed(self):
+        """The caller indices not kept, ascending."""
+        return self._each(False).astype(np.int64)
+
+
+class VoxelResult(TileResult):
+    """The voxels of :meth:`TiledCloud.voxel_grid`, per tile (``parts``: ``path``, ``voxels``)."""
+
+    def __init__(self, cloud, parts, out):
+        super().__init__("voxels", sum(p["voxels"] for p in parts), parts)
+        self._cloud = cloud
+        self._out = out
+
+    def assemble(self):
+        """The dict ``nbhd.voxel_grid(points, ...)`` returns, in memory: ``centroids``,
+        ``nearest``, ``offsets``, ``members``, ``cells``, in ascending linear voxel index."""
+        loaded = [dict(np.load(p["path"])) for p in self.parts]
+        key = np.concatenate([z["key"] for z in loaded])
+        order = np.argsort(key, kind="stable")
+        counts = np.concatenate([z["counts"] for z in loaded])
+        starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        members = np.concatenate([z["members"] for z in loaded])
+        runs = [members[starts[v]:starts[v + 1]] for v in order]
+        return {
+            "centroids": np.concatenate([z["centroids"] for z in loaded])[order],
+            "nearest": np.concatenate([z["nearest"] for z in loaded])[order].astype(np.uint32),
+            "offsets": np.concatenate([[0], np.cumsum(counts[order])]).astype(np.uint64),
+            "members": (np.concatenate(runs) if runs else members).astype(np.uint32),
+            "cells": np.concatenate([z["cells"] for z in loaded])[order],
+        }
+
+    def cloud(self, store=None, buckets=None):
+        """The centroids as a new :class:`TiledCloud` (default store: a folder beside the
+        cloud's) whose caller order is the voxels' — ``assemble()["centroids"]``'s — without
+        gathering them: the voxels' ranks come from a sort over ``buckets`` ranges of keys
+        (default: one per tile), cut at quantiles of the tiles' key samples, one task each,
+        then one task per tile writes its piece."""
+        cloud = self._cloud
+        if store is None:
+            store = cloud._out(None, "voxel-cloud")
+        os.makedirs(store, exist_ok=True)
+        paths = [p["path"] for p in self.parts]
+        sample = np.sort(np.concatenate([np.asarray(p["sample"], np.uint64)
+                                         for p in self.parts]))
+        b = max(1, min(buckets or len(paths), len(sample)))
+        cuts = [int(c) for c in np.unique(sample[(np.arange(1, b) * len(sample)) // b])]
+        bounds = [0] + cuts + [2**64]
+        starts = self._starts(cuts)
+        ranks = [os.path.join(self._out, f"bucket_{i:06d}") for i in range(len(bounds) - 1)]
+        dask.compute(*[
+            dask.delayed(_tiles.voxel_ranks, pure=False)(paths, bounds[i], bounds[i + 1],
+                                                         starts[i], ranks[i])
+            for i in range(len(ranks))])
+        done = dask.compute(*[
+            dask.delayed(_tiles.voxel_piece, pure=False)(paths[t], t, ranks, store)
+            for t in range(len(paths))])
+        tiles = [Tile(lo, hi, count, grid_id=t, chunks=[0]) for t, count, lo, hi in done
+                 if count]
+        big = max((max(abs(v) for v in t.lo + t.hi) for t in tiles), default=0.0)
+        if self.n < 2:
+            raise ValueError("fewer than two voxels: not a tiled cloud")
+        return TiledCloud(Spec(self.n, cloud.spec.dtype, tiles, big, store), store)
+
+    def _starts(self, cuts):
+        """The number of voxels below each bucket's first key: each tile's keys counted below
+        every cut (its key file mapped, not read)."""
+        below = np.zeros(len(cuts), np.int64)
+        for p in self.parts:
+            k = np.load(p["path"] + ".key.npy", mmap_mode="r")
+            below += np.searchsorted(k, np.asarray(cuts, np.uint64))
+        return [0] + below.tolist()
 
 
 class RobustResult(TileResult):

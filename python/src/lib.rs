@@ -46,6 +46,9 @@ fn _nbhd(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<robust_tiles::PyExactSum>()?;
     m.add_function(wrap_pyfunction!(robust_tiles::_skipped_outputs, m)?)?;
     m.add_function(wrap_pyfunction!(filter::voxel_grid, m)?)?;
+    m.add_function(wrap_pyfunction!(filter::mean_distances, m)?)?;
+    m.add_function(wrap_pyfunction!(filter::squared_deviation_sum, m)?)?;
+    m.add_function(wrap_pyfunction!(filter::outlier_threshold, m)?)?;
     m.add_function(wrap_pyfunction!(shapes::aerial_tile, m)?)?;
     m.add_function(wrap_pyfunction!(io::read, m)?)?;
     m.add_function(wrap_pyfunction!(io::write, m)?)?;

@@ -496,6 +496,18 @@ pub struct PyExactSum {
     sum: ExactSum,
 }
 
+impl PyExactSum {
+    /// The sum as a Python object (for the filters' tiled steps, `filter.rs`).
+    pub(crate) fn of(sum: ExactSum) -> Self {
+        Self { sum }
+    }
+
+    /// The sum held.
+    pub(crate) fn sum(&self) -> &ExactSum {
+        &self.sum
+    }
+}
+
 bytes_pymethods!(PyExactSum, sum: ExactSum, {
     #[new]
     fn new() -> Self {

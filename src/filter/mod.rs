@@ -22,7 +22,7 @@ mod voxel;
 pub(crate) use voxel::check_leaf_count;
 
 pub use outliers::{
-    radius_outlier_removal, statistical_outlier_removal, Kept, RadiusOutlierOptions,
-    StatisticalOutlierOptions,
+    mean_distance, outlier_threshold, radius_outlier_removal, squared_deviation_sum,
+    statistical_outlier_removal, Kept, RadiusOutlierOptions, StatisticalOutlierOptions,
 };
 pub use voxel::{voxel_grid, VoxelGrid, VoxelGridOptions};

@@ -4,6 +4,7 @@ use crate::error::{NbhdError, Result};
 use crate::index::NeighborIndex;
 use crate::query::Neighborhood;
 use crate::scalar::Scalar;
+use crate::sum::ExactSum;
 use crate::table::TableOptions;
 
 /// The points a filter keeps.
@@ -52,10 +53,13 @@ impl Default for StatisticalOutlierOptions {
 }
 
 /// Statistical outlier removal. For every point `i` its mean distance to its `k` nearest other
-/// points, `d_i = (1/k) Σ_{j ∈ N_k(i)} ‖x_i − x_j‖`; over all `n` points the mean `μ` and the
-/// sample standard deviation `σ = √(Σ (d_i − μ)² / (n − 1))` (PCL's definition; σ = 0 when
-/// n = 1); point `i` is kept when `d_i ≤ μ + α σ`. Distances are taken in `f64` from the
-/// tree's squared distances.
+/// points, `d_i = (1/k) Σ_{j ∈ N_k(i)} ‖x_i − x_j‖` ([`mean_distance`]); over all `n` points
+/// the mean `μ` and the sample standard deviation `σ = √(Σ (d_i − μ)² / (n − 1))` (PCL's
+/// definition; σ = 0 when n = 1); point `i` is kept when `d_i ≤ μ + α σ`
+/// ([`outlier_threshold`]). Distances are taken in `f64` from the tree's squared distances;
+/// both sums over the points are exact and rounded once ([`ExactSum`]), so they do not depend
+/// on the order of the points and a tiled run reduces them to the same bits (PCL sums in
+/// order, which can differ in the last bits).
 ///
 /// Errors: `k` = 0 ([`NbhdError::ZeroK`]); `k` not below the number of points, or a
 /// non-finite `std_ratio`, or too many threads ([`NbhdError::InvalidOption`]).
@@ -105,35 +109,56 @@ pub fn statistical_outlier_removal<T: Scalar, I: NeighborIndex<T>>(
         },
     )?;
     // d_i for the points the tree holds, in the caller's order
-    let d: Vec<(u32, f64)> = (0..table.len())
+    let (kept_rows, d): (Vec<u32>, Vec<f64>) = (0..table.len())
         .filter(|&i| !table.sq_dists_of(i).is_empty())
-        .map(|i| {
-            let s: f64 = table
-                .sq_dists_of(i)
-                .iter()
-                .fold(0.0, |acc, d2| acc + d2.to_f64().sqrt());
-            (i as u32, s / k as f64)
-        })
-        .collect();
-    let n = d.len() as f64;
-    let mean = d.iter().fold(0.0, |acc, &(_, x)| acc + x) / n;
-    let sq = d
-        .iter()
-        .fold(0.0, |acc, &(_, x)| acc + (x - mean) * (x - mean));
-    let sigma = if d.len() > 1 {
-        (sq / (n - 1.0)).sqrt()
-    } else {
-        0.0
-    };
-    let threshold = mean + options.std_ratio * sigma;
+        .map(|i| (i as u32, mean_distance(table.sq_dists_of(i))))
+        .unzip();
+    let mean = ExactSum::from_iter(d.iter().copied()).value() / d.len() as f64;
+    let threshold = outlier_threshold(
+        mean,
+        &squared_deviation_sum(&d, mean),
+        d.len(),
+        options.std_ratio,
+    );
     Ok(Kept {
-        indices: d
-            .iter()
-            .filter(|&&(_, x)| x <= threshold)
-            .map(|&(i, _)| i)
+        indices: kept_rows
+            .into_iter()
+            .zip(d)
+            .filter(|&(_, x)| x <= threshold)
+            .map(|(i, _)| i)
             .collect(),
         source_len: index.source_len(),
     })
+}
+
+/// A point's mean distance to its nearest other points, `d_i = (1/k) Σ_j ‖x_i − x_j‖`, from
+/// the `k` squared distances of its row: each root taken in `f64`, summed in the row's order
+/// (nearest first), divided by `k`. The step a tiled run (`python/nbhd/dask.py`) takes for
+/// each of its tile's points, as [`statistical_outlier_removal`] takes it for every point.
+pub fn mean_distance<T: Scalar>(sq_dists: &[T]) -> f64 {
+    let s: f64 = sq_dists
+        .iter()
+        .fold(0.0, |acc, d2| acc + d2.to_f64().sqrt());
+    s / sq_dists.len() as f64
+}
+
+/// `Σ (d_i − μ)²` over some of the points' mean distances `d`, exactly summed
+/// ([`ExactSum`]): the parts of a tiled run merge to the one-machine sum bit for bit.
+pub fn squared_deviation_sum(d: &[f64], mean: f64) -> ExactSum {
+    d.iter().map(|&x| (x - mean) * (x - mean)).collect()
+}
+
+/// The statistical outlier threshold `μ + α σ` of `n` points whose mean distances average to
+/// `mean` (their exact sum, rounded once, divided by `n`) and deviate from it by `spread`
+/// ([`squared_deviation_sum`]), with the sample deviation `σ = √(spread / (n − 1))` (PCL's; 0
+/// for one point). A point is kept when its mean distance is at most the threshold.
+pub fn outlier_threshold(mean: f64, spread: &ExactSum, n: usize, std_ratio: f64) -> f64 {
+    let sigma = if n > 1 {
+        (spread.value() / (n as f64 - 1.0)).sqrt()
+    } else {
+        0.0
+    };
+    mean + std_ratio * sigma
 }
 
 /// Options of [`radius_outlier_removal`].

@@ -62,6 +62,11 @@ pub struct VoxelGrid<T> {
     /// For each voxel, the caller's index of its point nearest the centroid (Euclidean distance
     /// taken in `f64`; ties by the smaller index): original points, whose attributes are kept.
     pub nearest: Vec<u32>,
+    /// `dim` values per voxel: its voxel numbers `⌊x_a · inv_a⌋` along each coordinate, which do
+    /// not depend on the other points (Open3D's `grid_index` less the grid's origin). Voxels
+    /// computed from parts of a cloud (tiles) line up by them, and sorting them with the last
+    /// coordinate first gives the ascending linear index of the whole cloud.
+    pub cells: Vec<i64>,
     /// Number of points the caller passed in.
     pub source_len: usize,
 }
@@ -85,6 +90,11 @@ impl<T: Scalar> VoxelGrid<T> {
     /// The caller's indices of voxel `v`'s points, ascending.
     pub fn members_of(&self, v: usize) -> &[u32] {
         &self.members[self.offsets[v]..self.offsets[v + 1]]
+    }
+
+    /// Voxel numbers of voxel `v` (see [`VoxelGrid::cells`]).
+    pub fn cells_of(&self, v: usize) -> &[i64] {
+        &self.cells[v * self.dim..(v + 1) * self.dim]
     }
 }
 
@@ -306,6 +316,7 @@ fn run<T: Scalar>(
         offsets: vec![0],
         members: Vec::new(),
         nearest: Vec::new(),
+        cells: Vec::new(),
         source_len: n,
     };
     let Some((lo, hi)) = bounds::<T>(view) else {
@@ -328,12 +339,14 @@ fn run<T: Scalar>(
         offsets: Vec::with_capacity(voxels + 1),
         members: Vec::with_capacity(pairs.len()),
         nearest: Vec::with_capacity(voxels),
+        cells: Vec::with_capacity(voxels * d),
         source_len: n,
     };
     out.offsets.push(0);
     for (v, (c, near)) in per_voxel.into_iter().enumerate() {
         out.centroids.extend_from_slice(&c);
         out.nearest.push(near);
+        out.cells.extend(g.cells_of(pairs[starts[2 * v]].0));
         out.members.extend(
             pairs[starts[2 * v]..starts[2 * v + 1]]
                 .iter()
@@ -345,6 +358,18 @@ fn run<T: Scalar>(
 }
 
 impl<T: Scalar> Grid<T> {
+    /// The voxel numbers `⌊x_a · inv_a⌋` of the voxel with linear number `key`.
+    fn cells_of(&self, key: u64) -> impl Iterator<Item = i64> + '_ {
+        let d = self.low.len();
+        (0..d).map(move |a| {
+            let along = match self.mul.get(a + 1) {
+                Some(&next) => (key % next) / self.mul[a],
+                None => key / self.mul[a],
+            };
+            along as i64 + self.low[a]
+        })
+    }
+
     /// The linear number of the voxel holding the finite point `p`.
     fn key(&self, p: &[T]) -> u64 {
         let mut k = 0u64;
