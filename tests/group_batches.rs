@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{points, to_f32, Kind, KINDS};
+use common::{points, sorted_rows, to_f32, Kind, KINDS};
 use nbhd::NeighborIndex;
 use nbhd::{
     BruteForce, BuildOptions, KdTree, NbhdError, NeighborSearch, NeighborTable, Neighborhood,
@@ -30,22 +30,6 @@ fn batch(kind: Kind, coords: &[f64], d: usize, seed: u64) -> Vec<f64> {
         q.extend(p.iter().map(|c| sign * (c * 1000.0 + 1.0e4)));
     }
     q
-}
-
-/// The rows of `t` as `(sq_dist, index)` lists, each sorted (for unsorted radius rows).
-fn sorted_rows<T: Scalar>(t: &NeighborTable<T>) -> Vec<Vec<(T, u32)>> {
-    (0..t.len())
-        .map(|i| {
-            let mut r: Vec<(T, u32)> = t
-                .sq_dists_of(i)
-                .iter()
-                .copied()
-                .zip(t.indices_of(i).iter().copied())
-                .collect();
-            r.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap().then(a.1.cmp(&b.1)));
-            r
-        })
-        .collect()
 }
 
 /// The table of one search per query of `searcher`.
