@@ -370,21 +370,118 @@ fn each_point_counts_once_at_its_nearest_image() {
     assert_eq!(got, [(0, 0.0), (1, 0.0625), (3, 0.0625), (2, 0.25)]);
 }
 
-/// A saved periodic tree is refused on loading, naming why, rather than loaded without its box
-/// (the format does not keep the box yet); a growing one likewise.
+/// Every k-nearest row of `a` and `b` for queries inside, on the edge of and outside the box
+/// (wrapped): identical, bit for bit.
+fn same_rows<T: Scalar>(a: &impl NeighborIndex<T>, b: &impl NeighborIndex<T>, d: usize, seed: u64) {
+    let mut rng = Rng::new(seed);
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    for _ in 0..40 {
+        let q: Vec<T> = (0..d)
+            .map(|_| T::from_f64(rng.unit() * 3.0 - 1.0))
+            .collect();
+        a.knn(Query::point(&q), 7, &mut x).unwrap();
+        b.knn(Query::point(&q), 7, &mut y).unwrap();
+        assert_eq!(x, y, "query {q:?}");
+    }
+}
+
+fn saved_round_trip<T: Scalar>() {
+    use nbhd::Persist;
+    let d = 3;
+    for mixed in [false, true] {
+        let (given, sizes) = boxes(d, 1.0, mixed);
+        // rounded to T, a point just below L in f64 may reach L: wrapped to 0 as data must be
+        let pts: Vec<T> = cloud(0, 300, &sizes, 17)
+            .into_iter()
+            .enumerate()
+            .map(|(i, x)| match T::from_f64(x) {
+                t if t.to_f64() >= sizes[i % d] => T::ZERO,
+                t => t,
+            })
+            .collect();
+        let view = PointsView::from_flat(&pts, d).unwrap();
+        let tree = KdTree::<T>::build_periodic(&view, &BuildOptions::default(), &given).unwrap();
+        let bytes = tree.to_bytes();
+        let loaded = KdTree::<T>::from_bytes(&bytes).unwrap();
+        assert_eq!(loaded.period(), tree.period());
+        assert_eq!(loaded.to_bytes(), bytes, "saved again: the same bytes");
+        same_rows(&tree, &loaded, d, 3);
+        let mut growing =
+            DynamicKdTree::<T>::new_periodic(d, &BuildOptions::default(), &given).unwrap();
+        growing.insert_flat(&pts[..150 * d]).unwrap();
+        growing.insert_flat(&pts[150 * d..]).unwrap();
+        growing.remove(&[3, 40, 299]).unwrap();
+        let bytes = growing.to_bytes();
+        let loaded = DynamicKdTree::<T>::from_bytes(&bytes).unwrap();
+        assert_eq!(loaded.period(), growing.period());
+        assert_eq!(loaded.to_bytes(), bytes);
+        same_rows(&growing, &loaded, d, 4);
+        // an empty periodic growing tree keeps its box too
+        let empty = DynamicKdTree::<T>::new_periodic(d, &BuildOptions::default(), &given).unwrap();
+        let back = DynamicKdTree::<T>::from_bytes(&empty.to_bytes()).unwrap();
+        assert_eq!(back.period(), empty.period());
+    }
+}
+
+/// A saved periodic tree loads with its box (the payload's last section,
+/// docs/tree-file-format.md) and answers every query as the saved one, bit for bit; a growing
+/// one likewise; an open box is a plain tree and saves as one.
 #[test]
-fn saved_periodic_trees_are_refused_on_loading() {
+fn saved_periodic_trees_load_with_their_box() {
+    use nbhd::Persist;
+    saved_round_trip::<f32>();
+    saved_round_trip::<f64>();
+    let view = PointsView::from_flat(&[0.1f64, 0.2, 0.9], 1).unwrap();
+    let open = KdTree::<f64>::build_periodic(&view, &BuildOptions::default(), &[0.0]).unwrap();
+    let plain = KdTree::<f64>::build(&view, &BuildOptions::default()).unwrap();
+    assert_eq!(open.to_bytes(), plain.to_bytes());
+}
+
+/// Recomputes both checksums of a saved static tree after a change, as a crafted file would.
+fn reseal(bytes: &mut [u8]) {
+    let payload = crc32fast::hash(&bytes[128..]);
+    bytes[96..100].copy_from_slice(&payload.to_ne_bytes());
+    let header = crc32fast::hash(&bytes[..120]);
+    bytes[120..124].copy_from_slice(&header.to_ne_bytes());
+}
+
+/// Crafted boxes are refused naming why: no periodic axis, a negative size, points outside
+/// it, an unknown flag, and a file of the flag without its box (as nbhd wrote before it kept
+/// the box).
+#[test]
+fn crafted_periodic_boxes_are_refused() {
     use nbhd::Persist;
     let view = PointsView::from_flat(&[0.1f64, 0.2, 0.9], 1).unwrap();
     let tree = KdTree::<f64>::build_periodic(&view, &BuildOptions::default(), &[1.0]).unwrap();
-    let err = KdTree::<f64>::from_bytes(&tree.to_bytes()).unwrap_err();
-    assert!(err.to_string().contains("periodic"), "{err}");
-    let mut growing =
-        DynamicKdTree::<f64>::new_periodic(1, &BuildOptions::default(), &[1.0]).unwrap();
-    growing.insert_flat(&[0.5]).unwrap();
-    let err = DynamicKdTree::<f64>::from_bytes(&growing.to_bytes()).unwrap_err();
-    assert!(err.to_string().contains("periodic"), "{err}");
-    // an open box is a plain tree and saves as one
-    let open = KdTree::<f64>::build_periodic(&view, &BuildOptions::default(), &[0.0]).unwrap();
-    assert!(KdTree::<f64>::from_bytes(&open.to_bytes()).is_ok());
+    let good = tree.to_bytes();
+    let n = good.len();
+    let with_size = |l: f64| {
+        let mut b = good.clone();
+        b[n - 8..].copy_from_slice(&l.to_ne_bytes());
+        reseal(&mut b);
+        KdTree::<f64>::from_bytes(&b).unwrap_err().to_string()
+    };
+    assert!(
+        with_size(0.0).contains("no periodic axis"),
+        "{}",
+        with_size(0.0)
+    );
+    assert!(
+        with_size(-1.0).contains("periodic box"),
+        "{}",
+        with_size(-1.0)
+    );
+    assert!(with_size(f64::NAN).contains("periodic box"));
+    assert!(with_size(0.5).contains("outside"), "{}", with_size(0.5));
+    let mut flag = good.clone();
+    flag[28..32].copy_from_slice(&2u32.to_ne_bytes());
+    reseal(&mut flag);
+    let err = KdTree::<f64>::from_bytes(&flag).unwrap_err().to_string();
+    assert!(err.contains("byte 28"), "{err}");
+    let mut old = good[..n - 8].to_vec();
+    let len = (old.len() - 128) as u64;
+    old[88..96].copy_from_slice(&len.to_ne_bytes());
+    reseal(&mut old);
+    let err = KdTree::<f64>::from_bytes(&old).unwrap_err().to_string();
+    assert!(err.contains("periodic box"), "{err}");
 }

@@ -70,6 +70,23 @@ def test_kdtree_pickles_through_its_saved_bytes(dtype):
         assert pickle.loads(pickle.dumps(tree, protocol=protocol)).to_bytes() == saved
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_periodic_trees_pickle_with_their_box(dtype):
+    pts = cloud(300, seed=4, dtype=dtype)  # in [0, 1): inside a box of 1 on x and y
+    pts[:, 2] -= 3.0  # z open
+    growing = nbhd.DynamicKdTree(3, dtype=np.dtype(dtype).name, boxsize=[1.0, 1.0, 0.0])
+    growing.insert(pts[:200])
+    growing.insert(pts[200:])
+    growing.remove([5, 250])
+    for tree in (nbhd.KdTree(pts, boxsize=[1.0, 1.0, 0.0]), growing):
+        back = pickle.loads(pickle.dumps(tree))
+        assert back.to_bytes() == tree.to_bytes()
+        # queries across the box's edges and outside it (wrapped) answer the same
+        q = np.array([[0.99, 0.01, -3.0], [-0.5, 2.25, -2.5], [0.5, 0.5, 0.0]], dtype)
+        same_pair(tree.knn(q, 6), back.knn(q, 6))
+        same_table(tree.radius(q, 0.3), back.radius(q, 0.3))
+
+
 def test_bad_bytes_are_refused_with_what_differs():
     tree = nbhd.KdTree(cloud(200, seed=3))
     saved = tree.to_bytes()

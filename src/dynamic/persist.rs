@@ -23,8 +23,9 @@ use crate::points::point_bytes;
 use crate::query::NeighborSearch;
 use crate::scalar::{Scalar, ScalarType};
 use crate::tree::{
-    check_flags, check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size,
-    u32_at, u64_at, write_saved, written_by, Kind, DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
+    check_start, header, invalid, pad8, period_section_len, periodic_flag, read_codes, read_period,
+    scalar_bytes, scalar_name, size, u32_at, u64_at, write_period, write_saved, written_by, Kind,
+    DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
 };
 use crate::tree::{
     saved_header, BuildOptions, KdTree, LoadOptions, Persist, SavedFormat, HEADER_LEN, MAGIC,
@@ -67,6 +68,8 @@ pub struct SavedDynamicInfo {
     /// The options the static trees are built with, as the file states them (its `threads`
     /// is what the saving tree used: a loaded tree builds on the default 0 instead).
     pub options: BuildOptions,
+    /// Whether the tree is periodic (a torus; its box follows the kept coordinates).
+    pub periodic: bool,
     /// Bytes of the saved dynamic tree: header and payload.
     pub total_len: u64,
     payload_crc: u32,
@@ -85,8 +88,8 @@ impl SavedDynamicInfo {
         let h = check_start(bytes, &DYNAMIC)?;
         let version = u32_at(h, 12);
         let written_by = written_by(h);
-        check_flags(h)?;
-        if u32_at(h, 28) != 0 || h[108..120].iter().any(|&b| b != 0) || u32_at(h, 124) != 0 {
+        let periodic = periodic_flag(h)?;
+        if h[108..120].iter().any(|&b| b != 0) || u32_at(h, 124) != 0 {
             return Err(invalid("a reserved header field is not zero"));
         }
         let (scalar, codes) = read_codes(h)?;
@@ -141,7 +144,8 @@ impl SavedDynamicInfo {
                     (next - base)
                         .checked_mul(dim)?
                         .checked_mul(scalar.size() as u64)?,
-                )?)
+                )?)?
+                .checked_add(period_section_len(periodic, dim, scalar)?)
         })()
         .ok_or_else(|| invalid(format!("dimension {dim} overflows the payload's size")))?;
         let smallest = trees
@@ -174,6 +178,7 @@ impl SavedDynamicInfo {
                 threads: size(threads)?,
                 ..codes
             },
+            periodic,
             total_len,
             payload_crc: u32_at(h, 104),
         })
@@ -202,6 +207,8 @@ impl<T: Scalar> SavedFormat for DynamicKdTree<T> {
         self.parts.len() as u64 * TABLE_ENTRY
             + 2 * bitmap_len(n)
             + coords.next_multiple_of(8)
+            + period_section_len(self.period.is_some(), self.dim as u64, T::TYPE)
+                .expect("a box of a tree in memory")
             + self
                 .parts
                 .iter()
@@ -257,6 +264,8 @@ impl<T: Scalar> SavedFormat for DynamicKdTree<T> {
         }
         let written = self.store.len() * T::TYPE.size();
         w.write_all(&[0; 8][..written.next_multiple_of(8) - written])?;
+        write_period(self.period.as_ref(), &mut buf);
+        w.write_all(&buf)?;
         for p in &self.parts {
             write_saved(&*p.tree, w)?;
         }
@@ -268,8 +277,23 @@ impl<T: Scalar> SavedFormat for DynamicKdTree<T> {
     fn from_payload(info: &SavedDynamicInfo, payload: &[u8]) -> Result<Self> {
         let table_len = info.trees * TABLE_ENTRY as usize;
         let (table, rest) = payload.split_at(table_len);
-        let (kept, tree_bytes) = Kept::<T>::read(info, rest)?;
+        let (kept, rest) = Kept::<T>::read(info, rest)?;
+        let period_len = period_section_len(info.periodic, info.dim as u64, T::TYPE)
+            .expect("checked with the header") as usize;
+        let (period_bytes, tree_bytes) = rest.split_at(period_len);
+        let period = match info.periodic {
+            true => Some(read_period::<T>(period_bytes, info.dim)?),
+            false => None,
+        };
         let parts = read_trees(info, &kept, table, tree_bytes)?;
+        if let Some(i) = parts
+            .iter()
+            .position(|p| p.tree.period() != period.as_ref())
+        {
+            return Err(invalid(format!(
+                "static tree {i} has another periodic box than the dynamic tree"
+            )));
+        }
         let live_total: usize = parts.iter().map(|p| p.live).sum();
         // Every live index is held by a tree (the trees' live points are distinct live
         // indices, so equal counts mean the same sets).
@@ -304,7 +328,7 @@ impl<T: Scalar> SavedFormat for DynamicKdTree<T> {
             parts,
             live: info.live,
             growth: info.growth,
-            period: None,
+            period,
         })
     }
 }

@@ -113,7 +113,7 @@ mod planes;
 mod reach;
 mod rows;
 mod run;
-mod scales;
+pub(super) mod scales;
 mod step;
 mod tile;
 
@@ -133,7 +133,7 @@ pub use scales::WIDE as NOISE_SCALE_FACTOR;
 /// ([`RobustOptions::noise_scale`], `robust/scales.rs`).
 pub use scales::BALL_DIMENSION as NOISE_SCALE_DIMENSION;
 
-use super::source::Neighbors;
+use super::source::{Neighbors, SearchMethod};
 use super::{point_outputs, progress_in_units, Criteria, Length};
 use super::{FeatureCriterion, SmoothResult, Stage, Weighting};
 use crate::error::{NbhdError, Result};
@@ -364,10 +364,29 @@ fn robust_finite(
     options: &RobustOptions,
     progress: &mut dyn FnMut(f64, Stage) -> bool,
 ) -> Result<RobustReport> {
+    let wide_first = options.noise_scale
+        && matches!(neighbors, Neighbors::Search(SearchMethod::KdTree))
+        && scales::input_reads_as_ball(points, options.k_plane);
+    robust_whole(points, neighbors, options, progress, wide_first)
+}
+
+/// [`robust_finite`] with the first search finding the wide rows when `wide_first`
+/// ([`RobustTile::search_wide_first`]; the same bits either way, a search saved where the run
+/// widens).
+pub(super) fn robust_whole(
+    points: &[DVec3],
+    neighbors: Neighbors<'_>,
+    options: &RobustOptions,
+    progress: &mut dyn FnMut(f64, Stage) -> bool,
+    wide_first: bool,
+) -> Result<RobustReport> {
     let total = options.max_iterations as f64 + 1.0;
     let mut report = progress_in_units(total, progress);
     report(0.0, Stage::Neighbors)?;
     let mut tile = RobustTile::whole(points, neighbors);
+    if wide_first {
+        tile.search_wide_first();
+    }
     let h = RobustRun::spacing_of_nearest(tile.nearest(options.k_plane)?.0);
     let mut run = RobustRun::new(options, h, neighbors)?;
     let eps = run.epsilon();

@@ -455,6 +455,40 @@ fn robust_noise_scale_widens_and_stays_bit_identical() {
     );
 }
 
+/// The first search may find the wide rows, the plain ones being their first `k_plane`
+/// (`RobustTile::search_wide_first`): the same bits whether the run then widens (noise of 5h,
+/// where the sample's guess says so) or not (1h, a wrong guess forced), outputs included.
+#[test]
+fn robust_wide_rows_searched_first_give_the_same_bits() {
+    for (amp, widens) in [(5.0, true), (1.0, false)] {
+        let (_, _, p) = noisy(&Cube::new(1.0), 4000, amp, 9);
+        assert_eq!(robust::scales::input_reads_as_ball(&p, 48), widens);
+        let run = |first| {
+            let o = RobustOptions::default();
+            robust::robust_whole(&p, Neighbors::default(), &o, &mut |_, _| true, first).unwrap()
+        };
+        let (a, b) = (run(false), run(true));
+        assert_eq!(a.wide_iterations > 0, widens, "{:?}", a.dimension);
+        let bits = |r: &super::robust::RobustReport| -> Vec<u64> {
+            let outputs = r.result.outputs.iter();
+            let outputs = outputs.flat_map(|o| [o.mean_curvature, o.normal.x, o.normal.z]);
+            r.result
+                .points
+                .iter()
+                .chain(&r.normals)
+                .flat_map(|q| q.to_array())
+                .chain(outputs)
+                .chain(r.noise.iter().copied())
+                .chain(r.dimension.iter().copied())
+                .map(f64::to_bits)
+                .collect()
+        };
+        assert_eq!(bits(&a), bits(&b), "noise {amp}h");
+        assert_eq!(a.result.outputs.len(), 4000);
+        assert_eq!(a.result.min_neighbors, b.result.min_neighbors);
+    }
+}
+
 #[test]
 fn robust_scales_exactly_with_a_power_of_two() {
     let (_, _, p) = noisy(&Torus::new(1.0, 0.4), 1500, 1.0, 4);

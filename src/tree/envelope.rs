@@ -14,6 +14,7 @@ use std::path::Path;
 
 use super::{BuildOptions, MedianAlgorithm, PivotPolicy};
 use crate::error::{NbhdError, Result, SavedTreeError};
+use crate::metric::Period;
 use crate::packed::NonFinitePolicy;
 use crate::scalar::{Scalar, ScalarType};
 
@@ -321,20 +322,60 @@ pub(crate) fn header(
     h
 }
 
-/// The word at byte 28 of a saved periodic index (0, reserved, otherwise). This format version
-/// does not hold the box: such a file is refused on loading ([`check_flags`]), rather than
-/// loaded as an index that is not periodic.
+/// The word at byte 28 of a saved periodic index (0 otherwise). Its payload ends with the
+/// period section ([`period_section_len`]): the box, which nbhd 0.1 files of this flag lacked
+/// (they were refused on loading, and still are: their payload is a section short).
 pub(crate) const PERIODIC: u32 = 1;
 
-/// Refuses the header `h` of a periodic index (byte 28, [`PERIODIC`]), naming why.
-pub(crate) fn check_flags(h: &[u8]) -> Result<()> {
-    if u32_at(h, 28) == PERIODIC {
-        return Err(invalid(
-            "the index is periodic (a torus); this format version does not keep the box, so \
-             it cannot be loaded (build it again with its box)",
-        ));
+/// Whether the header `h` is a periodic index's (byte 28, [`PERIODIC`]); any other non-zero
+/// word is refused.
+pub(crate) fn periodic_flag(h: &[u8]) -> Result<bool> {
+    match u32_at(h, 28) {
+        0 => Ok(false),
+        PERIODIC => Ok(true),
+        w => Err(invalid(format!(
+            "flags {w:#x} at byte 28 (0, or 1 for a periodic index)"
+        ))),
     }
-    Ok(())
+}
+
+/// Bytes of the period section of a periodic index of dimension `dim` (0 when not periodic):
+/// the box size of every axis in the scalar type (0 on an open axis), padded to 8 bytes.
+pub(crate) fn period_section_len(periodic: bool, dim: u64, scalar: ScalarType) -> Option<u64> {
+    if !periodic {
+        return Some(0);
+    }
+    pad8(dim.checked_mul(scalar.size() as u64)?)
+}
+
+/// Appends the period section of `period` (nothing for `None`) to `buf`.
+pub(crate) fn write_period<T: Scalar>(period: Option<&Period<T>>, buf: &mut Vec<u8>) {
+    if let Some(p) = period {
+        let start = buf.len();
+        for l in p.sizes() {
+            scalar_bytes(T::from_f64(l), buf);
+        }
+        let written = buf.len() - start;
+        buf.resize(start + written.next_multiple_of(8), 0);
+    }
+}
+
+/// The box a period section `bytes` of dimension `dim` holds, checked as a new periodic index
+/// checks its box (sizes 0, positive or +∞, at least one periodic axis, zero padding).
+pub(crate) fn read_period<T: Scalar>(bytes: &[u8], dim: usize) -> Result<Period<T>> {
+    let size = T::TYPE.size();
+    if bytes[dim * size..].iter().any(|&b| b != 0) {
+        return Err(invalid("padding after the periodic box is not zero"));
+    }
+    let sizes: Vec<f64> = bytes[..dim * size]
+        .chunks_exact(size)
+        .map(|b| T::read_ne(b).to_f64())
+        .collect();
+    match Period::new(&sizes, dim) {
+        Ok(Some(p)) => Ok(p),
+        Ok(None) => Err(invalid("the periodic box has no periodic axis")),
+        Err(e) => Err(invalid(format!("the periodic box: {e}"))),
+    }
 }
 
 /// The scalar type and the policies a checked header (bytes 24 to 27) names; its leaf size

@@ -56,8 +56,9 @@ use crate::table::NeighborTable;
 pub(crate) use blocks::Blocks;
 pub(crate) use envelope::saved_header;
 pub(crate) use envelope::{
-    check_flags, check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size,
-    u32_at, u64_at, write_saved, written_by, Kind, DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
+    check_start, header, invalid, pad8, period_section_len, periodic_flag, read_codes, read_period,
+    scalar_bytes, scalar_name, size, u32_at, u64_at, write_period, write_saved, written_by, Kind,
+    DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND,
 };
 pub use envelope::{LoadOptions, Persist, FORMAT_VERSION, HEADER_LEN, MAGIC};
 #[doc(hidden)]

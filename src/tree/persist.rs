@@ -17,8 +17,9 @@ use std::sync::OnceLock;
 
 use super::envelope::saved_header;
 use super::envelope::{
-    check_flags, check_start, header, invalid, pad8, read_codes, scalar_bytes, scalar_name, size,
-    u32_at, u64_at, written_by, Kind, SavedFormat, FORMAT_VERSION, HEADER_LEN, MAGIC,
+    check_start, header, invalid, pad8, period_section_len, periodic_flag, read_codes, read_period,
+    scalar_bytes, scalar_name, size, u32_at, u64_at, write_period, written_by, Kind, SavedFormat,
+    FORMAT_VERSION, HEADER_LEN, MAGIC,
 };
 use super::envelope::{DYNAMIC_KIND, FOREST_MAGIC, STATIC_KIND};
 use super::node::{Node, LEAF};
@@ -50,6 +51,8 @@ pub struct SavedTreeInfo {
     pub depth: usize,
     /// The options the tree was built with.
     pub options: BuildOptions,
+    /// Whether the tree is periodic (a torus; its box ends the payload).
+    pub periodic: bool,
     /// Bytes of the saved tree: header and payload.
     pub total_len: u64,
     /// The payload's CRC-32.
@@ -64,22 +67,32 @@ fn node_record(scalar: ScalarType) -> usize {
     }
 }
 
-/// The byte sizes of the payload's four sections, or `None` if they overflow 64 bits.
+/// The byte sizes of the payload's sections (the period's 0 unless the tree is periodic), or
+/// `None` if they overflow 64 bits.
 #[derive(Clone, Copy, Debug)]
 struct Sections {
     coords: u64,
     ids: u64,
     nodes: u64,
     bitmap: u64,
+    period: u64,
 }
 
 impl Sections {
-    fn new(scalar: ScalarType, dim: u64, points: u64, nodes: u64, source_len: u64) -> Option<Self> {
+    fn new(
+        scalar: ScalarType,
+        dim: u64,
+        points: u64,
+        nodes: u64,
+        source_len: u64,
+        periodic: bool,
+    ) -> Option<Self> {
         Some(Self {
             coords: pad8(points.checked_mul(dim)?.checked_mul(scalar.size() as u64)?)?,
             ids: pad8(points.checked_mul(4)?)?,
             nodes: nodes.checked_mul(node_record(scalar) as u64)?,
             bitmap: source_len.div_ceil(64).checked_mul(8)?,
+            period: period_section_len(periodic, dim, scalar)?,
         })
     }
 
@@ -87,7 +100,8 @@ impl Sections {
         self.coords
             .checked_add(self.ids)?
             .checked_add(self.nodes)?
-            .checked_add(self.bitmap)
+            .checked_add(self.bitmap)?
+            .checked_add(self.period)
     }
 }
 
@@ -107,8 +121,8 @@ impl SavedTreeInfo {
         let h = check_start(bytes, &STATIC)?;
         let version = u32_at(h, 12);
         let written_by = written_by(h);
-        check_flags(h)?;
-        if u32_at(h, 28) != 0 || u32_at(h, 100) != 0 || u32_at(h, 124) != 0 {
+        let periodic = periodic_flag(h)?;
+        if u32_at(h, 100) != 0 || u32_at(h, 124) != 0 {
             return Err(invalid("a reserved header field is not zero"));
         }
         if h[104..120].iter().any(|&b| b != 0) {
@@ -145,14 +159,20 @@ impl SavedTreeInfo {
                 "threads {threads} (at most {MAX_THREADS})"
             )));
         }
-        let sections = Sections::new(scalar, dim, points, nodes, source_len)
+        let sections = Sections::new(scalar, dim, points, nodes, source_len, periodic)
             .and_then(|s| s.total())
             .ok_or_else(|| invalid(format!("dimension {dim} overflows the payload's size")))?;
         if payload_len != sections {
             return Err(invalid(format!(
                 "payload length {payload_len}, but {dim}-dimensional {} points, {nodes} nodes \
-                 and {source_len} indices take {sections} bytes",
-                scalar_name(scalar)
+                 and {source_len} indices{} take {sections} bytes",
+                scalar_name(scalar),
+                if periodic {
+                    " and the periodic box (a periodic tree saved before nbhd kept its box \
+                     lacks it: build it again)"
+                } else {
+                    ""
+                }
             )));
         }
         let total_len = payload_len
@@ -174,6 +194,7 @@ impl SavedTreeInfo {
                 threads: size(threads)?,
                 ..codes
             },
+            periodic,
             total_len,
             payload_crc: u32_at(h, 96),
         })
@@ -187,6 +208,7 @@ impl SavedTreeInfo {
             self.points as u64,
             self.nodes as u64,
             self.source_len as u64,
+            self.periodic,
         )
         .expect("sizes checked with the header")
     }
@@ -213,6 +235,7 @@ impl<T: Scalar> SavedFormat for KdTree<T> {
             self.len() as u64,
             self.nodes.len() as u64,
             self.source_len as u64,
+            self.periodic.is_some(),
         )
         .and_then(|s| s.total())
         .expect("a tree in memory has a payload that fits in memory")
@@ -286,6 +309,7 @@ impl<T: Scalar> SavedFormat for KdTree<T> {
             buf.extend_from_slice(&word.to_ne_bytes());
             flush(&mut buf, false)?;
         }
+        write_period(self.period(), &mut buf);
         flush(&mut buf, true)
     }
 
@@ -294,7 +318,8 @@ impl<T: Scalar> SavedFormat for KdTree<T> {
         let s = info.sections();
         let (coords_bytes, rest) = payload.split_at(s.coords as usize);
         let (ids_bytes, rest) = rest.split_at(s.ids as usize);
-        let (node_bytes, bitmap_bytes) = rest.split_at(s.nodes as usize);
+        let (node_bytes, rest) = rest.split_at(s.nodes as usize);
+        let (bitmap_bytes, period_bytes) = rest.split_at(s.bitmap as usize);
         let size = T::TYPE.size();
         let coords: Vec<T> = coords_bytes[..info.points * info.dim * size]
             .chunks_exact(size)
@@ -341,7 +366,12 @@ impl<T: Scalar> SavedFormat for KdTree<T> {
         tree.check_nodes()?;
         // Derived, not saved: made once the nodes are known to be well formed.
         tree.derive(1)?;
-        Ok(tree)
+        if !info.periodic {
+            return Ok(tree);
+        }
+        // Its points checked to lie in the box, as a periodic build checks them.
+        let period = read_period(period_bytes, info.dim)?;
+        tree.with_period(period).map_err(|e| invalid(e.to_string()))
     }
 }
 

@@ -117,6 +117,15 @@ impl Rows {
         self.len.iter().copied().max().unwrap_or(0) as usize
     }
 
+    /// The largest number of neighbours any point has in its first `k`.
+    pub(super) fn max_narrow_len(&self, k: usize) -> usize {
+        self.len
+            .iter()
+            .map(|&l| (l as usize).min(k))
+            .max()
+            .unwrap_or(0)
+    }
+
     /// The smallest number of neighbours any point has in its first `k`.
     pub(super) fn min_narrow_len(&self, k: usize) -> usize {
         self.len

@@ -52,6 +52,9 @@ pub struct RobustTile<'a> {
     /// The proxy the run's rows shrank on, with its generation ([`RobustTile::set_shrink`]),
     /// in local order.
     shrink: Option<(usize, Vec<DVec3>)>,
+    /// Whether the first search finds the wide rows, to stand in for the plain ones
+    /// ([`RobustTile::search_wide_first`]).
+    wide_first: bool,
 }
 
 /// The rows of a tile and the proxy they are measured on, in the k-d tree's order.
@@ -73,6 +76,9 @@ struct State {
     reach: Option<Reach>,
     /// Stored positions of the owned points, in local order (`None`: all points).
     owned_at: Option<Vec<u32>>,
+    /// Whether the rows are wide rows searched in place of the plain ones, which are their
+    /// first `k_plane` on the input, until a round after [`Round::Start`] asks for either.
+    stand_in: bool,
 }
 
 /// The owned points' part of one round (per point values in local order).
@@ -145,7 +151,19 @@ impl<'a> RobustTile<'a> {
             pending: None,
             pending_normals: None,
             shrink: None,
+            wide_first: false,
         }
+    }
+
+    /// Has the first search find the wide rows (`WIDE`·`k_plane` nearest) instead of the
+    /// plain ones, where the cloud is expected to read as a ball of noise
+    /// (`scales::input_reads_as_ball`): rows are sorted by `(sq_dist, index)` on the input, so
+    /// the first `k_plane` of a wide row are the plain row, and [`Round::Start`] reads those.
+    /// If the run widens, its wide rows are already there (one search instead of two); if not,
+    /// they are cut back to the plain rows. Either way every round reads the rows it would
+    /// have read: the results are the same bits.
+    pub(super) fn search_wide_first(&mut self) {
+        self.wide_first = true;
     }
 
     /// A tile of a split cloud: `input` every finite point of the cloud inside `region`
@@ -179,6 +197,7 @@ impl<'a> RobustTile<'a> {
             pending: None,
             pending_normals: None,
             shrink: None,
+            wide_first: false,
         })
     }
 
@@ -199,6 +218,8 @@ impl<'a> RobustTile<'a> {
     /// for the wide and shrunk rows) and stores the proxy in the new tree's order. Returns each
     /// gathered point's squared distance to its nearest, by local index.
     fn search(&mut self, set: RowSet, k_plane: usize) -> Result<Vec<Option<f64>>> {
+        let stand_in = set == RowSet::Plain && std::mem::take(&mut self.wide_first);
+        let set = if stand_in { RowSet::Wide } else { set };
         let k = match set {
             RowSet::Plain => k_plane,
             _ => k_plane * scales::WIDE,
@@ -253,12 +274,36 @@ impl<'a> RobustTile<'a> {
             normals,
             reach,
             owned_at,
+            stand_in,
         });
         Ok(nearest)
     }
 
+    /// The plain rows on the input, measured and cut at `eps`, for [`Round::Start`]: wide rows
+    /// that stand in for them are kept whole (the round reads their first `k_plane`).
+    fn start_rows(&mut self, eps: f64, k_plane: usize) -> Result<()> {
+        match self.state.as_mut().filter(|st| st.stand_in) {
+            Some(st) if st.generation != 0 => Err(out_of_turn("a start after a step")),
+            Some(st) => {
+                st.measure(eps);
+                Ok(())
+            }
+            None => self.rows_on(RowSet::Plain, 0, eps, k_plane),
+        }
+    }
+
     /// The rows of `set` measured on the proxy of `generation` and cut at `eps`.
     fn rows_on(&mut self, set: RowSet, generation: usize, eps: f64, k_plane: usize) -> Result<()> {
+        if let Some(st) = self.state.as_mut().filter(|st| st.stand_in) {
+            // the run has chosen: the wide rows stay, or their first `k_plane` as sorted on
+            // the input (stand-ins live on generation 0 only) are the plain rows
+            st.stand_in = false;
+            if set == RowSet::Plain {
+                st.measure(eps);
+                st.rows.shrink(k_plane);
+                st.set = RowSet::Plain;
+            }
+        }
         let searched = |s: RowSet| s == RowSet::Plain;
         let fresh = self
             .state
@@ -407,7 +452,7 @@ impl<'a> RobustTile<'a> {
         let kp = options.k_plane;
         match *round {
             Round::Start => {
-                self.rows_on(RowSet::Plain, 0, eps, kp)?;
+                self.start_rows(eps, kp)?;
                 Ok(self.start_part(options))
             }
             Round::Ratio { generation } => {
@@ -435,6 +480,11 @@ impl<'a> RobustTile<'a> {
     fn start_part(&self, options: &RobustOptions) -> TilePart {
         let st = self.state.as_ref().expect("rows measured");
         let (max_len, min_narrow) = match &st.owned_at {
+            // wide rows standing in for the plain ones: their first `k_plane`
+            None if st.stand_in => (
+                st.rows.max_narrow_len(options.k_plane),
+                st.rows.min_narrow_len(options.k),
+            ),
             None => (st.rows.max_len(), st.rows.min_narrow_len(options.k)),
             Some(at) => {
                 let len = |&s: &u32| st.rows.wide(s as usize).len();
