@@ -5,12 +5,11 @@
 
 mod common;
 
-use common::{points, to_f32, Kind};
+use common::{points, sorted_rows, to_f32, Kind};
 use nbhd::table::neighborhoods_of_all;
 use nbhd::NeighborIndex;
 use nbhd::{
-    BuildOptions, KdTree, NeighborTable, Neighborhood, PivotPolicy, PointsView, Query, Scalar,
-    TableOptions,
+    BuildOptions, KdTree, Neighborhood, PivotPolicy, PointsView, Query, Scalar, TableOptions,
 };
 use proptest::prelude::*;
 
@@ -22,22 +21,6 @@ const SETS: [Kind; 6] = [
     Kind::Grid,
     Kind::Coplanar,
 ];
-
-/// Rows sorted by `(sq_dist, index)`, for the unsorted radius variant.
-fn sorted_rows<T: Scalar>(t: &NeighborTable<T>) -> Vec<Vec<(T, u32)>> {
-    (0..t.len())
-        .map(|i| {
-            let mut r: Vec<(T, u32)> = t
-                .sq_dists_of(i)
-                .iter()
-                .copied()
-                .zip(t.indices_of(i).iter().copied())
-                .collect();
-            r.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap().then(a.1.cmp(&b.1)));
-            r
-        })
-        .collect()
-}
 
 fn check<T: Scalar>(coords: &[T], d: usize, leaf_sizes: &[usize]) {
     let view = PointsView::from_flat(coords, d).unwrap();

@@ -22,7 +22,7 @@ use crate::index::answer;
 use crate::query::Neighborhood;
 use crate::scalar::Scalar;
 use crate::table::NeighborTable;
-use crate::tree::group_search::{batch_table, Cells};
+use crate::tree::group_search::{batch_table, BatchGroups, Cells};
 
 /// Most queries in one group (chosen by measurement, `benches/dynamic.rs`).
 const GROUP: usize = 8;
@@ -64,8 +64,12 @@ impl<T: Scalar> DynamicKdTree<T> {
                 p.tree.cell_view(p.cells::<D>(), tombstones)
             })
             .collect();
-        let span = (SPAN_LEAVES * self.options.leaf_size) as u32;
+        let grouping = BatchGroups {
+            span: (SPAN_LEAVES * self.options.leaf_size) as u32,
+            max_group: GROUP,
+            gather: false,
+        };
         let single = |q: &[T], row: &mut Vec<_>| answer(self, q, None, nbhd, row);
-        batch_table(&views, queries, order, keys, span, GROUP, nbhd, &single)
+        batch_table(&views, queries, (order, keys), grouping, nbhd, &single)
     }
 }

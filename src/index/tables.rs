@@ -156,8 +156,13 @@ fn packed_queries<T: Scalar>(queries: &PointsView<'_>) -> Result<Vec<T>> {
 }
 
 /// The positions of the packed `queries` ordered by the region each falls into
-/// ([`NeighborIndex::region_key`]), ties by position (a counting sort: two passes over the
-/// queries), and those keys in that order.
+/// ([`NeighborIndex::region_key`]), and those keys in that order. The keys are found in a
+/// coarse spatial order of the queries ([`grid_order`]), so that consecutive descents share
+/// their path and its nodes stay in the cache; then sorted by key with a counting sort, ties in
+/// that spatial order. (In the caller's order, each descent of a large tree missed the cache at
+/// its lower levels: the 1M torus' points as queries on their own tree, one thread, took
+/// 0.65–0.85 s for their keys alone, 0.2–0.26 s in the grid order — wall times at a load of
+/// 13–16 on 2 cores, 2026-11-29.)
 pub(super) fn region_order<T: Scalar, I: NeighborIndex<T>>(
     index: &I,
     queries: &[T],
@@ -167,23 +172,92 @@ pub(super) fn region_order<T: Scalar, I: NeighborIndex<T>>(
     if index.is_empty() {
         return ((0..n as u32).collect(), vec![0; n]);
     }
-    let key_of: Vec<u32> = queries
-        .par_chunks_exact(d)
-        .map(|q| index.region_key(q))
+    let visit = grid_order(queries, d);
+    let key_of: Vec<u32> = visit
+        .par_iter()
+        .map(|&i| index.region_key(&queries[i as usize * d..][..d]))
         .collect();
-    let keys = index.region_keys();
-    let mut starts = vec![0u32; keys + 1];
-    for &l in &key_of {
+    let by_key = counting_order(&key_of, index.region_keys());
+    let order = by_key.iter().map(|&w| visit[w as usize]).collect();
+    let sorted = by_key.iter().map(|&w| key_of[w as usize]).collect();
+    (order, sorted)
+}
+
+/// Most bits per axis of [`grid_order`]'s cells.
+const GRID_BITS: u32 = 10;
+
+/// The positions of the packed `queries` (dimension `d`) in the Morton order of the cells of
+/// a grid over their bounding box (in the first three axes), ties by position: about one cell
+/// per query, at most [`GRID_BITS`] bits per axis.
+fn grid_order<T: Scalar>(queries: &[T], d: usize) -> Vec<u32> {
+    let n = queries.len() / d;
+    let axes = d.min(3);
+    let bits = ((usize::BITS - n.leading_zeros()) / axes as u32).clamp(1, GRID_BITS);
+    let (lo, hi) = queries
+        .par_chunks_exact(d)
+        .fold(
+            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+            |(mut lo, mut hi), q| {
+                for j in 0..axes {
+                    lo[j] = lo[j].min(q[j].to_f64());
+                    hi[j] = hi[j].max(q[j].to_f64());
+                }
+                (lo, hi)
+            },
+        )
+        .reduce(
+            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+            |(a, b), (c, e)| {
+                (
+                    std::array::from_fn(|j| a[j].min(c[j])),
+                    std::array::from_fn(|j| b[j].max(e[j])),
+                )
+            },
+        );
+    let side = f64::from(1u32 << bits);
+    // halves, so that no difference overflows; an axis of zero extent is one cell
+    let scale: [f64; 3] = std::array::from_fn(|j| {
+        let extent = hi[j] * 0.5 - lo[j] * 0.5;
+        let s = 0.5 * side / extent;
+        if extent > 0.0 && s.is_finite() {
+            s
+        } else {
+            0.0
+        }
+    });
+    let top = (1u32 << bits) - 1;
+    let cell_of: Vec<u32> = queries
+        .par_chunks_exact(d)
+        .map(|q| {
+            // the cell's coordinates (a NaN product, of an infinite extent, is cell 0)
+            let c: [u32; 3] =
+                std::array::from_fn(|j| ((q[j.min(axes - 1)].to_f64() - lo[j]) * scale[j]) as u32);
+            let mut code = 0u32;
+            for b in (0..bits).rev() {
+                for &cj in &c[..axes] {
+                    code = code << 1 | (cj.min(top) >> b & 1);
+                }
+            }
+            code
+        })
+        .collect();
+    counting_order(&cell_of, 1 << (bits as usize * axes))
+}
+
+/// The positions `0..keys.len()` ordered by their key (each below `buckets`), ties by position:
+/// a counting sort, two passes over the keys.
+fn counting_order(keys: &[u32], buckets: usize) -> Vec<u32> {
+    let mut starts = vec![0u32; buckets + 1];
+    for &l in keys {
         starts[l as usize + 1] += 1;
     }
-    for p in 0..keys {
+    for p in 0..buckets {
         starts[p + 1] += starts[p];
     }
-    let mut order = vec![0u32; n];
-    for (i, &l) in key_of.iter().enumerate() {
+    let mut order = vec![0u32; keys.len()];
+    for (i, &l) in keys.iter().enumerate() {
         order[starts[l as usize] as usize] = i as u32;
         starts[l as usize] += 1;
     }
-    let sorted = order.iter().map(|&i| key_of[i as usize]).collect();
-    (order, sorted)
+    order
 }

@@ -47,7 +47,7 @@ use rows::{GroupKey, HeapRows, KeyHeapRows, RadiusRows, RowSets, SortedRows};
 use rows::{KEY_HEAP_MAX_K, SORTED_MAX_K};
 
 pub(crate) use cells::{CellView, Cells};
-pub(crate) use tables::{batch_table, table, Plan};
+pub(crate) use tables::{batch_table, table, BatchGroups, Plan};
 
 use super::node::Node;
 use crate::query::result_set::Key32;

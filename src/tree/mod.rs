@@ -325,6 +325,16 @@ impl<T: Scalar> NeighborIndex<T> for KdTree<T> {
     ) -> Option<Result<NeighborTable<T>>> {
         self.grouped_all(nbhd, exclude_self)
     }
+
+    fn grouped_batch(
+        &self,
+        queries: &[T],
+        order: &[u32],
+        keys: &[u32],
+        nbhd: Neighborhood<T>,
+    ) -> Option<Result<NeighborTable<T>>> {
+        self.grouped_batch_of(queries, order, keys, nbhd)
+    }
 }
 
 /// Subtrees of at most this many points are one leaf of the compact descent (`node.rs`): 32

@@ -70,11 +70,10 @@ impl<T: Scalar> KdTree<T> {
             if n.is_leaf() {
                 return n.a;
             }
-            node = if q[n.dim as usize] < n.split {
-                node + 1
-            } else {
-                n.a as usize
-            };
+            // without a branch: which side a query takes is a coin toss the predictor loses
+            // at every level (queries come in spatial order, so the nodes are in the cache)
+            let right = usize::from(q[n.dim as usize] >= n.split);
+            node = (node + 1) * (1 - right) + n.a as usize * right;
         }
     }
 

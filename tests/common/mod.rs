@@ -86,3 +86,19 @@ pub fn points(kind: Kind, n: usize, d: usize, seed: u64) -> Vec<f64> {
 pub fn to_f32(v: &[f64]) -> Vec<f32> {
     v.iter().map(|&x| x as f32).collect()
 }
+
+/// The rows of `t` as `(sq_dist, index)` lists, each sorted (to compare unsorted radius rows).
+pub fn sorted_rows<T: nbhd::Scalar>(t: &nbhd::NeighborTable<T>) -> Vec<Vec<(T, u32)>> {
+    (0..t.len())
+        .map(|i| {
+            let mut r: Vec<(T, u32)> = t
+                .sq_dists_of(i)
+                .iter()
+                .copied()
+                .zip(t.indices_of(i).iter().copied())
+                .collect();
+            r.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap().then(a.1.cmp(&b.1)));
+            r
+        })
+        .collect()
+}

@@ -127,29 +127,39 @@ impl<'a, T: Scalar, const D: usize> Plan<'a, T, D> {
     }
 }
 
+/// How a batch's queries are grouped: consecutive queries (in the order of their leaves)
+/// whose leaves lie within `span` tree positions of the group's first form a group of at most
+/// `max_group` members; `gather`: each group is first answered from one gathered block
+/// (`gather.rs`; a single tree only).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BatchGroups {
+    pub span: u32,
+    pub max_group: usize,
+    pub gather: bool,
+}
+
 /// The rows of the packed, finite `queries` (dimension `D`), row `i` for query `i`, over the
 /// trees `parts` (largest first: its bounds prune the smaller trees most), answered in groups
 /// along `order` (a permutation of the queries); in parallel over fixed chunks of `order`, so
 /// identical for any thread count.
 ///
 /// `keys[w]` is the first tree position, in the largest tree, of the leaf the query `order[w]`
-/// falls into (increasing): consecutive queries whose leaves lie within `span` positions form a
-/// group of at most `max_group`, and a query with no such neighbour is answered alone by
-/// `single` (a group of far-apart queries would search the space between them). The members'
-/// rows are kept from tree to tree, so the trees' answers merge in `(sq_dist, index)` order and
-/// every later tree is searched with the bounds the earlier ones left.
-#[allow(clippy::too_many_arguments)]
+/// falls into (increasing): queries are grouped by `grouping` ([`BatchGroups`]), and a query
+/// with no neighbour within its span is answered alone by `single` (a group of far-apart
+/// queries would search the space between them) unless the group is gathered. The members'
+/// rows are kept from tree to tree, so the trees' answers merge in `(sq_dist, index)` order
+/// and every later tree is searched with the bounds the earlier ones left.
 pub(crate) fn batch_table<T: Scalar, const D: usize>(
     parts: &[CellView<'_, T, D>],
     queries: &[T],
-    order: &[u32],
-    keys: &[u32],
-    span: u32,
-    max_group: usize,
+    (order, keys): (&[u32], &[u32]),
+    grouping: BatchGroups,
     nbhd: Neighborhood<T>,
     single: &SingleSearch<'_, T>,
 ) -> Result<NeighborTable<T>> {
-    let max_group = max_group.clamp(1, GROUP);
+    // the gathered block is collected from the first tree alone, every point of it live
+    let gather = grouping.gather && parts.len() == 1 && parts[0].not_live.is_none();
+    let (span, max_group) = (grouping.span, grouping.max_group.clamp(1, GROUP));
     let n = order.len();
     let bounds: Vec<usize> = (0..n.div_ceil(CHUNK))
         .map(|c| c * CHUNK)
@@ -162,11 +172,18 @@ pub(crate) fn batch_table<T: Scalar, const D: usize>(
         exclude_self: false,
         single: Some(single),
     };
+    // Every row of k nearest holds k points, or all of them, when every point of the trees is
+    // live: its place in the table is known before the search.
+    let all_live = parts.iter().all(|p| p.not_live.is_none());
+    let row_len = match nbhd {
+        Neighborhood::Knn { k } if all_live => Some(k.min(parts.iter().map(|p| p.ids.len()).sum())),
+        _ => None,
+    };
     rows_in_chunks(
         n,
         &bounds,
         |w| order[w] as usize,
-        None,
+        row_len,
         |c, out| {
             let work = &order[bounds[c]..bounds[c + 1]];
             let keys = &keys[bounds[c]..bounds[c + 1]];
@@ -181,7 +198,7 @@ pub(crate) fn batch_table<T: Scalar, const D: usize>(
                     s = e;
                 }
             };
-            run_rows(&groups, nbhd, false, out);
+            run_rows(&groups, nbhd, gather, out);
             Ok(())
         },
     )
