@@ -312,9 +312,15 @@ def select_tile(spec: Spec, t: int, removed, kept_path: str, threshold: float, s
     with np.load(kept_path) as z:
         idx, keep = z["idx"], z["d"] <= threshold
     idx, pts = idx[keep], pts[keep]
+    return write_piece(store, t, idx - np.searchsorted(removed, idx), pts)
+
+
+def write_piece(store: str, t: int, idx, pts):
+    """Writes ``(idx, pts)`` (ascending caller indices) as the one piece of tile ``t`` of a new
+    store (chunk 0); returns ``(t, count, lo, hi)``, which :func:`nbhd.dask` makes a tile of."""
     base = piece_path(store, 0, t)
     np.save(base + ".pts.npy", pts)
-    np.save(base + ".idx.npy", idx - np.searchsorted(removed, idx))
+    np.save(base + ".idx.npy", idx)
     if len(pts) == 0:
         return t, 0, [0.0] * 3, [0.0] * 3
     return t, len(pts), pts.min(axis=0).tolist(), pts.max(axis=0).tolist()
@@ -326,8 +332,8 @@ def voxel_tile(spec: Spec, t: int, leaf, min_points: int, low, mul, out: str, th
     point of such a voxel lies within an edge of that point, so the voxel is whole: the same
     members, summed in the same order, as on one machine). Written to ``out`` in ascending
     linear index of the whole cloud's grid (``low``, ``mul``: its lowest voxel numbers and
-    multipliers): ``key``, ``centroids``, ``nearest``, ``counts``, ``members`` (caller
-    indices), ``cells``. Returns the counts and a sample of the keys (for the ranks)."""
+    multipliers): ``centroids``, ``nearest``, ``counts``, ``members`` (caller indices),
+    ``cells``, and the keys in ``out + ".key.npy"`` (mapped by the ranks' tasks). Returns the counts and a sample of the keys (for the ranks)."""
     import nbhd
 
     own = owned(spec, t)
@@ -344,7 +350,7 @@ def voxel_tile(spec: Spec, t: int, leaf, min_points: int, low, mul, out: str, th
     key = ((cells - np.asarray(low, np.int64)).astype(np.uint64)
            * np.asarray(mul, np.uint64)).sum(axis=1, dtype=np.uint64)
     centroids = g["centroids"][mine]
-    _write(out, key=key, centroids=centroids, nearest=idx[g["nearest"][mine].astype(np.int64)],
+    _write(out, centroids=centroids, nearest=idx[g["nearest"][mine].astype(np.int64)],
            counts=counts.astype(np.uint64), members=members.astype(np.uint32), cells=cells)
     np.save(out + ".key.npy", key)
     step = max(1, len(key) // 64)
@@ -357,18 +363,18 @@ def voxel_ranks(paths, lo_key, hi_key, start: int, out: str):
     (``start`` voxels have smaller keys): each tile's slice of them, in key order, written
     one after the other in tile order to ``out`` (``.ranks.npy``, with ``.toff.npy`` the
     slices' offsets)."""
-    keys, tile_of = [], []
-    for t, p in enumerate(paths):
+    keys = []
+    for p in paths:
         k = np.load(p + ".key.npy", mmap_mode="r")
         a, b = np.searchsorted(k, [lo_key, hi_key])
         keys.append(np.asarray(k[a:b]))
-        tile_of.append(np.full(b - a, t, np.int64))
+    lens = [len(k) for k in keys]
     keys = np.concatenate(keys)
     order = np.argsort(keys, kind="stable")
     rank = np.empty(len(keys), np.int64)
     rank[order] = start + np.arange(len(keys))
     np.save(out + ".ranks.npy", rank)  # tile by tile: each tile's slice in its key order
-    np.save(out + ".toff.npy", np.concatenate([[0], np.cumsum([len(x) for x in tile_of])]))
+    np.save(out + ".toff.npy", np.concatenate([[0], np.cumsum(lens)]))
 
 
 def voxel_piece(path: str, t: int, bucket_paths, store: str):
@@ -381,12 +387,7 @@ def voxel_piece(path: str, t: int, bucket_paths, store: str):
         toff = np.load(b + ".toff.npy")
         parts.append(np.load(b + ".ranks.npy", mmap_mode="r")[toff[t]:toff[t + 1]])
     ranks = np.concatenate(parts) if parts else np.empty(0, np.int64)
-    base = piece_path(store, 0, t)
-    np.save(base + ".pts.npy", centroids)
-    np.save(base + ".idx.npy", ranks)
-    if len(centroids) == 0:
-        return t, 0, [0.0] * 3, [0.0] * 3
-    return t, len(centroids), centroids.min(axis=0).tolist(), centroids.max(axis=0).tolist()
+    return write_piece(store, t, ranks, centroids)
 
 
 def nearest_of_rows(parts, a: int, b: int):

@@ -388,14 +388,8 @@ class TiledCloud:
             dask.delayed(_tiles.select_tile, pure=False)(spec, t, node, kept.parts[t]["path"],
                                                          kept.threshold, store)
             for t in range(self.tiles)])
-        tiles = [Tile(lo, hi, count, grid_id=t, chunks=[0]) for t, count, lo, hi in done
-                 if count]
-        big = max((max(abs(v) for v in t.lo + t.hi) for t in tiles), default=0.0)
-        cloud = TiledCloud(Spec(self.n - len(removed), self.spec.dtype, tiles, big, store),
-                           store)
-        if cloud.n < 2:
-            raise ValueError("fewer than two points are kept: not a tiled cloud")
-        return cloud
+        return _cloud_of_pieces(done, self.n - len(removed), self.spec.dtype, store,
+                                "points are kept")
 
     def voxel_grid(self, leaf, *, min_points_per_voxel=0, threads=0, out=None):
         """``nbhd.voxel_grid(points, leaf, ...)`` on the tiles, identical: every occupied voxel's
@@ -576,6 +570,16 @@ class TiledCloud:
 
 # the volume of the unit ball in 1 and 2 dimensions: a segment, a disc
 _UNIT_BALL = {1: 2.0, 2: np.pi}
+
+
+def _cloud_of_pieces(done, n, dtype, store, what):
+    """The :class:`TiledCloud` of ``n`` points that ``_tiles.write_piece`` tasks wrote to
+    ``store`` (``done``: their ``(t, count, lo, hi)``), one piece per non-empty tile."""
+    if n < 2:
+        raise ValueError(f"fewer than two {what}: not a tiled cloud")
+    tiles = [Tile(lo, hi, count, grid_id=t, chunks=[0]) for t, count, lo, hi in done if count]
+    big = max((max(abs(v) for v in t.lo + t.hi) for t in tiles), default=0.0)
+    return TiledCloud(Spec(n, dtype, tiles, big, store), store)
 
 
 def _first_robust_halo(spec, t, k_plane):
@@ -989,7 +993,7 @@ class VoxelResult(TileResult):
         """The dict ``nbhd.voxel_grid(points, ...)`` returns, in memory: ``centroids``,
         ``nearest``, ``offsets``, ``members``, ``cells``, in ascending linear voxel index."""
         loaded = [dict(np.load(p["path"])) for p in self.parts]
-        key = np.concatenate([z["key"] for z in loaded])
+        key = np.concatenate([np.load(p["path"] + ".key.npy") for p in self.parts])
         order = np.argsort(key, kind="stable")
         counts = np.concatenate([z["counts"] for z in loaded])
         starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
@@ -1028,12 +1032,7 @@ class VoxelResult(TileResult):
         done = dask.compute(*[
             dask.delayed(_tiles.voxel_piece, pure=False)(paths[t], t, ranks, store)
             for t in range(len(paths))])
-        tiles = [Tile(lo, hi, count, grid_id=t, chunks=[0]) for t, count, lo, hi in done
-                 if count]
-        big = max((max(abs(v) for v in t.lo + t.hi) for t in tiles), default=0.0)
-        if self.n < 2:
-            raise ValueError("fewer than two voxels: not a tiled cloud")
-        return TiledCloud(Spec(self.n, cloud.spec.dtype, tiles, big, store), store)
+        return _cloud_of_pieces(done, self.n, cloud.spec.dtype, store, "voxels")
 
     def _starts(self, cuts):
         """The number of voxels below each bucket's first key: each tile's keys counted below
