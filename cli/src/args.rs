@@ -202,6 +202,18 @@ pub fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
 
 /// Parses a length: `0.05` in the points' units, or `6h` in units of the mean spacing `h`
 /// (mean distance of a point to its nearest other point). Range checks are the library's.
+/// The sizes of `--boxsize`: a periodic box's size per axis (0 for an open axis), or one for
+/// every axis; the library checks them when it builds the tree.
+#[derive(Clone, Debug)]
+pub struct BoxSize(pub Vec<f64>);
+
+pub fn parse_boxsize(s: &str) -> Result<BoxSize, String> {
+    s.split(',')
+        .map(|v| v.trim().parse::<f64>().map_err(|e| format!("{v:?}: {e}")))
+        .collect::<Result<Vec<_>, _>>()
+        .map(BoxSize)
+}
+
 pub fn parse_length(s: &str) -> Result<Length, String> {
     let t = s.trim();
     let bad = || format!("'{s}' is not a length (a number like 0.05, or a multiple of h like 6h)");

@@ -79,6 +79,7 @@ enum Command {
     Knn(commands::neighbors::KnnArgs),
     Radius(commands::neighbors::RadiusArgs),
     Neighbors(commands::neighbors::NeighborsArgs),
+    Pairs(commands::neighbors::PairsArgs),
     /// PCA normals of every point over its ε-k neighbourhood (thesis eq. 2.8–2.10)
     ///
     /// Writes the input with normals (nx ny nz; normal_x normal_y normal_z in PCD) and curvature,
@@ -127,6 +128,7 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Knn(a)) => commands::neighbors::run_knn(a, &out),
         Some(Command::Radius(a)) => commands::neighbors::run_radius(a, &out),
         Some(Command::Neighbors(a)) => commands::neighbors::run_neighbors(a, &out),
+        Some(Command::Pairs(a)) => commands::neighbors::run_pairs(a, &out),
         Some(Command::Normals(a)) => commands::geometry::run(a, What::Normals, &out),
         Some(Command::Curvature(a)) => commands::geometry::run(a, What::Curvature, &out),
         Some(Command::Smooth(a)) => commands::smooth::run(a, &out),

@@ -1669,3 +1669,169 @@ fn tiles_smooth_as_the_whole_cloud_does() {
     let got = std::path::Path::new(&dir).join("full_fmt6.laz");
     assert_eq!(std::fs::read(got).unwrap(), std::fs::read(&want).unwrap());
 }
+
+/// Plain loops over every pair (i, j) of `a` × `b` within `r` in the metric `p` (1, 2 or ∞),
+/// with `keep(i, j)` choosing which count: rows of indices ascending and keys (squared for
+/// p = 2, the distance otherwise).
+fn loop_pairs(
+    a: &[[f64; 3]],
+    b: &[[f64; 3]],
+    r: f64,
+    p: f64,
+    strict: bool,
+    keep: impl Fn(usize, usize) -> bool,
+) -> Vec<(Vec<u32>, Vec<f64>)> {
+    a.iter()
+        .enumerate()
+        .map(|(i, x)| {
+            let mut row = (Vec::new(), Vec::new());
+            for (j, y) in b.iter().enumerate() {
+                let d = x.iter().zip(y).map(|(u, v)| (u - v).abs());
+                let (dist, key) = match p {
+                    1.0 => (d.clone().sum::<f64>(), d.sum::<f64>()),
+                    2.0 => {
+                        let s = d.map(|t| t * t).sum::<f64>();
+                        (s.sqrt(), s)
+                    }
+                    _ => (d.clone().fold(0.0, f64::max), d.fold(0.0, f64::max)),
+                };
+                let within = if strict { dist < r } else { dist <= r };
+                if keep(i, j) && within {
+                    row.0.push(j as u32);
+                    row.1.push(key);
+                }
+            }
+            row
+        })
+        .collect()
+}
+
+fn assert_same_pairs(got: &[(Vec<u32>, Vec<f64>)], want: &[(Vec<u32>, Vec<f64>)], what: &str) {
+    assert_eq!(got.len(), want.len(), "{what}: rows");
+    for (i, (g, w)) in got.iter().zip(want).enumerate() {
+        assert_eq!(g.0, w.0, "{what}: row {i}");
+        for (x, y) in g.1.iter().zip(&w.1) {
+            assert!(
+                (x - y).abs() <= 1e-12 * y.max(1e-300),
+                "{what}: row {i}: {x} vs {y}"
+            );
+        }
+    }
+}
+
+/// `nbhd pairs`: every pair within ε once (row i: the j > i), and with `--queries` every
+/// (query, point) pair, against plain loops — duplicates at distance 0 and a NaN point
+/// included, inclusive and strict, Euclidean, l1 and l∞.
+#[test]
+fn pairs_equal_plain_loops() {
+    let (file, pts) = sphere_file("sphere-pairs.xyz");
+    let finite = |i: usize| pts[i][0].is_finite();
+    for (metric, p, strict, r) in [
+        ("l2", 2.0, false, "0.2"),
+        ("l1", 1.0, true, "0.25"),
+        ("linf", f64::INFINITY, false, "0.12"),
+    ] {
+        let mut a = vec!["--json", "pairs", "-r", r, &file, "--metric", metric];
+        let r: f64 = r.parse().unwrap();
+        if strict {
+            a.push("--strict");
+        }
+        let v = json_of(&nbhd(&a));
+        assert_eq!(v["kind"], "pairs");
+        let want = loop_pairs(&pts, &pts, r, p, strict, |i, j| {
+            j > i && finite(i) && finite(j)
+        });
+        assert_same_pairs(&rows(&v), &want, &a.join(" "));
+        assert!(
+            want.iter().any(|w| w.1.contains(&0.0)),
+            "duplicates pair at 0"
+        );
+    }
+    // Against a second file: the queries' rows hold the input's points within ε, ascending.
+    let queries: Vec<[f64; 3]> = pts
+        .iter()
+        .step_by(7)
+        .filter(|q| q[0].is_finite())
+        .map(|q| [q[0] * 1.01, q[1], q[2]])
+        .collect();
+    let qpath = tmp("sphere-pairs-queries.xyz");
+    let double = nbhd::io::WriteOptions {
+        precision: nbhd::io::Precision::Double,
+        ..nbhd::io::WriteOptions::ascii()
+    };
+    nbhd::io::write(
+        &qpath,
+        &nbhd::io::PointCloud::from_positions(queries.clone()),
+        &double,
+    )
+    .unwrap();
+    let v = json_of(&nbhd(&[
+        "--json",
+        "pairs",
+        "-r",
+        "0.2",
+        &file,
+        "--queries",
+        &qpath,
+    ]));
+    let want = loop_pairs(&queries, &pts, 0.2, 2.0, false, |_, j| finite(j));
+    assert_same_pairs(&rows(&v), &want, "pairs --queries");
+    let o = nbhd(&["pairs", "-r", "0.2", &file, "--exclude-self"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("never its own pair"), "{}", stderr(&o));
+}
+
+/// `nbhd tree save --boxsize`: the file keeps the box, and the commands that load it search
+/// periodically — the same rows as the library's periodic tree, pairs included.
+#[test]
+fn saved_periodic_trees_keep_their_box() {
+    let mut pts = Vec::new();
+    for i in 0..150u32 {
+        let c = |s: u32| f64::from((i.wrapping_mul(2_654_435_761) >> s) % 16) / 16.0;
+        pts.push([c(3), c(11), c(19) * 2.0]);
+    }
+    let path = tmp("periodic-save.xyz");
+    let cloud = nbhd::io::PointCloud::from_positions(pts.clone());
+    nbhd::io::write(&path, &cloud, &nbhd::io::WriteOptions::ascii()).unwrap();
+    let saved = tmp("periodic-save.nbhdtree");
+    let v = json_of(&nbhd(&[
+        "--json",
+        "tree",
+        "save",
+        &path,
+        &saved,
+        "--boxsize",
+        "1,1,0",
+    ]));
+    assert_eq!(v["boxsize"], serde_json::json!([1.0, 1.0, 0.0]));
+    let view = PointsView::from_rows(&pts).unwrap();
+    let tree = KdTree::build_periodic(&view, &BuildOptions::default(), &[1.0, 1.0, 0.0]).unwrap();
+    let opts = TableOptions {
+        exclude_self: false, // as the command without --exclude-self
+        ..TableOptions::default()
+    };
+    let want_pairs = tree.pairs(0.15, &opts).unwrap();
+    let want_knn = tree
+        .neighborhoods(Neighborhood::Knn { k: 5 }, &opts)
+        .unwrap();
+    for (args, want) in [
+        (&["pairs", "-r", "0.15"][..], &want_pairs),
+        (&["knn", "-k", "5"][..], &want_knn),
+    ] {
+        let mut a = vec!["--json"];
+        a.extend(args);
+        a.extend([path.as_str(), "--tree", saved.as_str()]);
+        let v = json_of(&nbhd(&a));
+        assert_eq!(v["boxsize"], serde_json::json!([1.0, 1.0, 0.0]), "{a:?}");
+        let got = rows(&v);
+        assert_eq!(got.len(), pts.len());
+        for (i, (idx, d)) in got.iter().enumerate() {
+            assert_eq!(idx.as_slice(), want.indices_of(i), "{a:?} row {i}");
+            assert_eq!(d.as_slice(), want.sq_dists_of(i), "{a:?} row {i}");
+        }
+    }
+    assert!(want_pairs.total() > 0);
+    let o = nbhd(&["knn", "-k", "2", &path, "--tree", &saved, "--boxsize", "1"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("keeps the box"), "{}", stderr(&o));
+}

@@ -1,6 +1,7 @@
-//! `nbhd knn | radius | neighbors FILE`: the k nearest, all within radius ε, or the ε-k
+//! `nbhd knn | radius | neighbors | pairs FILE`: the k nearest, all within radius ε, or the ε-k
 //! neighbourhood (the k nearest within ε, thesis Section 2.1.1) of every point of a file, or of
-//! the points of a second file, from a k-d tree built with the chosen variant.
+//! the points of a second file, from a k-d tree built with the chosen variant; or the pairs of
+//! points within ε (each once).
 //!
 //! With `--tree FILE` the tree is loaded from a file written by `nbhd tree save` instead of
 //! built; it must hold exactly the input's points under their indices.
@@ -10,7 +11,7 @@
 //! with every digit — under `--metric`, that metric's key: the distance for l1 and linf,
 //! Σ|Δ|^p for p=<x>), or a JSON document.
 
-use crate::args::{length_text, parse_length, InputArgs, TreeArgs};
+use crate::args::{length_text, parse_boxsize, parse_length, BoxSize, InputArgs, TreeArgs};
 use crate::error::{Context, Result};
 use crate::output::{ms, num, Output};
 use crate::progress::Progress;
@@ -75,7 +76,7 @@ pub struct Common {
     /// A periodic box (a torus, as scipy's boxsize): the box size L of every axis, comma
     /// separated (x,y,z), or one for all; 0 leaves an axis open. Every point must lie in
     /// [0, L) on a periodic axis; queries are wrapped into the box and each axis difference
-    /// counts at its nearest image
+    /// counts at its nearest image. A tree loaded with --tree keeps the box it was saved with
     #[arg(long, value_name = "L[,L...]", value_parser = parse_boxsize)]
     pub boxsize: Option<BoxSize>,
 
@@ -126,11 +127,41 @@ pub struct NeighborsArgs {
     pub radius: Length,
 }
 
+/// Every pair of points within ε of each other
+///
+/// Each pair once, as row i holding the j > i (scipy's query_pairs), indices ascending; with
+/// --queries, each query's row holds the input's points within ε, indices ascending (scipy's
+/// sparse_distance_matrix of the queries' tree against the input's). The output's lines are
+/// `query,rank,index,sq_dist` as for the other commands: `query` is i (or the query), `rank`
+/// the place in its row.
+#[derive(clap::Args, Debug)]
+pub struct PairsArgs {
+    #[command(flatten)]
+    pub common: Common,
+
+    /// The pairs' distance ε (inclusive; --strict for < ε): a number in the points' units, or
+    /// a multiple of the mean spacing h such as 2h
+    #[arg(long, short = 'r', value_parser = parse_length, allow_hyphen_values = true)]
+    pub radius: Length,
+}
+
 /// Which neighbourhood, before the radius is resolved.
 enum Kind {
     Knn(i64),
     Radius(Length),
     KnnRadius(i64, Length),
+    Pairs(Length),
+}
+
+impl Kind {
+    fn name(&self) -> &'static str {
+        match self {
+            Kind::Knn(_) => "knn",
+            Kind::Radius(_) => "radius",
+            Kind::KnnRadius(..) => "neighbors",
+            Kind::Pairs(_) => "pairs",
+        }
+    }
 }
 
 pub fn run_knn(a: KnnArgs, out: &Output) -> Result<()> {
@@ -145,15 +176,8 @@ pub fn run_neighbors(a: NeighborsArgs, out: &Output) -> Result<()> {
     run(a.common, Kind::KnnRadius(a.k, a.radius), out)
 }
 
-/// The sizes of `--boxsize`.
-#[derive(Clone, Debug)]
-pub struct BoxSize(Vec<f64>);
-
-fn parse_boxsize(s: &str) -> std::result::Result<BoxSize, String> {
-    s.split(',')
-        .map(|v| v.trim().parse::<f64>().map_err(|e| format!("{v:?}: {e}")))
-        .collect::<std::result::Result<Vec<_>, _>>()
-        .map(BoxSize)
+pub fn run_pairs(a: PairsArgs, out: &Output) -> Result<()> {
+    run(a.common, Kind::Pairs(a.radius), out)
 }
 
 fn parse_metric(s: &str) -> std::result::Result<Metric, String> {
@@ -185,11 +209,11 @@ fn mean_spacing(tree: &KdTree<f64>) -> Result<f64> {
 struct Facts {
     name: String,
     queries_file: Option<PathBuf>,
+    kind: &'static str,
     k: Option<usize>,
     length: Option<Length>,
     h: Option<f64>,
     radius: Option<f64>,
-    nbhd: Neighborhood<f64>,
     query: QueryOptions,
     /// The periodic box's sizes per axis (0 for open), if the tree has one.
     boxsize: Option<Vec<f64>>,
@@ -207,10 +231,13 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
     // Check what can be checked before reading.
     let k = match kind {
         Kind::Knn(k) | Kind::KnnRadius(k, _) => Some(check_k(k)?),
-        Kind::Radius(_) => None,
+        Kind::Radius(_) | Kind::Pairs(_) => None,
     };
     if c.exclude_self && c.queries.is_some() {
         return Err("--exclude-self applies to the input's own points, not to --queries".into());
+    }
+    if c.exclude_self && matches!(kind, Kind::Pairs(_)) {
+        return Err("--exclude-self does not apply to pairs: a point is never its own pair".into());
     }
     let query = QueryOptions {
         metric: c.metric,
@@ -224,11 +251,13 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
         None => None,
     };
     let name = c.input.input.display().to_string();
-    let boxsize = c.boxsize.as_ref().map(|b| b.0.as_slice());
+    let boxsize = c.boxsize.as_ref();
     let (tree, build_ms) = match &c.tree_file {
         Some(_) if boxsize.is_some() => {
             return Err(
-                "--boxsize builds a periodic tree; a saved tree (--tree) keeps no box".into(),
+                "--boxsize builds a periodic tree; a saved tree (--tree) keeps the box \
+                        it was saved with (nbhd tree save --boxsize)"
+                    .into(),
             )
         }
         Some(file) => load_tree(file, &cloud, &name)?,
@@ -236,7 +265,7 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
     };
     let opts = *tree.options();
     let length = match kind {
-        Kind::Radius(l) | Kind::KnnRadius(_, l) => Some(l),
+        Kind::Radius(l) | Kind::KnnRadius(_, l) | Kind::Pairs(l) => Some(l),
         Kind::Knn(_) => None,
     };
     let h = match length {
@@ -244,34 +273,35 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
         _ => None,
     };
     let radius = length.map(|l| l.resolve(h.unwrap_or(1.0)));
-    let nbhd = match (k, radius) {
-        (Some(k), None) => Neighborhood::Knn { k },
-        (None, Some(radius)) => Neighborhood::Radius {
+    let search = match (&kind, k, radius) {
+        (Kind::Pairs(_), _, Some(radius)) => Search::Pairs(radius),
+        (_, Some(k), None) => Search::Table(Neighborhood::Knn { k }),
+        (_, None, Some(radius)) => Search::Table(Neighborhood::Radius {
             radius,
             sorted: true,
-        },
-        (Some(k), Some(radius)) => Neighborhood::KnnRadius { k, radius },
-        (None, None) => unreachable!("every kind has k or a radius"),
+        }),
+        (_, Some(k), Some(radius)) => Search::Table(Neighborhood::KnnRadius { k, radius }),
+        (_, None, None) => unreachable!("every kind has k or a radius"),
     };
     let t = Instant::now();
     let table = {
-        let _s = Progress::spinner(out, "computing neighbourhoods");
+        let _s = Progress::spinner(out, format!("computing {}", kind.name()));
         let queries = queries.as_ref().map(|(path, cloud)| (*path, cloud));
         let opts = TableOptions {
             exclude_self: c.exclude_self,
             threads: 0,
             query,
         };
-        table(&tree, nbhd, &opts, queries, &name)?
+        table(&tree, search, &opts, queries, &name)?
     };
     let facts = Facts {
         name,
         queries_file: c.queries,
+        kind: kind.name(),
         k,
         length,
         h,
         radius,
-        nbhd,
         query,
         boxsize: tree.period().map(|p| p.sizes()),
         exclude_self: c.exclude_self,
@@ -288,10 +318,10 @@ fn run(c: Common, kind: Kind, out: &Output) -> Result<()> {
 
 /// Builds the k-d tree of `cloud` (periodic over `boxsize` if given) under a spinner; returns
 /// it and the milliseconds taken.
-fn build_tree(
+pub(crate) fn build_tree(
     cloud: &PointCloud,
     opts: &BuildOptions,
-    boxsize: Option<&[f64]>,
+    boxsize: Option<&BoxSize>,
     name: &str,
     out: &Output,
 ) -> Result<(KdTree<f64>, f64)> {
@@ -303,7 +333,9 @@ fn build_tree(
             format!("building the k-d tree of {} points", cloud.len()),
         );
         match boxsize {
-            Some(boxsize) => KdTree::<f64>::build_periodic(&view, opts, boxsize).context(name)?,
+            Some(boxsize) => {
+                KdTree::<f64>::build_periodic(&view, opts, &boxsize.0).context(name)?
+            }
             None => KdTree::<f64>::build(&view, opts).context(name)?,
         }
     };
@@ -349,45 +381,53 @@ fn load_tree(file: &Path, cloud: &PointCloud, name: &str) -> Result<(KdTree<f64>
     Ok((tree, ms(t)))
 }
 
-/// The neighbourhoods of the tree's own points, or of the points of the query file (which
-/// must all be finite); errors of the search name the input file `name`.
+/// What a command searches: a neighbourhood per point, or the pairs within a distance.
+enum Search {
+    Table(Neighborhood<f64>),
+    Pairs(f64),
+}
+
+/// The neighbourhoods (or pairs) of the tree's own points, or of the points of the query file
+/// (which must all be finite); errors of the search name the input file `name`.
 fn table(
     tree: &KdTree<f64>,
-    nbhd: Neighborhood<f64>,
+    search: Search,
     opts: &TableOptions,
     queries: Option<(&PathBuf, &PointCloud)>,
     name: &str,
 ) -> Result<NeighborTable<f64>> {
-    match queries {
-        None => tree.neighborhoods(nbhd, opts).context(name),
-        Some((path, q)) => {
-            let qname = path.display().to_string();
-            let qv = q.view().context(&qname)?;
-            if let Some((i, _)) = qv.first_non_finite() {
-                return Err(
-                    format!("{qname}: query point {i} has a NaN or infinite coordinate").into(),
-                );
+    let Some((path, q)) = queries else {
+        return match search {
+            Search::Table(nbhd) => tree.neighborhoods(nbhd, opts).context(name),
+            Search::Pairs(radius) => tree.pairs(radius, opts).context(name),
+        };
+    };
+    let qname = path.display().to_string();
+    let qv = q.view().context(&qname)?;
+    if let Some((i, _)) = qv.first_non_finite() {
+        return Err(format!("{qname}: query point {i} has a NaN or infinite coordinate").into());
+    }
+    match search {
+        Search::Table(nbhd) => tree.neighborhoods_of(&qv, nbhd, opts).context(name),
+        Search::Pairs(radius) => {
+            // The queries' tree measures the pairs (its metric under `opts`, the input's box).
+            let qtree = match tree.period() {
+                Some(p) => KdTree::<f64>::build_periodic(&qv, tree.options(), &p.sizes()),
+                None => KdTree::<f64>::build(&qv, tree.options()),
             }
-            tree.neighborhoods_of(&qv, nbhd, opts).context(name)
+            .context(&qname)?;
+            qtree.pairs_with(tree, radius, opts).context(name)
         }
     }
 }
 
 impl Facts {
-    fn kind_name(&self) -> &'static str {
-        match self.nbhd {
-            Neighborhood::Knn { .. } => "knn",
-            Neighborhood::Radius { .. } => "radius",
-            Neighborhood::KnnRadius { .. } => "neighbors",
-        }
-    }
-
     /// The summary as JSON (without the rows).
     fn json(&self) -> serde_json::Value {
         json!({
             "input": self.name,
             "queries_file": self.queries_file.as_ref().map(|q| q.display().to_string()),
-            "kind": self.kind_name(),
+            "kind": self.kind,
             "k": self.k,
             "radius": self.radius.map(num),
             "radius_given": self.length.map(length_text),
@@ -430,7 +470,7 @@ impl Facts {
              tree {} / {} / leaf {}: depth {}, {} nodes, {} leaves, {} KiB, {} in {:.1} ms; \
              queries {:.1} ms",
             self.name,
-            self.kind_name(),
+            self.kind,
             self.table.len(),
             self.points,
             self.points - self.stats.points,

@@ -2,17 +2,16 @@
 //! (docs/tree-file-format.md), so that the neighbourhood commands can load it with `--tree`
 //! instead of building it again.
 
-use crate::args::{InputArgs, TreeArgs};
+use crate::args::{parse_boxsize, BoxSize, InputArgs, TreeArgs};
+use crate::commands::neighbors::build_tree;
 use crate::error::{Context, Result};
 use crate::output::{ms, num, Output};
-use crate::progress::Progress;
-use nbhd::KdTree;
 use nbhd::Persist;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Save a built k-d tree, to be loaded by `nbhd knn | radius | neighbors --tree`
+/// Save a built k-d tree, to be loaded by `nbhd knn | radius | neighbors | pairs --tree`
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(subcommand)]
@@ -40,6 +39,12 @@ pub struct SaveArgs {
 
     #[command(flatten)]
     pub tree: TreeArgs,
+
+    /// Build a periodic tree (a torus, as scipy's boxsize; see `nbhd knn --help`): the box
+    /// size L of every axis, comma separated, or one for all; 0 leaves an axis open. The file
+    /// keeps the box: the commands that load the tree search it periodically
+    #[arg(long, value_name = "L[,L...]", value_parser = parse_boxsize)]
+    pub boxsize: Option<BoxSize>,
 }
 
 pub fn run(a: Args, out: &Output) -> Result<()> {
@@ -51,17 +56,8 @@ pub fn run(a: Args, out: &Output) -> Result<()> {
 fn save(a: SaveArgs, out: &Output) -> Result<()> {
     let cloud = a.input.read()?;
     let name = a.input.input.display().to_string();
-    let view = cloud.view().context(&name)?;
     let opts = a.tree.options();
-    let t = Instant::now();
-    let tree = {
-        let _s = Progress::spinner(
-            out,
-            format!("building the k-d tree of {} points", cloud.len()),
-        );
-        KdTree::<f64>::build(&view, &opts).context(&name)?
-    };
-    let build_ms = ms(t);
+    let (tree, build_ms) = build_tree(&cloud, &opts, a.boxsize.as_ref(), &name, out)?;
     let t = Instant::now();
     tree.save_file(&a.output)?;
     let save_ms = ms(t);
@@ -81,6 +77,7 @@ fn save(a: SaveArgs, out: &Output) -> Result<()> {
             "depth": stats.depth,
             "nodes": stats.nodes,
         },
+        "boxsize": tree.period().map(|p| p.sizes()),
         "file_bytes": bytes,
         "build_ms": num(build_ms),
         "save_ms": num(save_ms),
