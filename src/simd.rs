@@ -8,9 +8,9 @@
 //!   four points per instruction);
 //! - the grouped table search's keys within a bound and its ranks (`tree/group_search/`:
 //!   AVX-512 F + VL, and AVX2 for the ranks);
-//! - the normals' batched eigen solves (`geometry/eigen.rs`: AVX), the robust planes' lane
-//!   sums (`geometry/robust_plane.rs`: AVX) and the robust smoothing's scores and steps
-//!   (`smooth/robust/`: AVX).
+//! - the normals' batched eigen solves (`geometry/eigen.rs`: AVX), the robust planes'
+//!   neighbourhood fills and lane sums (`geometry/robust_plane.rs`: AVX) and the robust
+//!   smoothing's scores and steps (`smooth/robust/`: AVX).
 //!
 //! [`force_portable`] makes every one of them take its portable form instead, in the whole
 //! process, until it is called again with `false`. It exists for the tests and fuzz targets
