@@ -178,8 +178,20 @@ fn main() {
                 let t = Instant::now();
                 let r = smooth_robust_report(&noisy, &a.options, &mut |_, _| true).unwrap();
                 let secs = t.elapsed().as_secs_f64();
+                let h = r.result.spacing;
+                let disp = (r
+                    .result
+                    .points
+                    .iter()
+                    .zip(&noisy)
+                    .map(|(a, b)| a.distance_squared(*b))
+                    .sum::<f64>()
+                    / noisy.len() as f64)
+                    .sqrt()
+                    / h;
                 let note = format!(
-                    "wide {} dim {:?} it {} moved {:?} noise {:?}",
+                    "sigma/h {:.2} disp {disp:.2} wide {} dim {:?} it {} moved {:?} noise {:?}",
+                    pct / 100.0 / h,
                     r.wide_iterations,
                     r.dimension
                         .iter()

@@ -60,17 +60,64 @@ impl Neighborhood {
             v.truncate(padded);
             v.resize(padded, 0.0);
             v[0] = 0.0;
-            v[self.len..].fill(0.0);
+            // the padding, fewer than `LANES` elements: stores, not a call to `memset`
+            for c in 0..LANES - 1 {
+                if let Some(x) = v.get_mut(self.len + c) {
+                    *x = 0.0;
+                }
+            }
         }
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx() {
+            // SAFETY: the processor supports AVX (checked just above).
+            unsafe { self.fill_avx(points, p, row) };
+            return;
+        }
+        self.fill_from(0, points, p, row);
+    }
+
+    /// The neighbours `row[t..]` relative to `p`, at `t + 1..` (the portable loop of
+    /// [`Neighborhood::fill`], and the rest of its AVX blocks).
+    #[inline(always)]
+    fn fill_from(&mut self, t: usize, points: &[DVec3], p: DVec3, row: &[u32]) {
         // zipped, so that only the read of a neighbour is bounds-checked
-        let coordinates = self.x[1..]
+        let coordinates = self.x[t + 1..]
             .iter_mut()
-            .zip(&mut self.y[1..])
-            .zip(&mut self.z[1..]);
-        for (((x, y), z), &j) in coordinates.zip(row) {
+            .zip(&mut self.y[t + 1..])
+            .zip(&mut self.z[t + 1..]);
+        for (((x, y), z), &j) in coordinates.zip(&row[t..]) {
             let d = points[j as usize] - p;
             (*x, *y, *z) = (d.x, d.y, d.z);
         }
+    }
+
+    /// [`Neighborhood::fill`]'s neighbours four at a time in AVX registers
+    /// (`crate::simd::transpose4_avx`): the same subtraction per coordinate, so the same bits
+    /// as the portable loop, in about two thirds of its instructions (each neighbour's first two
+    /// coordinates one load, each block's differences three subtractions and three stores).
+    ///
+    /// # Safety
+    /// The processor supports AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn fill_avx(&mut self, points: &[DVec3], p: DVec3, row: &[u32]) {
+        use std::arch::x86_64::*;
+        let blocks = row.len() / LANES * LANES;
+        let origin = [p.x, p.y, p.z].map(|c| _mm256_set1_pd(c));
+        let coordinates = self.x[1..=blocks]
+            .chunks_exact_mut(LANES)
+            .zip(self.y[1..=blocks].chunks_exact_mut(LANES))
+            .zip(self.z[1..=blocks].chunks_exact_mut(LANES));
+        for (((x, y), z), ids) in coordinates.zip(row.chunks_exact(LANES)) {
+            let q = [0, 1, 2, 3].map(|l| &points[ids[l] as usize]);
+            // SAFETY: AVX as the caller guarantees
+            let c = unsafe { crate::simd::transpose4_avx(q) };
+            for (out, (c, o)) in [x, y, z].into_iter().zip(c.into_iter().zip(origin)) {
+                // SAFETY: `out` is a chunk of `LANES` = 4 `f64`, the 32 bytes stored
+                unsafe { _mm256_storeu_pd(out.as_mut_ptr(), _mm256_sub_pd(c, o)) };
+            }
+        }
+        self.fill_from(blocks, points, p, row);
     }
 
     /// How many points it holds.
@@ -508,6 +555,35 @@ mod tests {
             z: coordinate(|p| p.z),
             len: points.len(),
             w: Vec::new(),
+        }
+    }
+
+    /// The fill's values are the exact differences `points[j] − points[s]` (the AVX blocks and
+    /// the portable rest alike), the point itself first at the origin, zeros as padding, also
+    /// after a longer neighbourhood held more; a row of any length around the blocks of four.
+    #[test]
+    fn fill_holds_the_exact_differences_and_zero_padding() {
+        let pts: Vec<DVec3> = (0..40)
+            .map(|i| {
+                let t = i as f64;
+                DVec3::new((t * 0.37).sin() * 3.1, t * t * 0.013 - 1.0, 1e3 + t * 0.1)
+            })
+            .collect();
+        let mut local = Neighborhood::default();
+        for len in (0..14).chain([35, 2, 9, 0]) {
+            let row: Vec<u32> = (0..len).map(|t| ((t * 7 + 3) % 40) as u32).collect();
+            local.fill(&pts, 5, &row);
+            assert_eq!(local.len(), len + 1);
+            let padded = (len + 1).div_ceil(LANES) * LANES;
+            for (c, v) in [&local.x, &local.y, &local.z].into_iter().enumerate() {
+                assert_eq!(v.len(), padded);
+                assert_eq!(v[0].to_bits(), 0);
+                for (t, &j) in row.iter().enumerate() {
+                    let d = (pts[j as usize] - pts[5]).to_array()[c];
+                    assert_eq!(v[t + 1].to_bits(), d.to_bits(), "len {len} t {t} c {c}");
+                }
+                assert!(v[len + 1..].iter().all(|x| x.to_bits() == 0), "len {len}");
+            }
         }
     }
 

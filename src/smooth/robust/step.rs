@@ -212,9 +212,7 @@ impl Block {
         b
     }
 
-    /// [`Block::gather`] in AVX registers: the first two coordinates of two points in one
-    /// 128-bit load each, transposed by unpacking (the portable loop goes through memory, and
-    /// its four narrow stores and one wide load stall the gather).
+    /// [`Block::gather`] in AVX registers (`crate::simd::transpose4_avx`).
     ///
     /// # Safety
     /// The processor supports AVX.
@@ -228,23 +226,10 @@ impl Block {
         ids: &[u32; LANES],
     ) -> Self {
         use std::arch::x86_64::*;
-        let lanes = |q: [&DVec3; LANES]| {
-            // SAFETY: each reference is to a `DVec3`, three consecutive `f64` (`repr(C)`), so
-            // `&v.x` starts two of them; AVX as the caller guarantees
-            unsafe {
-                let xy = |v: &DVec3| _mm_loadu_pd(&v.x);
-                let z = |u: &DVec3, v: &DVec3| _mm_loadh_pd(_mm_load_sd(&u.z), &v.z);
-                let pair = |lo: __m128d, hi: __m128d| {
-                    _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(lo), hi)
-                };
-                // [x0 y0 x2 y2] and [x1 y1 x3 y3]: unpacked to [x0 x1 x2 x3], [y0 y1 y2 y3]
-                let (a, b) = (pair(xy(q[0]), xy(q[2])), pair(xy(q[1]), xy(q[3])));
-                let z = pair(z(q[0], q[1]), z(q[2], q[3]));
-                [_mm256_unpacklo_pd(a, b), _mm256_unpackhi_pd(a, b), z]
-            }
-        };
-        let x = lanes(ids.map(|j| &points[j as usize]));
-        let n = lanes(ids.map(|j| &normals[j as usize]));
+        // SAFETY: AVX as the caller guarantees
+        let x = unsafe { crate::simd::transpose4_avx(ids.map(|j| &points[j as usize])) };
+        // SAFETY: as above
+        let n = unsafe { crate::simd::transpose4_avx(ids.map(|j| &normals[j as usize])) };
         // SAFETY: `__m256d` and `[f64; 4]` are the same 32 bytes
         let array = |v: __m256d| unsafe { std::mem::transmute::<__m256d, [f64; LANES]>(v) };
         let p = p.to_array();
