@@ -8,6 +8,7 @@
 //! k = 16 within it). `batch-knn10` answers the same points as a batch of outside queries
 //! (`neighborhoods_of`, the points in the data set's own order). A fourth argument `f64` builds
 //! an `f64` tree, and `noself` leaves each point out of its own row (as the normals do).
+//! `pairs` is scipy's `query_pairs` at that radius (`NeighborIndex::pairs`: each pair once).
 
 use std::time::Instant;
 
@@ -63,6 +64,24 @@ fn run<T: Scalar>(pts: &[[T; 3]], set_name: &str, op: &str, reps: usize, exclude
         .collect();
     d20.sort_by(|a, b| a.partial_cmp(b).unwrap());
     let radius = d20[d20.len() / 2];
+    let topts = TableOptions {
+        exclude_self,
+        threads: 1,
+        ..Default::default()
+    };
+    if op == "pairs" {
+        for _ in 0..reps {
+            let (s, c) = (Instant::now(), cpu_seconds());
+            let t = tree.pairs(radius, &topts).unwrap();
+            println!(
+                "{set_name} pairs {:.2} ms (CPU {:.2} ms), {} pairs",
+                s.elapsed().as_secs_f64() * 1e3,
+                (cpu_seconds() - c) * 1e3,
+                t.total()
+            );
+        }
+        return;
+    }
     let batch = op.starts_with("batch-");
     let nbhd = match op.trim_start_matches("batch-") {
         knn if knn.starts_with("knn") => Neighborhood::Knn {
@@ -74,11 +93,6 @@ fn run<T: Scalar>(pts: &[[T; 3]], set_name: &str, op: &str, reps: usize, exclude
         },
         "epsk" => Neighborhood::KnnRadius { k: 16, radius },
         _ => panic!("unknown operation {op}"),
-    };
-    let topts = TableOptions {
-        exclude_self,
-        threads: 1,
-        ..Default::default()
     };
     for _ in 0..reps {
         let (s, c) = (Instant::now(), cpu_seconds());

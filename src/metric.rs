@@ -456,6 +456,37 @@ impl<T: Scalar> Period<T> {
         }
         norm.lower(s)
     }
+
+    /// A lower bound (under `norm`, through its `lower`) of the key between any point of the
+    /// box `[la, ha]` and any point of the box `[lb, hb]` (both inside the periodic box): per
+    /// axis the smaller of the gap between the two intervals and `L − t`, `t` the widest
+    /// difference of their points (`max(hb − la, ha − lb)`). A pair's difference `t'` rounds to
+    /// at least the rounded gap and at most the rounded `t` (rounding is monotone), so each term
+    /// is at most the pair's `min(t', L − t')`, and the terms are folded in the order of
+    /// [`Period::key`]: the bound never exceeds a pair's key.
+    #[inline]
+    pub(crate) fn boxes_key<N: Norm<T>>(
+        &self,
+        norm: N,
+        la: &[T],
+        ha: &[T],
+        lb: &[T],
+        hb: &[T],
+    ) -> T {
+        let mut s = T::ZERO;
+        for j in 0..la.len() {
+            let gap = if lb[j] > ha[j] {
+                lb[j] - ha[j]
+            } else if la[j] > hb[j] {
+                la[j] - hb[j]
+            } else {
+                T::ZERO
+            };
+            let widest = (hb[j] - la[j]).max_of(ha[j] - lb[j]);
+            s = norm.fold(s, norm.term(gap.min_of(self.sizes[j] - widest)));
+        }
+        norm.lower(s)
+    }
 }
 
 #[cfg(test)]

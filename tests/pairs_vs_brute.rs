@@ -462,3 +462,109 @@ fn bad_radii_weights_and_options_are_refused() {
         [3]
     );
 }
+
+/// The static tree's pairs come from its self-join over the leaves (each pair of leaves once),
+/// the growing tree's from one search per point: over the seven kinds of sets of
+/// `tests/common` (duplicates, all points identical, zero-extent axes, integer grids with
+/// pairs exactly on the radius), d = 1–5, every pivot policy, leaves of 1, 2 and 7 points (many
+/// leaves, so the descents prune), radii at quantiles of the pair distances and on the grid's
+/// steps, inclusive and strict, Euclidean, p = 1 and a periodic box: both equal the brute force
+/// bit for bit, on 1 and 2 threads.
+fn check_self_join_on_every_kind<T: Scalar>(seed: u64) {
+    use common::{points, KINDS};
+    for (c, kind) in KINDS.into_iter().enumerate() {
+        for d in 1..=5 {
+            let pts: Vec<T> = points(kind, 120, d, seed + c as u64 * 10 + d as u64)
+                .iter()
+                .map(|&x| T::from_f64(x))
+                .collect();
+            let open = vec![T::INFINITY; d];
+            let mut dists: Vec<f64> =
+                brute(&pts, &pts, d, &open, Metric::Euclidean, T::INFINITY, true)
+                    .iter()
+                    .flatten()
+                    .map(|&(_, k)| k.to_f64().sqrt())
+                    .collect();
+            dists.sort_by(f64::total_cmp);
+            let mut radii = vec![0.0, 1.0, 2.0];
+            radii.extend([0.02, 0.1, 0.3].map(|q| dists[(q * (dists.len() - 1) as f64) as usize]));
+            for (v, pivot) in PivotPolicy::ALL.into_iter().enumerate() {
+                let leaf_size = [1, 2, 7][(v + d) % 3];
+                check_join_case(&pts, d, pivot, leaf_size, &radii, kind);
+            }
+        }
+    }
+}
+
+/// [`check_self_join_on_every_kind`] for one set, pivot policy and leaf size.
+fn check_join_case<T: Scalar>(
+    pts: &[T],
+    d: usize,
+    pivot: PivotPolicy,
+    leaf_size: usize,
+    radii: &[f64],
+    kind: common::Kind,
+) {
+    let opts = BuildOptions {
+        pivot,
+        leaf_size,
+        ..BuildOptions::default()
+    };
+    // a periodic box around the set: the points shifted into [0, 12) on every axis
+    let shifted: Vec<T> = pts.iter().map(|&x| x + T::from_f64(6.0)).collect();
+    let (lo, hi) = shifted
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x.to_f64()), h.max(x.to_f64()))
+        });
+    let fits = lo >= 0.0 && hi < 12.0;
+    let tree = KdTree::from_flat(pts, d, &opts).unwrap();
+    let periodic = fits.then(|| {
+        let view = PointsView::from_flat(&shifted, d).unwrap();
+        KdTree::build_periodic(&view, &opts, &[12.0]).unwrap()
+    });
+    let (_, growing) = static_and_growing(pts, d, None, pivot);
+    let open = vec![T::INFINITY; d];
+    let sizes = vec![T::from_f64(12.0); d];
+    for &r in radii {
+        let r = T::from_f64(r);
+        for (p, strict) in [(2.0, false), (2.0, true), (1.0, false)] {
+            let metric = Metric::from_p(p).unwrap();
+            let query = QueryOptions {
+                strict,
+                ..QueryOptions::with_p(p).unwrap()
+            };
+            let key = metric.key_of(r);
+            let bound = if strict { key.next_down() } else { key };
+            let what =
+                format!("{kind:?} d {d} {pivot:?} leaf {leaf_size} r {r} p {p} strict {strict}");
+            let one = tree.pairs(r, &table(query, 1)).unwrap();
+            assert_eq!(
+                rows_of(&one),
+                brute(pts, pts, d, &open, metric, bound, true),
+                "{what}"
+            );
+            assert_eq!(
+                tree.pairs(r, &table(query, 2)).unwrap(),
+                one,
+                "2 threads: {what}"
+            );
+            assert_eq!(
+                growing.pairs(r, &table(query, 2)).unwrap(),
+                one,
+                "growing: {what}"
+            );
+            if let Some(t) = &periodic {
+                let want = brute(&shifted, &shifted, d, &sizes, metric, bound, true);
+                let got = t.pairs(r, &table(query, 2)).unwrap();
+                assert_eq!(rows_of(&got), want, "periodic: {what}");
+            }
+        }
+    }
+}
+
+#[test]
+fn self_join_pairs_equal_the_brute_force_on_every_kind_of_set() {
+    check_self_join_on_every_kind::<f64>(31);
+    check_self_join_on_every_kind::<f32>(32);
+}

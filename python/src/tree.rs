@@ -247,6 +247,33 @@ impl PyTable {
     }
 }
 
+/// The `(row, column)` pairs of the entries of the rows `starts` (their columns `cols`), row
+/// after row, as one flat `intp` vector: written by every core, blocks of rows each (the
+/// zeroed vector's pages are first touched by the threads that fill them).
+fn stacked_pairs(starts: &[usize], cols: &[u32]) -> Vec<isize> {
+    use rayon::prelude::*;
+    const ROWS_PER_BLOCK: usize = 16_384;
+    let rows = starts.len().saturating_sub(1);
+    let mut both = vec![0isize; 2 * cols.len()];
+    let mut parts = Vec::with_capacity(rows.div_ceil(ROWS_PER_BLOCK));
+    let mut rest = &mut both[..];
+    for lo in (0..rows).step_by(ROWS_PER_BLOCK) {
+        let hi = (lo + ROWS_PER_BLOCK).min(rows);
+        let (part, next) = rest.split_at_mut(2 * (starts[hi] - starts[lo]));
+        parts.push((lo, hi, part));
+        rest = next;
+    }
+    parts.into_par_iter().for_each(|(lo, hi, part)| {
+        let mut out = part.chunks_exact_mut(2);
+        for i in lo..hi {
+            for (&j, o) in cols[starts[i]..starts[i + 1]].iter().zip(&mut out) {
+                o.copy_from_slice(&[i as isize, j as isize]);
+            }
+        }
+    });
+    both
+}
+
 #[pymethods]
 impl PyTable {
     /// Number of rows.
@@ -280,12 +307,8 @@ impl PyTable {
         let total = cols.len();
         let rows = self.starts.windows(2).enumerate();
         if stacked {
-            let mut both: Vec<isize> = Vec::with_capacity(2 * total);
-            for (i, w) in rows {
-                for &j in &cols[w[0]..w[1]] {
-                    both.extend_from_slice(&[i as isize, j as isize]);
-                }
-            }
+            let starts = &self.starts;
+            let both = py.detach(|| stacked_pairs(starts, cols));
             return Ok(vec2(py, both, total, 2)?.into_any());
         }
         let mut of_row: Vec<isize> = Vec::with_capacity(total);

@@ -175,6 +175,15 @@ pub trait NeighborIndex<T: Scalar>: NeighborSearch<T> + Sized {
         None
     }
 
+    /// The pairs `(i, j)`, `i < j`, of held points whose key under `measure` is at most
+    /// `bound` — row `i` of the table those `j` ascending, with their keys, `source_len` rows —
+    /// by a faster path than one search per point, if the flavour has one (on the current
+    /// thread pool).
+    #[doc(hidden)]
+    fn grouped_pairs(&self, _bound: T, _measure: &Measure) -> Option<Result<NeighborTable<T>>> {
+        None
+    }
+
     // ---- The queries, written once ----
 
     /// The `k` nearest held points of `query`, by `(sq_dist, index)`, into `out` (cleared

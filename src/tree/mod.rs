@@ -18,6 +18,8 @@
 //! - `exact_knn.rs`: the fast exact k-nearest table of 3-D `f64` points, searched in `f32`
 //!   and proven exact in `f64` ([`exact_knn_table`]);
 //! - `periodic.rs`: periodic trees (a torus) and their descent;
+//! - `self_join.rs`: the pairs of the tree's own points within a radius (scipy's
+//!   `query_pairs`), each pair of leaves visited once;
 //! - `nodes.rs`: the nodes as a caller sees them (scipy's node objects) and per-node weights;
 //! - `part.rs`: what a forest reads of one of its trees;
 //! - `persist.rs`: saving a built tree and loading it back (docs/tree-file-format.md).
@@ -40,6 +42,7 @@ mod periodic;
 mod persist;
 mod presorted;
 mod search;
+mod self_join;
 mod split;
 
 use std::sync::OnceLock;
@@ -324,6 +327,10 @@ impl<T: Scalar> NeighborIndex<T> for KdTree<T> {
         exclude_self: bool,
     ) -> Option<Result<NeighborTable<T>>> {
         self.grouped_all(nbhd, exclude_self)
+    }
+
+    fn grouped_pairs(&self, bound: T, measure: &Measure) -> Option<Result<NeighborTable<T>>> {
+        Some(self.self_join(bound, measure))
     }
 
     fn grouped_batch(
