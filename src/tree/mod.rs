@@ -41,6 +41,7 @@ mod persist;
 mod presorted;
 mod search;
 mod split;
+mod split_lines;
 
 use std::sync::OnceLock;
 
