@@ -41,7 +41,6 @@ mod persist;
 mod presorted;
 mod search;
 mod split;
-mod split_lines;
 
 use std::sync::OnceLock;
 

@@ -1,7 +1,6 @@
 //! The compact node array of a k-d tree, in preorder: the left child of internal node `i` is
 //! `i + 1`, its right child is stored. Leaves are ranges of the tree-ordered points.
 
-use super::split_lines::SplitLines;
 use crate::scalar::Scalar;
 
 /// `dim` value marking a leaf.
@@ -83,8 +82,6 @@ pub(crate) struct Descent<T> {
     pub steps: Vec<Step<T>>,
     /// Smallest caller index of every step's subtree.
     pub min_id: Vec<u32>,
-    /// The splits of the complete top levels, a cache line per block of levels.
-    pub lines: SplitLines<T>,
 }
 
 impl<T: Scalar> Descent<T> {
@@ -103,7 +100,6 @@ impl<T: Scalar> Descent<T> {
         let mut d = Descent {
             steps: Vec::with_capacity(nodes.len()),
             min_id: Vec::with_capacity(nodes.len()),
-            lines: SplitLines::default(),
         };
         // Breadth first: (preorder node, first point of its subtree) in step order.
         let mut queue = std::collections::VecDeque::new();
@@ -136,14 +132,11 @@ impl<T: Scalar> Descent<T> {
             }
             at += 1;
         }
-        d.lines = SplitLines::new(&d.steps);
         Some(d)
     }
 
     /// Bytes held.
     pub(crate) fn bytes(&self) -> usize {
-        self.steps.len() * std::mem::size_of::<Step<T>>()
-            + self.min_id.len() * 4
-            + self.lines.bytes()
+        self.steps.len() * std::mem::size_of::<Step<T>>() + self.min_id.len() * 4
     }
 }

@@ -27,7 +27,6 @@
 
 use super::kernel::sq_dists_below;
 use super::node::{Descent, Node, DESCENT_LEAF};
-use super::split_lines::{SplitLines, OUTSIDE};
 use crate::metric::{Norm, L2};
 use crate::prefetch::prefetch_range;
 use crate::query::result_set::ResultSet;
@@ -304,8 +303,6 @@ pub(crate) struct DescentView<'a, T> {
 #[derive(Clone, Copy)]
 struct Pending<T> {
     step: u32,
-    /// Its place in the blocked top levels ([`OUTSIDE`] below them).
-    at: u32,
     dist: T,
     gaps: [T; 3],
 }
@@ -325,7 +322,6 @@ pub(crate) fn search_compact<T: Scalar, C: ResultSet<T>>(
 ) {
     let empty = Pending {
         step: 0,
-        at: OUTSIDE,
         dist: T::ZERO,
         gaps: [T::ZERO; 3],
     };
@@ -373,13 +369,10 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool, c
     let excluded = exclude.unwrap_or(u32::MAX);
     let steps = &tree.descent.steps[..];
     let min_id = &tree.descent.min_id[..];
-    let blocks = &tree.descent.lines;
-    let lines = blocks.lines();
     let mut qa = [T::ZERO; 4];
     qa[..D].copy_from_slice(&q[..D]);
     stack[0] = Pending {
         step: 0,
-        at: blocks.root(),
         dist: T::ZERO,
         gaps: [T::ZERO; 3],
     };
@@ -388,7 +381,6 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool, c
         len -= 1;
         let Pending {
             step: mut node,
-            mut at,
             dist,
             gaps,
         } = stack[len];
@@ -396,21 +388,14 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool, c
             continue;
         }
         loop {
-            // The complete top levels read their splits from the blocked lines (children by
-            // the Eytzinger rule), the levels below from the steps.
-            let (split, sd, first) = if at != OUTSIDE {
-                let (split, sd) = SplitLines::read(lines, at);
-                (split, sd, 2 * node + 1)
-            } else {
-                let s = steps[node as usize];
-                let sd = (s.link & 3) as usize;
-                if sd == DESCENT_LEAF as usize {
-                    scan_leaf::<T, C, D, SSE, AVX>(tree, &qa, s.leaf_range(), excluded, out);
-                    break;
-                }
-                (s.split, sd, s.link >> 2)
-            };
-            let diff = qa[sd] - split;
+            let s = steps[node as usize];
+            let sd = (s.link & 3) as usize;
+            if sd == DESCENT_LEAF as usize {
+                scan_leaf::<T, C, D, SSE, AVX>(tree, &qa, s.leaf_range(), excluded, out);
+                break;
+            }
+            let first = s.link >> 2;
+            let diff = qa[sd] - s.split;
             // As in `search_d`: on a tie the right side first unless only ties at the bound
             // can still enter; then the side with the smaller index.
             let right_first = if diff == T::ZERO {
@@ -420,15 +405,6 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool, c
             };
             let near = first + right_first as u32;
             let far = first + !right_first as u32;
-            // Both children's places at once (siblings: in one block, or side by side in the
-            // next row; `OUTSIDE` plus 0 stays outside).
-            let (left_at, next) = if at != OUTSIDE {
-                blocks.children(at)
-            } else {
-                (OUTSIDE, 0)
-            };
-            let near_at = left_at.wrapping_add(next * right_first as u32);
-            let far_at = left_at.wrapping_add(next * !right_first as u32);
             let mut g = gaps;
             g[sd] = diff;
             let mut fd = T::ZERO;
@@ -438,42 +414,30 @@ fn compact_search<T: Scalar, C: ResultSet<T>, const D: usize, const SSE: bool, c
             // Pushed unconditionally, kept only if it may enter (no branch on the test).
             stack[len] = Pending {
                 step: far,
-                at: far_at,
                 dist: fd,
                 gaps: g,
             };
             if may_enter(out, fd, min_id, far) {
                 len += 1;
-                if far_at == OUTSIDE {
-                    request_far::<T, D>(tree, far);
-                } else if next == 16 {
-                    prefetch_range(SplitLines::block(lines, far_at));
+                // The far cell is visited after the near side's subtree: its first lines are
+                // requested now (its step shares the near step's line, already read), so that
+                // their misses overlap the near side's work. A leaf's indices too: on the 1M
+                // cube k = 30 took 0.89-0.95x the time with them, k = 10 the same.
+                let fs = steps[far as usize];
+                if fs.link & 3 == DESCENT_LEAF {
+                    let (a, b) = fs.leaf_range();
+                    prefetch_range(&tree.coords[a * D..b * D]);
+                    prefetch_range(&tree.ids[a..b]);
+                } else {
+                    let f = (fs.link >> 2) as usize;
+                    prefetch_range(&steps[f..f + 1]);
                 }
             }
             node = near;
-            at = near_at;
             if !may_enter(out, dist, min_id, node) {
                 break;
             }
         }
-    }
-}
-
-/// Requests the first lines of the far cell at step `far` (below the blocked levels), visited
-/// after the near side's subtree, so that their misses overlap the near side's work (its step
-/// shares the near step's line, read next). A leaf's indices too: on the 1M cube k = 30 took
-/// 0.89-0.95x the time with them, k = 10 the same.
-#[inline(always)]
-fn request_far<T: Scalar, const D: usize>(tree: &DescentView<'_, T>, far: u32) {
-    let steps = &tree.descent.steps;
-    let fs = steps[far as usize];
-    if fs.link & 3 == DESCENT_LEAF {
-        let (a, b) = fs.leaf_range();
-        prefetch_range(&tree.coords[a * D..b * D]);
-        prefetch_range(&tree.ids[a..b]);
-    } else {
-        let f = (fs.link >> 2) as usize;
-        prefetch_range(&steps[f..f + 1]);
     }
 }
 
