@@ -812,6 +812,8 @@ class RobustJob:
         import nbhd
 
         self._t0 = time.monotonic()
+        # the tiles' kept gathers and rows are this run's: none of an earlier run in `out`
+        shutil.rmtree(os.path.join(self.out, "rows"), ignore_errors=True)
         self._spec = self.client.scatter(self.cloud.spec, broadcast=True)
         run = nbhd.RobustRun(self._spacing(), self.options)
         while (r := run.round())["kind"] != "finish":
@@ -835,7 +837,8 @@ class RobustJob:
         parts = self._each(_tiles.robust_finish, r)
         for g in range(r["generation"] + 1):
             self._drop_generation(g)
-        shutil.rmtree(os.path.join(self.out, "values"), ignore_errors=True)
+        for kept in ("values", "rows"):
+            shutil.rmtree(os.path.join(self.out, kept), ignore_errors=True)
         result = RobustResult(self.cloud.spec, parts, run.report())
         result.status = self.status
         return result
