@@ -535,8 +535,9 @@ class TiledCloud:
 
         Needs a ``distributed`` client (``client``, default the current one): the client
         drives the rounds of ``nbhd.RobustRun``; each round is one task per tile, which
-        gathers the tile and its halo, searches its rows again and reads the positions of
-        the round's generation from the owners' files, so a worker holds one tile at a time
+        reads the tile and its halo, its rows (gathered and searched by the tile's first
+        round, kept in files under ``out``) and the positions of the round's generation
+        from the owners' files, so a worker holds one tile at a time
         (its memory is bounded by a tile's working set, not by the cloud); every round's medians are
         reduced exactly (``nbhd.RankSearch`` over the tiles' value files, never gathered). A
         cloud cut with ``non_finite="skip"`` has holes: they are refused here unless

@@ -156,7 +156,7 @@ pub(super) struct KeptRef<'a> {
 }
 
 impl Kept {
-    pub(super) fn as_ref(&self) -> KeptRef<'_> {
+    pub(super) fn borrowed(&self) -> KeptRef<'_> {
         KeptRef {
             rows: &self.rows,
             order: &self.order,
@@ -479,7 +479,7 @@ mod tests {
         };
         let print = fingerprint(&input, 12, Some(&region));
         let kept = searched(&input, 12, &region);
-        write(&path, print, &kept.as_ref()).unwrap();
+        write(&path, print, &kept.borrowed()).unwrap();
         let back = read(&path, print, input.len(), None).expect("read back");
         assert!(same(&back, &kept));
         // another k, region or point: another fingerprint, so the file reads as absent
@@ -533,7 +533,7 @@ mod tests {
             reach,
             measured: None,
         };
-        write(&path, print, &bad.as_ref()).unwrap();
+        write(&path, print, &bad.borrowed()).unwrap();
         assert!(
             read(&path, print, input.len(), None).is_none(),
             "order not a permutation"
@@ -575,7 +575,7 @@ mod tests {
             })
             .collect();
         kept.measured = Some((key, planes));
-        write(&path, print, &kept.as_ref()).unwrap();
+        write(&path, print, &kept.borrowed()).unwrap();
         let back = read(&path, print, input.len(), Some(key)).expect("read back");
         assert!(same(&back, &kept));
         assert!(

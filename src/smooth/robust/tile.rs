@@ -355,7 +355,7 @@ impl<'a> RobustTile<'a> {
             measured: None,
         };
         if let Some((path, print)) = &file {
-            let _ = row_file::write(path, *print, &kept.as_ref());
+            let _ = row_file::write(path, *print, &kept.borrowed());
         }
         Ok(kept)
     }
