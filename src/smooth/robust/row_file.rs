@@ -211,10 +211,11 @@ fn write_to(tmp: &Path, print: u64, kept: &KeptRef<'_>) -> io::Result<()> {
     for v in [print, kept.order.len() as u64, width as u64] {
         w.put(v, v.to_le_bytes())?;
     }
-    let flags = u8::from(farthest.is_some()) * FARTHEST
-        | u8::from(kept.reach.is_some()) * REACH
-        | u8::from(kept.measured.is_some()) * MEASURED
-        | u8::from(!kept.nearest.is_empty()) * NEAREST;
+    let flag = |set: bool, bit: u8| if set { bit } else { 0 };
+    let flags = flag(farthest.is_some(), FARTHEST)
+        | flag(kept.reach.is_some(), REACH)
+        | flag(kept.measured.is_some(), MEASURED)
+        | flag(!kept.nearest.is_empty(), NEAREST);
     w.put(u64::from(flags), [flags])?;
     if let Some((key, _)) = &kept.measured {
         for v in key.words() {
