@@ -33,6 +33,9 @@ struct Control {
     median_of_medians: bool,
     /// Gather every tile anew for every round (a driver that keeps nothing between rounds).
     fresh: bool,
+    /// Tiles keep their rows in files (`RobustTile::keep_rows_in`) in a directory of this
+    /// name, read back by the tiles gathered anew.
+    files: Option<&'static str>,
 }
 
 const EXACT: Control = Control {
@@ -40,6 +43,7 @@ const EXACT: Control = Control {
     grow: true,
     median_of_medians: false,
     fresh: false,
+    files: None,
 };
 
 /// What a tile gathered anew needs besides its input: the positions of every generation so
@@ -51,8 +55,8 @@ struct History {
 
 impl History {
     /// Tile `cell` gathered anew with `halo` and given what `round` reads.
-    fn gather(&self, points: &[DVec3], mid: DVec3, cell: usize, halo: f64, round: &Round) -> Tile {
-        let mut t = gather(points, mid, cell, halo);
+    fn gather(&self, points: &[DVec3], mid: DVec3, t: &Tile, halo: f64, round: &Round) -> Tile {
+        let mut t = gather(points, mid, t.cell, halo, t.files);
         let of = |v: &[DVec3]| -> Vec<DVec3> { t.gathered.iter().map(|&i| v[i]).collect() };
         let (generation, rows) = match *round {
             Round::Ratio { generation } => (generation, RowSet::Wide),
@@ -92,6 +96,7 @@ struct Tile {
     halo: f64,
     gathered: Vec<usize>,
     owned: Vec<usize>,
+    files: Option<&'static str>,
 }
 
 /// The cell of a point: 2×2 in x and y about `mid`.
@@ -99,8 +104,21 @@ fn cell_of(p: DVec3, mid: DVec3) -> usize {
     usize::from(p.x >= mid.x) + 2 * usize::from(p.y >= mid.y)
 }
 
-/// Tile `cell` with a halo of `halo` (absolute) around its box, unbounded on the outer sides.
-fn gather(points: &[DVec3], mid: DVec3, cell: usize, halo: f64) -> Tile {
+/// Where tile `cell` keeps its rows with `Control::files` of `name`.
+fn row_dir(name: &str, cell: usize) -> std::path::PathBuf {
+    let run = format!("nbhd-robust-tiles-{}-{name}", std::process::id());
+    std::env::temp_dir().join(run).join(format!("tile_{cell}"))
+}
+
+/// Tile `cell` with a halo of `halo` (absolute) around its box, unbounded on the outer sides;
+/// with `files`, keeping its rows in files of that name.
+fn gather(
+    points: &[DVec3],
+    mid: DVec3,
+    cell: usize,
+    halo: f64,
+    files: Option<&'static str>,
+) -> Tile {
     let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
     let side = |high: bool, m: f64| {
         if high {
@@ -127,13 +145,17 @@ fn gather(points: &[DVec3], mid: DVec3, cell: usize, halo: f64) -> Tile {
         .filter(|&i| cell_of(points[i], mid) == cell)
         .collect();
     let input = gathered.iter().map(|&i| points[i]).collect();
-    let tile = RobustTile::gathered(input, &owned_flags, region).unwrap();
+    let mut tile = RobustTile::gathered(input, &owned_flags, region).unwrap();
+    if let Some(name) = files {
+        tile.keep_rows_in(row_dir(name, cell));
+    }
     Tile {
         tile,
         cell,
         halo,
         gathered,
         owned,
+        files,
     }
 }
 
@@ -159,7 +181,7 @@ fn tiled(points: &[DVec3], options: &RobustOptions, ctl: Control) -> Tiled {
     let mid = (lo + hi) / 2.0;
     let h0 = mean_spacing(&points).unwrap();
     let mut tiles: Vec<Tile> = (0..4)
-        .map(|c| gather(&points, mid, c, ctl.halo * h0))
+        .map(|c| gather(&points, mid, c, ctl.halo * h0, ctl.files))
         .collect();
     let (mut grown, mut invalid) = (0, 0);
     // the spacing: each owned point's nearest, put in the cloud's order
@@ -168,7 +190,7 @@ fn tiled(points: &[DVec3], options: &RobustOptions, ctl: Control) -> Tiled {
         loop {
             let (near, valid) = t.tile.nearest(options).unwrap();
             if ctl.grow && !valid.iter().all(|&v| v) {
-                *t = gather(&points, mid, t.cell, 2.0 * t.halo);
+                *t = gather(&points, mid, t.cell, 2.0 * t.halo, t.files);
                 grown += 1;
                 continue;
             }
@@ -196,7 +218,7 @@ fn tiled(points: &[DVec3], options: &RobustOptions, ctl: Control) -> Tiled {
         let round = run.round();
         if ctl.fresh {
             for t in &mut tiles {
-                *t = history.gather(&points, mid, t.cell, t.halo, &round);
+                *t = history.gather(&points, mid, t, t.halo, &round);
             }
         }
         if matches!(round, Round::Finish { .. }) {
@@ -207,7 +229,7 @@ fn tiled(points: &[DVec3], options: &RobustOptions, ctl: Control) -> Tiled {
             loop {
                 let part = t.tile.round(&round, options, eps).unwrap();
                 if ctl.grow && !part.all_valid() {
-                    *t = history.gather(&points, mid, t.cell, 2.0 * t.halo, &round);
+                    *t = history.gather(&points, mid, t, 2.0 * t.halo, &round);
                     grown += 1;
                     continue;
                 }
@@ -365,6 +387,21 @@ fn tiles_equal_one_machine_at_three_noise_levels() {
                 ..EXACT
             };
             assert_tiled_equals_one_machine(&p, &RobustOptions::default(), fresh);
+            // and with the rows searched once and a measure's rows and planes read by its
+            // step, from the tiles' files (wide and shrunk rows at 5h)
+            let name = ["1h", "3h", "5h"][(noise as usize).min(5) / 2];
+            let files = Control {
+                files: Some(name),
+                ..fresh
+            };
+            assert_tiled_equals_one_machine(&p, &RobustOptions::default(), files);
+            let dir = row_dir(name, 0);
+            let kept = std::fs::read_dir(&dir).unwrap().count();
+            assert!(
+                kept >= 2,
+                "{noise}h: searched and measured rows kept in {dir:?}"
+            );
+            std::fs::remove_dir_all(dir.parent().unwrap()).unwrap();
         }
         let r = &t.report;
         assert!(!r.moved.is_empty(), "{noise}h: iterations ran");
@@ -482,7 +519,7 @@ fn the_reach_flags_only_values_that_are_the_whole_clouds() {
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &q| {
             (l.min(q), h.max(q))
         });
-    let mut t = gather(&p, (lo + hi) / 2.0, 0, 4.0 * h0);
+    let mut t = gather(&p, (lo + hi) / 2.0, 0, 4.0 * h0, None);
     let (near, _) = whole.nearest(&options).unwrap();
     t.tile.nearest(&options).unwrap();
     let mut run = RobustRun::new(

@@ -13,6 +13,7 @@ and dicts (:class:`Spec`), so tasks run on any worker that sees the store's dire
 from __future__ import annotations
 
 import os
+import pickle
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -448,10 +449,39 @@ def gather_robust(spec: Spec, t: int, width: float):
     return idx[order], pts, owner, at, lo.tolist(), hi.tolist()
 
 
+def gathered_robust(spec: Spec, t: int, width: float, out: str):
+    """:func:`gather_robust` of tile ``t`` with a halo of ``width``, kept in the tile's rows
+    directory by the first round that gathers it and read from there by the later rounds
+    (a read of the tile's own points in place of a pass over its neighbours' pieces); a
+    wider halo gathers and keeps anew."""
+    path = os.path.join(rows_dir(out, t), "gather.pickle")
+    try:
+        with open(path, "rb") as f:
+            kept = pickle.load(f)
+        if kept[0] == width:
+            return kept[1:]
+    except (OSError, EOFError, pickle.UnpicklingError, IndexError, TypeError):
+        pass  # absent or torn: gathered again below
+    idx, pts, owner, at, lo, hi = gather_robust(spec, t, width)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    tmp = path + ".tmp"
+    with open(tmp, "wb") as f:
+        pickle.dump((width, idx, pts, owner, at, lo, hi), f, protocol=5)
+    os.replace(tmp, path)
+    return idx, pts, owner, at, lo, hi
+
+
 def generation_path(out: str, g: int, t: int, what: str = "points") -> str:
     """Where tile ``t`` keeps its owned points' positions after ``g`` steps (``what``
     ``"points"``), or the normals of the step into them (``"normals"``), in owned order."""
     return os.path.join(out, f"gen_{g:04d}", f"{what}_{t:06d}.npy")
+
+
+def rows_dir(out: str, t: int) -> str:
+    """Where tile ``t`` keeps the rows it searched (``nbhd.RobustTile.keep_rows_in``): every
+    later round of the tile reads them instead of searching again; a wider halo's rows
+    replace them."""
+    return os.path.join(out, "rows", f"tile_{t:06d}")
 
 
 def values_path(out: str, t: int) -> str:
@@ -484,11 +514,12 @@ class RobustGather:
                  round=None):
         import nbhd
 
-        idx, pts, self.owner, self.at, lo, hi = gather_robust(spec, t, width)
+        idx, pts, self.owner, self.at, lo, hi = gathered_robust(spec, t, width, out)
         self.t, self.out, self.width, self.gathered = t, out, width, len(idx)
         mine = self.owner == t
         self.own = idx[mine]
         self.tile = nbhd.RobustTile(pts, mine, lo, hi, options, threads=threads)
+        self.tile.keep_rows_in(rows_dir(out, t))
         if round is None:
             return
         g = round["generation"]
@@ -503,7 +534,7 @@ class RobustGather:
     def _of_owners(self, g: int, what: str = "points"):
         """Generation ``g``'s ``what`` of every gathered point, from their owners' files."""
         values = np.empty((len(self.owner), 3), np.float64)
-        for u in np.unique(self.owner):
+        for u in np.flatnonzero(np.bincount(self.owner)):
             sel = self.owner == u
             path = generation_path(self.out, g, int(u), what)
             values[sel] = np.load(path, mmap_mode="r")[self.at[sel]]

@@ -535,8 +535,9 @@ class TiledCloud:
 
         Needs a ``distributed`` client (``client``, default the current one): the client
         drives the rounds of ``nbhd.RobustRun``; each round is one task per tile, which
-        gathers the tile and its halo, searches its rows again and reads the positions of
-        the round's generation from the owners' files, so a worker holds one tile at a time
+        reads the tile and its halo, its rows (gathered and searched by the tile's first
+        round, kept in files under ``out``) and the positions of the round's generation
+        from the owners' files, so a worker holds one tile at a time
         (its memory is bounded by a tile's working set, not by the cloud); every round's medians are
         reduced exactly (``nbhd.RankSearch`` over the tiles' value files, never gathered). A
         cloud cut with ``non_finite="skip"`` has holes: they are refused here unless
@@ -812,6 +813,8 @@ class RobustJob:
         import nbhd
 
         self._t0 = time.monotonic()
+        # the tiles' kept gathers and rows are this run's: none of an earlier run in `out`
+        shutil.rmtree(os.path.join(self.out, "rows"), ignore_errors=True)
         self._spec = self.client.scatter(self.cloud.spec, broadcast=True)
         run = nbhd.RobustRun(self._spacing(), self.options)
         while (r := run.round())["kind"] != "finish":
@@ -835,7 +838,8 @@ class RobustJob:
         parts = self._each(_tiles.robust_finish, r)
         for g in range(r["generation"] + 1):
             self._drop_generation(g)
-        shutil.rmtree(os.path.join(self.out, "values"), ignore_errors=True)
+        for kept in ("values", "rows"):
+            shutil.rmtree(os.path.join(self.out, kept), ignore_errors=True)
         result = RobustResult(self.cloud.spec, parts, run.report())
         result.status = self.status
         return result

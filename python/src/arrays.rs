@@ -201,6 +201,20 @@ pub fn dvec3s(obj: &Bound<'_, PyAny>) -> PyResult<Vec<glam::DVec3>> {
         .collect())
 }
 
+/// The flags of a 1-D array or sequence (anything numpy converts to `bool`), read as one
+/// array rather than one Python object at a time.
+pub fn bools(obj: &Bound<'_, PyAny>) -> PyResult<Vec<bool>> {
+    let np = obj.py().import("numpy")?;
+    let arr = np.call_method1("ascontiguousarray", (obj, "bool"))?;
+    let ro: numpy::PyReadonlyArray1<'_, bool> = arr
+        .extract()
+        .map_err(|_| value_err("flags must be a 1-D array of booleans"))?;
+    Ok(ro
+        .as_slice()
+        .map_err(|e| value_err(e.to_string()))?
+        .to_vec())
+}
+
 /// A vector as a 1-D numpy array, without a copy.
 pub fn vec1<'py, T: Element>(py: Python<'py>, v: Vec<T>) -> Bound<'py, PyArray1<T>> {
     v.into_pyarray(py)

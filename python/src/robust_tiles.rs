@@ -15,7 +15,7 @@ use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
 
-use crate::arrays::{dvec3_array, dvec3s, vec1};
+use crate::arrays::{bools, dvec3_array, dvec3s, vec1};
 use crate::errors::{value_err, OrRaise};
 use crate::geometry::outputs_dict;
 use crate::robust_options::PyRobustOptions;
@@ -250,7 +250,7 @@ impl PyRobustTile {
     fn new(
         py: Python<'_>,
         points: &Bound<'_, PyAny>,
-        owned: Vec<bool>,
+        owned: &Bound<'_, PyAny>,
         lo: [f64; 3],
         hi: [f64; 3],
         options: PyRef<'_, PyRobustOptions>,
@@ -261,6 +261,7 @@ impl PyRobustTile {
             ..options.options
         };
         let input = dvec3s(points)?;
+        let owned = bools(owned)?;
         let region = Region {
             lo: DVec3::from_array(lo),
             hi: DVec3::from_array(hi),
@@ -272,6 +273,14 @@ impl PyRobustTile {
             tile: Some(tile),
             options,
         })
+    }
+
+    /// Keeps the rows the tile searches in files in the directory `dir` and reads them from
+    /// there when a tile of the same input and region wrote them (a driver that makes the
+    /// tile anew at every round then searches once per row set, with the same results).
+    fn keep_rows_in(&mut self, dir: std::path::PathBuf) -> PyResult<()> {
+        self.tile()?.keep_rows_in(dir);
+        Ok(())
     }
 
     /// Each owned point's squared distance to its nearest other point (NaN: none) and whether

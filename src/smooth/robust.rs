@@ -111,6 +111,7 @@
 
 mod planes;
 mod reach;
+mod row_file;
 mod rows;
 mod run;
 pub(super) mod scales;

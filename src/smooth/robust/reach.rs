@@ -97,6 +97,15 @@ impl Reach {
         Self { cert, step }
     }
 
+    /// The flags as `robust/row_file.rs` kept them (1 or 0 per stored point); `None` for
+    /// flags of other lengths or values.
+    pub(super) fn from_flags(cert: &[u8], step: &[u8]) -> Option<Self> {
+        let of = |f: &[u8]| f.iter().map(|&b| (b <= 1).then_some(b == 1)).collect();
+        let (cert, step): (Option<Vec<bool>>, Option<Vec<bool>>) = (of(cert), of(step));
+        let (cert, step) = (cert?, step?);
+        (cert.len() == step.len()).then_some(Self { cert, step })
+    }
+
     /// The rounds that read a point's own row (ratio, plane distance, outputs).
     pub(super) fn cert(&self) -> &[bool] {
         &self.cert

@@ -83,6 +83,47 @@ impl Rows {
         ))
     }
 
+    /// The rows' parts, as `robust/row_file.rs` keeps them: the row width, the candidates
+    /// (`width` per row), each row's candidate count and count within ε, and the searched
+    /// farthest squared distances (`None` once cut).
+    #[allow(clippy::type_complexity)]
+    pub(super) fn as_parts(&self) -> (usize, &[u32], &[u32], &[u32], Option<&[f64]>) {
+        (
+            self.width,
+            &self.index,
+            &self.candidates,
+            &self.len,
+            self.searched_farthest.as_deref(),
+        )
+    }
+
+    /// The rows of [`Rows::as_parts`]'s parts; `None` unless they are consistent: one count
+    /// of each kind per row, `len ≤ candidates ≤ width`, every candidate a stored position.
+    pub(super) fn from_parts(
+        width: usize,
+        index: Vec<u32>,
+        candidates: Vec<u32>,
+        len: Vec<u32>,
+        farthest: Option<Vec<f64>>,
+    ) -> Option<Self> {
+        let n = candidates.len();
+        let fits = index.len() == n.checked_mul(width)?
+            && len.len() == n
+            && farthest.as_ref().is_none_or(|f| f.len() == n)
+            && candidates
+                .iter()
+                .zip(&len)
+                .all(|(&c, &l)| l <= c && c as usize <= width)
+            && index.iter().all(|&j| (j as usize) < n);
+        fits.then_some(Self {
+            width,
+            index,
+            candidates,
+            len,
+            searched_farthest: farthest,
+        })
+    }
+
     /// The wide neighbourhood of the point stored at `s`: stored positions, nearest first.
     #[inline]
     pub(super) fn wide(&self, s: usize) -> &[u32] {

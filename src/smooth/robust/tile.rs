@@ -17,6 +17,7 @@
 
 use super::planes::{covariance_planes, plane_distance, plane_distances, selected_normals, Plane};
 use super::reach::{Reach, Region};
+use super::row_file::{self, Kept, KeptRef, MeasuredKey};
 use super::rows::Rows;
 use super::run::{median, median_rank, Reduced, Round, RowSet};
 use super::scales;
@@ -29,6 +30,7 @@ use crate::smooth::PointOutput;
 use crate::sum::ExactSum;
 use glam::DVec3;
 use std::borrow::Cow;
+use std::path::PathBuf;
 
 /// One tile of a robust run (see the module documentation).
 pub struct RobustTile<'a> {
@@ -55,6 +57,9 @@ pub struct RobustTile<'a> {
     /// Whether the first search finds the wide rows, to stand in for the plain ones
     /// ([`RobustTile::search_wide_first`]).
     wide_first: bool,
+    /// Where the searched rows are kept between the tasks of a split run
+    /// ([`RobustTile::keep_rows_in`]).
+    row_files: Option<PathBuf>,
 }
 
 /// The rows of a tile and the proxy they are measured on, in the k-d tree's order.
@@ -152,6 +157,7 @@ impl<'a> RobustTile<'a> {
             pending_normals: None,
             shrink: None,
             wide_first: false,
+            row_files: None,
         }
     }
 
@@ -198,7 +204,16 @@ impl<'a> RobustTile<'a> {
             pending_normals: None,
             shrink: None,
             wide_first: false,
+            row_files: None,
         })
+    }
+
+    /// Keeps the rows this tile searches in files in `dir` (one per row width), and reads
+    /// them from there instead of searching when a tile of the same input and region made
+    /// earlier wrote them (`robust/row_file.rs`): a driver that makes the tile anew at every
+    /// round searches once per row set instead of once per round, with the same results.
+    pub fn keep_rows_in(&mut self, dir: impl Into<PathBuf>) {
+        self.row_files = Some(dir.into());
     }
 
     /// Each owned point's squared distance to its nearest other point (`None` without one),
@@ -225,20 +240,53 @@ impl<'a> RobustTile<'a> {
     fn search(&mut self, set: RowSet, k_plane: usize) -> Result<Vec<Option<f64>>> {
         let stand_in = set == RowSet::Plain && std::mem::take(&mut self.wide_first);
         let set = if stand_in { RowSet::Wide } else { set };
-        let k = match set {
-            RowSet::Plain => k_plane,
-            _ => k_plane * scales::WIDE,
-        };
-        let (rows, order, nearest) = match self.neighbors {
-            Neighbors::Search(SearchMethod::KdTree) => Rows::search(&self.input, k)?,
+        let k = searched_k(set, k_plane);
+        let kept = match self.neighbors {
+            Neighbors::Search(SearchMethod::KdTree) => self.searched_rows(k)?,
             neighbors => {
                 let (knn, order) = knn_rows(&self.input, neighbors, k)?;
                 let nearest = (0..knn.len())
                     .map(|i| knn.sq_dists_of(i).first().copied())
                     .collect();
-                (Rows::in_stored_order(&knn, &order), order, nearest)
+                let rows = Rows::in_stored_order(&knn, &order);
+                let reach = self.reach_of(&rows, &order, k);
+                Kept {
+                    rows,
+                    order,
+                    nearest,
+                    reach,
+                    measured: None,
+                }
             }
         };
+        let set = if set == RowSet::Plain {
+            set
+        } else {
+            RowSet::Wide
+        };
+        Ok(self.install(kept, set, stand_in))
+    }
+
+    /// The reach flags of `rows` searched for `k` on the input (`order` the stored order), in
+    /// a tile of a split cloud.
+    fn reach_of(&self, rows: &Rows, order: &[u32], k: usize) -> Option<Reach> {
+        self.region.as_ref().map(|region| {
+            let input: Vec<DVec3> = order.iter().map(|&o| self.input[o as usize]).collect();
+            Reach::new(&input, rows, k, region)
+        })
+    }
+
+    /// Makes `kept` the tile's state, of row set `set` (a measure's own when `kept` holds
+    /// one), on the proxy of the last state or the one given ([`RobustTile::set_current`]).
+    /// Returns the nearest distances kept.
+    fn install(&mut self, kept: Kept, set: RowSet, stand_in: bool) -> Vec<Option<f64>> {
+        let Kept {
+            rows,
+            order,
+            nearest,
+            reach,
+            measured,
+        } = kept;
         let current = match self.state.take() {
             Some(st) if st.generation > 0 => {
                 Some((st.generation, super::in_input_order(&st.cur, &st.order)))
@@ -250,38 +298,136 @@ impl<'a> RobustTile<'a> {
             Some((g, local)) => (g, order.iter().map(|&o| local[o as usize]).collect()),
             None => (0, order.iter().map(|&o| self.input[o as usize]).collect()),
         };
-        let reach = self.region.as_ref().map(|region| {
-            let input: Vec<DVec3> = order.iter().map(|&o| self.input[o as usize]).collect();
-            Reach::new(&input, &rows, k, region)
-        });
         let owned_at = self.owned.as_ref().map(|owned| {
             let position = super::super::positions_of(&order);
             owned.iter().map(|&i| position[i as usize]).collect()
         });
-        let set = if set == RowSet::Plain {
-            set
-        } else {
-            RowSet::Wide
-        };
         let normals = self
             .pending_normals
             .take()
             .map(|local| order.iter().map(|&o| local[o as usize]).collect())
             .unwrap_or_default();
+        let (set, measured_on, planes) = match measured {
+            Some((key, planes)) => (
+                key.set,
+                Some(key.generation),
+                Some((key.generation, planes)),
+            ),
+            None => (set, None, None),
+        };
         self.state = Some(State {
             set,
             rows,
             order,
             cur,
             generation,
-            measured_on: None,
-            planes: None,
+            measured_on,
+            planes,
             normals,
             reach,
             owned_at,
             stand_in,
         });
-        Ok(nearest)
+        nearest
+    }
+
+    /// [`Rows::search`] of the input for `k` with its reach, or the rows a tile of the same
+    /// input and region kept in its row file ([`RobustTile::keep_rows_in`]); rows searched
+    /// are written there. A file that cannot be written is left out: the next tile searches
+    /// again.
+    fn searched_rows(&self, k: usize) -> Result<Kept> {
+        let file = self.row_files.as_ref().map(|dir| {
+            let print = row_file::fingerprint(&self.input, k, self.region.as_ref());
+            (dir.join(format!("rows_{k}.bin")), print)
+        });
+        if let Some((path, print)) = &file {
+            if let Some(kept) = row_file::read(path, *print, self.input.len(), None) {
+                return Ok(kept);
+            }
+        }
+        let (rows, order, nearest) = Rows::search(&self.input, k)?;
+        let reach = self.reach_of(&rows, &order, k);
+        let kept = Kept {
+            rows,
+            order,
+            nearest,
+            reach,
+            measured: None,
+        };
+        if let Some((path, print)) = &file {
+            let _ = row_file::write(path, *print, &kept.borrowed());
+        }
+        Ok(kept)
+    }
+
+    /// The key under which a measure of `set` at `generation` on the proxy given to a fresh
+    /// tile ([`RobustTile::set_current`], the input at generation 0) keeps its rows and planes.
+    fn measured_key(&self, set: RowSet, generation: usize, eps: f64) -> Option<MeasuredKey> {
+        let proxy = match &self.pending {
+            Some((g, local)) if *g == generation => row_file::proxy_hash(local, |i| i as u32),
+            None if generation == 0 => row_file::proxy_hash(&self.input, |i| i as u32),
+            _ => return None,
+        };
+        Some(MeasuredKey {
+            set,
+            generation,
+            eps: eps.to_bits(),
+            proxy,
+        })
+    }
+
+    /// Installs the rows and planes a measure of `set` at `generation` kept for the rounds
+    /// after it on the same proxy (the step), when the tile is fresh and its files hold
+    /// them; whether it did.
+    fn kept_measured(&mut self, set: RowSet, generation: usize, eps: f64, k_plane: usize) -> bool {
+        let searches = matches!(self.neighbors, Neighbors::Search(SearchMethod::KdTree));
+        let Some(dir) = self
+            .row_files
+            .as_ref()
+            .filter(|_| searches && self.state.is_none())
+        else {
+            return false;
+        };
+        let Some(key) = self.measured_key(set, generation, eps) else {
+            return false;
+        };
+        let k = searched_k(set, k_plane);
+        let print = row_file::fingerprint(&self.input, k, self.region.as_ref());
+        let path = dir.join("measured.bin");
+        match row_file::read(&path, print, self.input.len(), Some(key)) {
+            Some(kept) => {
+                self.install(kept, set, false);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Keeps the rows as measured at `generation` and their `planes` in the tile's files, for
+    /// the step of the same generation (a tile of a split run made anew for it).
+    fn keep_measured(&self, generation: usize, eps: f64, k_plane: usize) {
+        let (Some(dir), Some(st)) = (&self.row_files, &self.state) else {
+            return;
+        };
+        let Some((_, planes)) = st.planes.as_ref().filter(|(g, _)| *g == generation) else {
+            return;
+        };
+        let key = MeasuredKey {
+            set: st.set,
+            generation,
+            eps: eps.to_bits(),
+            proxy: row_file::proxy_hash(&st.cur, |s| st.order[s]),
+        };
+        let k = searched_k(st.set, k_plane);
+        let print = row_file::fingerprint(&self.input, k, self.region.as_ref());
+        let kept = KeptRef {
+            rows: &st.rows,
+            order: &st.order,
+            nearest: &[],
+            reach: st.reach.as_ref(),
+            measured: Some((key, planes)),
+        };
+        let _ = row_file::write(&dir.join("measured.bin"), print, &kept);
     }
 
     /// The plain rows on the input, measured and cut at `eps`, for [`Round::Start`]: wide rows
@@ -314,7 +460,7 @@ impl<'a> RobustTile<'a> {
             .state
             .as_ref()
             .is_none_or(|st| searched(st.set) != searched(set));
-        if fresh {
+        if fresh && !self.kept_measured(set, generation, eps, k_plane) {
             self.search(set, k_plane)?;
         }
         let st = self.state.as_mut().expect("searched");
@@ -471,7 +617,9 @@ impl<'a> RobustTile<'a> {
             }
             Round::Measure { generation, rows } => {
                 self.rows_on(rows, generation, eps, kp)?;
-                Ok(self.measure_part(generation))
+                let part = self.measure_part(generation);
+                self.keep_measured(generation, eps, kp);
+                Ok(part)
             }
             Round::Step {
                 generation,
@@ -674,6 +822,15 @@ impl State {
             _ => self.rows.update(&self.cur, &self.order, eps),
         }
         self.measured_on = Some(self.generation);
+    }
+}
+
+/// How many nearest a search of `set` finds: `k_plane`, or `WIDE` times as many for the
+/// wide rows (and the shrunk ones, which are cut from them).
+fn searched_k(set: RowSet, k_plane: usize) -> usize {
+    match set {
+        RowSet::Plain => k_plane,
+        _ => k_plane * scales::WIDE,
     }
 }
 
