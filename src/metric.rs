@@ -475,17 +475,25 @@ impl<T: Scalar> Period<T> {
     ) -> T {
         let mut s = T::ZERO;
         for j in 0..la.len() {
-            let gap = if lb[j] > ha[j] {
-                lb[j] - ha[j]
-            } else if la[j] > hb[j] {
-                la[j] - hb[j]
-            } else {
-                T::ZERO
-            };
+            let gap = interval_gap(la[j], ha[j], lb[j], hb[j]);
             let widest = (hb[j] - la[j]).max_of(ha[j] - lb[j]);
             s = norm.fold(s, norm.term(gap.min_of(self.sizes[j] - widest)));
         }
         norm.lower(s)
+    }
+}
+
+/// The gap between the intervals `[la, ha]` and `[lb, hb]` (0 where they meet): the smallest
+/// difference of a point of one and a point of the other, rounded down as each of those
+/// differences rounds (rounding is monotone), so a lower bound of every pair's difference.
+#[inline(always)]
+pub(crate) fn interval_gap<T: Scalar>(la: T, ha: T, lb: T, hb: T) -> T {
+    if lb > ha {
+        lb - ha
+    } else if la > hb {
+        la - hb
+    } else {
+        T::ZERO
     }
 }
 

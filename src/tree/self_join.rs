@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use super::node::Node;
 use super::KdTree;
 use crate::error::{NbhdError, Result};
-use crate::metric::{Measure, Norm, NormUser, Period};
+use crate::metric::{interval_gap, Measure, Norm, NormUser, Period};
 use crate::scalar::Scalar;
 use crate::table::{try_filled, NeighborTable};
 
@@ -86,14 +86,8 @@ impl<T: Scalar, N: Norm<T>> PairMeasure<T> for Open<N> {
     fn point_box(self, x: &[T], lo: &[T], hi: &[T]) -> T {
         let mut s = T::ZERO;
         for j in 0..x.len() {
-            // rounding is monotone: a point of the box is at least this far from `x`
-            let gap = if x[j] < lo[j] {
-                lo[j] - x[j]
-            } else if x[j] > hi[j] {
-                x[j] - hi[j]
-            } else {
-                T::ZERO
-            };
+            // a point is an interval of one point
+            let gap = interval_gap(x[j], x[j], lo[j], hi[j]);
             s = self.0.fold(s, self.0.term(gap));
         }
         self.0.lower(s)
@@ -103,13 +97,7 @@ impl<T: Scalar, N: Norm<T>> PairMeasure<T> for Open<N> {
     fn box_box(self, la: &[T], ha: &[T], lb: &[T], hb: &[T]) -> T {
         let mut s = T::ZERO;
         for j in 0..la.len() {
-            let gap = if lb[j] > ha[j] {
-                lb[j] - ha[j]
-            } else if la[j] > hb[j] {
-                la[j] - hb[j]
-            } else {
-                T::ZERO
-            };
+            let gap = interval_gap(la[j], ha[j], lb[j], hb[j]);
             s = self.0.fold(s, self.0.term(gap));
         }
         self.0.lower(s)
