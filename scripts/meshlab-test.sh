@@ -106,15 +106,18 @@ xvfb_pid=""
 cleanup() { if [ -n "$xvfb_pid" ]; then kill "$xvfb_pid" 2>/dev/null || true; fi; }
 trap cleanup EXIT
 if [ -z "${DISPLAY:-}" ]; then
-    for d in $(seq 90 130); do
-        [ -e "/tmp/.X11-unix/X$d" ] || [ -e "/tmp/.X$d-lock" ] && continue
-        Xvfb ":$d" -screen 0 1280x1024x24 -nolisten tcp >"$work/xvfb.log" 2>&1 &
-        xvfb_pid=$!
-        for _ in $(seq 50); do [ -e "/tmp/.X11-unix/X$d" ] && break; sleep 0.1; done
-        if kill -0 "$xvfb_pid" 2>/dev/null; then export DISPLAY=":$d"; break; fi
-        xvfb_pid=""
-    done
-    [ -n "${DISPLAY:-}" ] || { echo "meshlab-test.sh: could not start Xvfb" >&2; exit 1; }
+    # -displayfd: Xvfb picks a free display and writes its number once it accepts clients
+    # (its socket file appears earlier: a meshlabserver started then aborted, exit 134)
+    ready="$work/xvfb.display"
+    rm -f "$ready"
+    Xvfb -displayfd 3 -screen 0 1280x1024x24 -nolisten tcp 3>"$ready" >"$work/xvfb.log" 2>&1 &
+    xvfb_pid=$!
+    for _ in $(seq 100); do [ -s "$ready" ] && break; sleep 0.1; done
+    if [ -s "$ready" ] && kill -0 "$xvfb_pid" 2>/dev/null; then
+        export DISPLAY=":$(head -n 1 "$ready")"
+    else
+        echo "meshlab-test.sh: could not start Xvfb (see $work/xvfb.log)" >&2; exit 1
+    fi
 fi
 step "ctest: meshlabserver applies every nbhd filter (DISPLAY=$DISPLAY)"
 (cd "$build" && ctest --output-on-failure -j "${CTEST_PARALLEL:-$(nproc)}" "$@")
