@@ -204,11 +204,19 @@ pub fn dvec3s(obj: &Bound<'_, PyAny>) -> PyResult<Vec<glam::DVec3>> {
 /// The flags of a 1-D array or sequence (anything numpy converts to `bool`), read as one
 /// array rather than one Python object at a time.
 pub fn bools(obj: &Bound<'_, PyAny>) -> PyResult<Vec<bool>> {
+    vector_of(obj, "bool", "flags must be a 1-D array of booleans")
+}
+
+/// The values of a 1-D array or sequence converted by numpy to `dtype` (the element type
+/// `T`), copied; `refusal` is the message when it is not one-dimensional.
+pub fn vector_of<T: Element + Copy>(
+    obj: &Bound<'_, PyAny>,
+    dtype: &str,
+    refusal: &str,
+) -> PyResult<Vec<T>> {
     let np = obj.py().import("numpy")?;
-    let arr = np.call_method1("ascontiguousarray", (obj, "bool"))?;
-    let ro: numpy::PyReadonlyArray1<'_, bool> = arr
-        .extract()
-        .map_err(|_| value_err("flags must be a 1-D array of booleans"))?;
+    let arr = np.call_method1("ascontiguousarray", (obj, dtype))?;
+    let ro: numpy::PyReadonlyArray1<'_, T> = arr.extract().map_err(|_| value_err(refusal))?;
     Ok(ro
         .as_slice()
         .map_err(|e| value_err(e.to_string()))?

@@ -11,11 +11,10 @@ use nbhd::smooth::robust::{
 };
 use nbhd::smooth::{Neighbors, RobustOptions};
 use nbhd::sum::ExactSum;
-use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
 
-use crate::arrays::{bools, dvec3_array, dvec3s, vec1};
+use crate::arrays::{bools, dvec3_array, dvec3s, vec1, vector_of};
 use crate::errors::{value_err, OrRaise};
 use crate::geometry::outputs_dict;
 use crate::robust_options::PyRobustOptions;
@@ -108,15 +107,7 @@ fn round_of(d: &Bound<'_, PyDict>) -> PyResult<(Round, f64)> {
 
 /// The f64 values of a 1-D array (any real type), copied.
 fn values_of(values: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
-    let np = values.py().import("numpy")?;
-    let arr = np.call_method1("ascontiguousarray", (values, "float64"))?;
-    let ro: PyReadonlyArray1<'_, f64> = arr
-        .extract()
-        .map_err(|_| value_err("values must be a 1-D array of numbers"))?;
-    Ok(ro
-        .as_slice()
-        .map_err(|e| value_err(e.to_string()))?
-        .to_vec())
+    vector_of(values, "float64", "values must be a 1-D array of numbers")
 }
 
 /// The state of one robust run between rounds, held by the driver (see
